@@ -1,0 +1,66 @@
+/* Byte-at-a-time frame parser (PROTOCOL.md §2, §7 inter-byte gap).
+ *
+ * Callable from a UART interrupt: no heap, no recursion, and a stated bound
+ * on the work per byte (see km_parser.c). It hunts for F9 FF, validates ID,
+ * length and checksum, skips F9 F5 response frames from other servos whole,
+ * and after any failure resynchronises at the next possible header inside the
+ * bytes already seen, so a good frame right after garbage is never lost.
+ * The parser knows no command and no own ID: the dispatcher filters. */
+#ifndef KM_PARSER_H
+#define KM_PARSER_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "km_frame.h"
+
+/* Diagnostic counters; they saturate rather than wrap. */
+typedef struct {
+    uint32_t frames_ok;         /* command frames delivered */
+    uint32_t responses_skipped; /* whole F9 F5 frames from other servos */
+    uint32_t checksum_errors;
+    uint32_t framing_errors;    /* bad header ID, bad length */
+    uint32_t timeouts;          /* partial frames dropped by the gap */
+    uint32_t overruns;          /* bytes the caller reported lost */
+} km_parser_stats_t;
+
+/* Events returned by feed/poll, as a bitmask (one call can both finish a
+ * checksum failure and, from the bytes already seen, a good frame). */
+#define KM_PARSE_FRAME        0x01u /* *out holds a new command frame */
+#define KM_PARSE_CHECKSUM_ERR 0x02u /* see km_parser_take_checksum_error() */
+
+typedef struct {
+    uint8_t window[KM_FRAME_MAX];   /* bytes of the candidate frame so far */
+    uint8_t psum[KM_FRAME_MAX + 1]; /* prefix sums mod 256 for O(1) re-checks */
+    uint16_t fill;                  /* bytes in window */
+    uint32_t last_tick;             /* tick of the newest byte */
+    uint32_t gap_ticks;             /* inter-byte gap that drops a frame */
+    uint8_t bad_ids[32];            /* bitset: IDs seen on checksum-failed frames */
+    km_parser_stats_t stats;
+} km_parser_t;
+
+void km_parser_init(km_parser_t *p, uint32_t gap_ticks);
+void km_parser_set_gap(km_parser_t *p, uint32_t gap_ticks);
+
+/* One received byte at tick `now`. Returns KM_PARSE_* bits. */
+unsigned km_parser_feed(km_parser_t *p, uint8_t byte, uint32_t now, km_frame_t *out);
+
+/* Time alone: drops a partial frame once the gap has passed in silence. */
+unsigned km_parser_poll(km_parser_t *p, uint32_t now, km_frame_t *out);
+
+/* The caller (UART driver) lost bytes: the partial frame is dropped. */
+void km_parser_overrun(km_parser_t *p);
+
+/* True (and clears it) if a checksum-failed frame carried ID `id`. */
+bool km_parser_take_checksum_error(km_parser_t *p, uint8_t id);
+
+/* Default inter-byte gap in microseconds at a baud rate: 10 byte times, but
+ * never under 1 ms, so a USB-serial master that splits a frame across USB
+ * packets is not cut (resync makes a long gap cheap: see km_parser.c). */
+static inline uint32_t km_parser_default_gap_us(uint32_t baud)
+{
+    uint32_t ten_bytes_us = (100u * 1000000u) / (baud ? baud : 1u);
+    return ten_bytes_us > 1000u ? ten_bytes_us : 1000u;
+}
+
+#endif
