@@ -1,0 +1,33 @@
+/* Encoder for servo -> master frames (PROTOCOL.md §2). */
+#include "km_encoder.h"
+
+uint16_t km_encode_response(uint8_t *out, uint8_t id, uint8_t cmd,
+                            const uint8_t *body, uint8_t body_len)
+{
+    if (body_len > KM_BODY_MAX) {
+        return 0;
+    }
+    const uint8_t length = (uint8_t)(body_len + 2u); /* cmd + body + checksum */
+    out[0] = KM_HDR0;
+    out[1] = KM_HDR1_RESPONSE;
+    out[2] = id;
+    out[3] = length;
+    out[4] = cmd;
+    for (uint8_t i = 0; i < body_len; i++) {
+        out[5u + i] = body[i];
+    }
+    /* Checksum covers ID through the last body byte: 3 + body_len bytes. */
+    out[5u + body_len] = km_checksum(&out[2], 3u + (uint32_t)body_len);
+    return (uint16_t)(6u + body_len);
+}
+
+uint16_t km_encode_status(uint8_t *out, uint8_t id, uint8_t status)
+{
+    out[0] = KM_HDR0;
+    out[1] = KM_HDR1_RESPONSE;
+    out[2] = id;
+    out[3] = 2u;
+    out[4] = status;
+    out[5] = km_checksum(&out[2], 3u);
+    return 6u;
+}
