@@ -1,0 +1,47 @@
+/* Single-producer single-consumer queue of received bus bytes, from the UART
+ * receive interrupt (producer) to the main loop (consumer).
+ *
+ * Why a queue and not the parser in the interrupt: the parser's worst case
+ * (a resync scan over up to 256 bytes after a failed frame) and the
+ * dispatcher's work would then run at interrupt priority and delay the
+ * answer-timer interrupt; the queue keeps the RX interrupt at a few dozen
+ * instructions and lets the main loop bound its work per poll. Each entry
+ * keeps the byte's arrival tick, so a frame's end is still stamped by the
+ * interrupt, not by when the main loop got to it.
+ *
+ * Lock-free: the producer writes only `head`, the consumer only `tail`; both
+ * are 32-bit words, read and written whole on Cortex-M0, ordered with C11
+ * acquire/release (a DMB on ARMv6-M). */
+#ifndef KM_RX_QUEUE_H
+#define KM_RX_QUEUE_H
+
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+/* Power of two. 128 bytes = 1.1 ms of traffic at 1 Mbaud; the main loop
+ * drains every control tick (1 ms) and more often when idle. */
+#define KM_RX_QUEUE_SIZE 128u
+
+#define KM_RX_LOST 0x01u /* bytes were lost before this one (overrun) */
+
+typedef struct {
+    uint8_t byte[KM_RX_QUEUE_SIZE];
+    uint8_t flags[KM_RX_QUEUE_SIZE];
+    uint32_t tick[KM_RX_QUEUE_SIZE];
+    atomic_uint head;        /* written by the producer only */
+    atomic_uint tail;        /* written by the consumer only */
+    uint32_t dropped;        /* producer side: bytes lost because the queue was full */
+    bool pending_loss;       /* producer side: mark the next stored byte as LOST */
+} km_rx_queue_t;
+
+void km_rx_queue_init(km_rx_queue_t *q);
+
+/* Interrupt context. A full queue drops the byte and marks the next one
+ * stored as following a loss, so the parser drops the broken frame. */
+void km_rx_queue_push(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost);
+
+/* Main loop. Returns false when empty. */
+bool km_rx_queue_pop(km_rx_queue_t *q, uint8_t *byte, uint32_t *tick, uint8_t *flags);
+
+#endif
