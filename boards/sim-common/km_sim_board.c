@@ -1,0 +1,74 @@
+/* Simulated boards (qemu-microbit, host-sim): the hal motor and sensors
+ * contracts over the simulated plant. The plant advances by the real elapsed
+ * tick time at every sensor read, so motion is what the motor commands
+ * produce, never faked; with the bridge free the shaft stays where it is. */
+#include "km_hal_motor.h"
+#include "km_hal_sensors.h"
+#include "km_hal_time.h"
+#include "km_plant.h"
+
+/* A read after a long pause (debugger, host suspended) advances the plant by
+ * at most this much, so one step never integrates minutes at once. */
+#define KM_SIM_MAX_STEP_US 100000u
+
+static km_plant_t s_plant;
+static km_plant_input_t s_input = {.bridge = KM_PLANT_COAST, .pwm = 0, .ext_torque_unm = 0};
+static uint32_t s_last_tick;
+static uint32_t s_us_per_tick_q16;
+
+void km_hal_motor_init(void)
+{
+    s_input.bridge = KM_PLANT_COAST;
+    s_input.pwm = 0;
+}
+
+void km_hal_motor_drive(int16_t pwm)
+{
+    if (pwm > KM_MOTOR_PWM_MAX) {
+        pwm = KM_MOTOR_PWM_MAX;
+    } else if (pwm < -KM_MOTOR_PWM_MAX) {
+        pwm = -KM_MOTOR_PWM_MAX;
+    }
+    s_input.bridge = KM_PLANT_DRIVE;
+    s_input.pwm = pwm;
+}
+
+void km_hal_motor_free(void)
+{
+    s_input.bridge = KM_PLANT_COAST;
+    s_input.pwm = 0;
+}
+
+void km_hal_motor_brake(void)
+{
+    s_input.bridge = KM_PLANT_BRAKE;
+    s_input.pwm = 0;
+}
+
+void km_hal_sensors_init(void)
+{
+    (void)km_plant_init(&s_plant, &km_plant_default_config);
+    s_us_per_tick_q16 = (uint32_t)((1000000ull << 16) / km_hal_time_tick_hz());
+    s_last_tick = km_hal_time_now();
+}
+
+void km_hal_sensors_read(km_sensors_t *out)
+{
+    const uint32_t now = km_hal_time_now();
+    uint32_t dt_us = (uint32_t)(((uint64_t)(now - s_last_tick) * s_us_per_tick_q16) >> 16);
+    if (dt_us > KM_SIM_MAX_STEP_US) {
+        dt_us = KM_SIM_MAX_STEP_US;
+    }
+    s_last_tick = now;
+    km_plant_step(&s_plant, &s_input, dt_us);
+    out->position = km_plant_position_ddeg(&s_plant);
+    out->current_ma = km_plant_current_ma(&s_plant);
+    out->voltage_mv = km_plant_voltage_mv(&s_plant);
+    out->temperature_c10 = km_plant_temp_dc(&s_plant);
+    out->faults = 0; /* the simulated sensors are sound unless a test injects a fault */
+}
+
+km_plant_t *km_sim_board_plant(void)
+{
+    return &s_plant;
+}
