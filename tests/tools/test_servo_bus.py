@@ -147,6 +147,32 @@ class ServoBus(unittest.TestCase):
         for pid in pids:
             self.assertFalse(pid_alive(pid), "servo pid %d still running" % pid)
 
+    def test_flash_dir_keeps_ids_across_runs(self):
+        with tempfile.TemporaryDirectory() as flash_dir:
+            for run in (1, 2):
+                ln = Launcher([8, 9], extra=("--flash-dir", flash_dir))
+                try:
+                    _, addr = ln.wait_ready()
+                    with socket.create_connection(addr) as s:
+                        self.assertEqual([f.id for f in exchange(s, kmbus.ping(9))], [9])
+                    heard = ln.heard_by(9)
+                finally:
+                    rc, _, err = ln.stop()
+                self.assertEqual(rc, 0, err)
+                wrote = kmbus.write(0, kmbus.REG_ID, b"\x09") in heard
+                # first run: fresh servo, written; second: already ID 9, not written
+                self.assertEqual(wrote, run == 1)
+            self.assertTrue(os.path.isfile(os.path.join(flash_dir, "servo-9.flash")))
+
+    def test_child_killed_by_signal_is_reported(self):
+        ln = Launcher([3])
+        ln.wait_ready()
+        os.kill(ln.pid_of(3), signal.SIGKILL)
+        ln.proc.wait(timeout=10)
+        rc, _, err = ln.stop()
+        self.assertEqual(rc, 1)
+        self.assertRegex(err, r"servo id 3 \(pid \d+\) killed by signal 9")
+
     def test_child_death_is_reported(self):
         ln = Launcher([4, 5], env={"FAKE_SERVO_EXIT": "5:0.5:7"})
         ln.wait_ready()
