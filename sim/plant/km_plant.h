@@ -20,6 +20,13 @@
  * init until the electrical+viscous damping per sub-step is < 1/2, so stable).
  * A step's time that is not a whole number of sub-steps is carried to the next
  * call, so step(1000) once and step(250) four times give the same state.
+ *
+ * Use from a simulated board, once per control tick:
+ *     static km_plant_t plant;
+ *     km_plant_init(&plant, &km_plant_default_config);
+ *     km_plant_input_t in = {KM_PLANT_DRIVE, pwm, 0};   // from the motor hal
+ *     km_plant_step(&plant, &in, 1000);                // 1 ms tick
+ *     adc = km_plant_pot_adc(&plant); ma = km_plant_current_ma(&plant); ...
  */
 #ifndef KM_PLANT_H
 #define KM_PLANT_H
