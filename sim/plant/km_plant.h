@@ -1,0 +1,143 @@
+/* Simulated servo plant: H-bridge, DC motor, gearbox, output load, potentiometer,
+ * supply with internal resistance, and winding heat. Integer/fixed-point only so
+ * the same code runs in the Cortex-M0 QEMU image, the host-sim board and the
+ * unit tests. Deterministic: the same inputs give the same readings, bit for bit.
+ *
+ * Model (all quantities referred to the OUTPUT shaft unless said otherwise):
+ *   - electrical: quasi-static (inductance neglected, L/R ~ 0.1 ms < sub-step):
+ *       drive:  V_app = d * V_bus,  I = (V_app - E) / R       (d = pwm / 1000)
+ *       brake:  V_app = 0 (terminals shorted), I = -E / R
+ *       coast:  terminals open, I = 0 (body-diode regeneration neglected)
+ *     "drive" is sign-magnitude PWM with slow decay, so its off-phase also
+ *     shorts the motor and the average above holds; pwm 0 in drive = brake.
+ *   - supply: V_bus = V_supply - R_int * I_supply, I_supply = d * I, solved
+ *     exactly each sub-step (no lag, stable for any R_int <= 4 R).
+ *   - mechanics: J dw/dt = Kt_out I - b w - Tc sgn(w) + T_ext, with stiction
+ *     (a shaft at rest stays at rest while |drive torque| <= Tc), hard
+ *     inelastic end-stops, and an overspeed guard (KM_PLANT_SPEED_MAX_MDPS).
+ *   - heat: C dT/dt = I^2 R - (T - T_amb) / R_th (one node: the winding).
+ * Integration: explicit Euler at a fixed sub-step (config.substep_us, halved at
+ * init until the electrical+viscous damping per sub-step is < 1/2, so stable).
+ * A step's time that is not a whole number of sub-steps is carried to the next
+ * call, so step(1000) once and step(250) four times give the same state.
+ *
+ * Use from a simulated board, once per control tick:
+ *     static km_plant_t plant;
+ *     km_plant_init(&plant, &km_plant_default_config);
+ *     km_plant_input_t in = {KM_PLANT_DRIVE, pwm, 0};   // from the motor hal
+ *     km_plant_step(&plant, &in, 1000);                // 1 ms tick
+ *     adc = km_plant_pot_adc(&plant); ma = km_plant_current_ma(&plant); ...
+ */
+#ifndef KM_PLANT_H
+#define KM_PLANT_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+/* Overspeed guard, output shaft, milli-degrees per second (2000 °/s, ~5x the
+ * default no-load speed): keeps every per-sub-step product inside int32. */
+#define KM_PLANT_SPEED_MAX_MDPS 2000000
+
+/* Potentiometer ADC full scale (12-bit, as on servo MCUs). */
+#define KM_PLANT_POT_ADC_MAX 4095u
+
+typedef enum {
+    KM_PLANT_DRIVE = 0, /* PWM drive, in.pwm sets duty and direction */
+    KM_PLANT_COAST = 1, /* all switches off: "free" */
+    KM_PLANT_BRAKE = 2, /* both low sides on: short-circuit braking */
+} km_plant_bridge_t;
+
+/* Injectable faults (bit mask), for protection and hardware-fault tests. */
+enum {
+    KM_PLANT_FAULT_POT_OPEN = 1u << 0,   /* wiper open: ADC rails high, position reads +travel */
+    KM_PLANT_FAULT_MOTOR_OPEN = 1u << 1, /* motor lead open: no current, no torque */
+    KM_PLANT_FAULT_TEMP_OPEN = 1u << 2,  /* thermistor open: reads KM_PLANT_TEMP_OPEN_DC */
+};
+#define KM_PLANT_TEMP_OPEN_DC (-400) /* 0.1 °C: what an open NTC reads (-40.0 °C) */
+
+/* Parameters. Units are in each field's name and comment. */
+typedef struct {
+    uint16_t supply_mv;          /* supply open-circuit voltage, mV */
+    uint16_t supply_r_mohm;      /* supply + wiring internal resistance, mΩ (<= 4 * motor_r_mohm) */
+    uint16_t motor_r_mohm;       /* winding + bridge on-resistance, mΩ (> 0) */
+    uint16_t motor_ke_uv_s_rad;  /* motor back-EMF constant, µV per rad/s at the motor; Kt = Ke (SI): µN·m per A */
+    uint16_t gear_ratio;         /* motor turns per output turn */
+    uint8_t gear_eff_pct;        /* gearbox efficiency, % (applied to torque in both directions) */
+    uint32_t rotor_j_gmm2;       /* rotor inertia at the motor, g·mm² (1e-9 kg·m²) */
+    uint32_t load_j_gmm2;        /* horn + load inertia at the output, g·mm² */
+    uint32_t viscous_unm_per_dps;/* viscous friction at the output, µN·m per °/s */
+    uint32_t coulomb_unm;        /* Coulomb (and static) friction at the output, µN·m */
+    int16_t pot_travel_ddeg;     /* potentiometer reads ±this, 0.1°; 0 = no pot limit (encoder product) */
+    int16_t endstop_ddeg;        /* hard mechanical stops at ±this, 0.1°; 0 = free multi-turn */
+    uint32_t thermal_r_mc_per_w; /* winding-to-ambient thermal resistance, m°C per W */
+    uint32_t thermal_c_mj_per_c; /* winding + case heat capacity, mJ per °C */
+    int16_t ambient_dc;          /* ambient and initial temperature, 0.1 °C */
+    uint16_t substep_us;         /* integration sub-step, µs (1..1000) */
+} km_plant_config_t;
+
+/* 20 kg·cm-class hobby serial servo at 7.4 V; numbers documented in km_plant_default.c. */
+extern const km_plant_config_t km_plant_default_config;
+
+typedef struct {
+    km_plant_bridge_t bridge;
+    int16_t pwm;             /* −1000..1000 (clamped), sign = direction; DRIVE only */
+    int32_t ext_torque_unm;  /* external torque on the output shaft, µN·m, + = positive direction */
+} km_plant_input_t;
+
+/* State and derived gains. Treat as opaque; read through the functions below. */
+typedef struct {
+    const km_plant_config_t *cfg;
+    /* derived at init (fixed-point gains for the fixed sub-step) */
+    uint32_t sub_us;         /* effective sub-step, µs */
+    int32_t ke_q24;          /* back-EMF at output: mV per mdeg/s, Q24 */
+    int32_t kt_q16;          /* torque at output: µN·m per mA, Q16 */
+    int32_t g_q16;           /* motor conductance: mA per mV, Q16 */
+    int32_t rint_q12;        /* R_int / R, Q12 */
+    int64_t visc_q16;        /* viscous friction: µN·m per m°/s, Q16 */
+    int64_t acc_q24;         /* speed change per sub-step: mdeg/s per µN·m, Q24 */
+    int64_t heat_q30;        /* heating per sub-step: µ°C per mW, Q30 */
+    int64_t cool_q30;        /* cooling per sub-step: fraction of (T - T_amb), Q30 */
+    /* settable environment */
+    int32_t supply_mv;
+    int32_t ambient_uc;      /* µ°C */
+    uint32_t faults;
+    /* state */
+    int32_t pos_ddeg;        /* output position, whole 0.1° part (multi-turn, wraps at int32) */
+    int32_t pos_rem_ndeg;    /* output position remainder, nano-degrees, |rem| < 1e8 */
+    int32_t speed_mdps;      /* output speed, milli-degrees per second */
+    int32_t current_ma;      /* motor current, mA, signed (+ drives positive) */
+    int32_t supply_ma;       /* current drawn from the supply, mA (signed) */
+    int32_t bus_mv;          /* voltage at the servo's supply terminals, mV */
+    int32_t temp_uc;         /* winding temperature, µ°C */
+    uint32_t carry_us;       /* time not yet integrated (< sub_us) */
+    uint32_t time_ms;        /* simulated time, ms (wraps after ~49 days) */
+    uint32_t time_us_part;   /* µs part of time_ms */
+} km_plant_t;
+
+/* Set up a plant at rest at position 0, ambient temperature, full supply.
+ * Returns false (plant unusable) if cfg is NULL or its parameters are invalid. */
+bool km_plant_init(km_plant_t *p, const km_plant_config_t *cfg);
+
+/* Advance the simulation by dt_us with the bridge input held constant. */
+void km_plant_step(km_plant_t *p, const km_plant_input_t *in, uint32_t dt_us);
+
+/* Environment and test hooks. */
+void km_plant_set_supply_mv(km_plant_t *p, int32_t mv);   /* open-circuit supply, mV (>= 0) */
+void km_plant_set_ambient_dc(km_plant_t *p, int16_t dc);  /* ambient, 0.1 °C */
+void km_plant_set_position_ddeg(km_plant_t *p, int32_t ddeg); /* teleport shaft (at rest) */
+void km_plant_set_faults(km_plant_t *p, uint32_t faults); /* KM_PLANT_FAULT_* mask */
+
+/* Readings (what the board's sensors would report). */
+int16_t km_plant_position_ddeg(const km_plant_t *p);  /* potentiometer, 0.1°, clamped to ±pot travel */
+uint16_t km_plant_pot_adc(const km_plant_t *p);       /* same as 12-bit ADC counts, 0 = -travel, 4095 = +travel */
+int32_t km_plant_turns_ddeg(const km_plant_t *p);     /* multi-turn "encoder" position, 0.1°, unclamped */
+int32_t km_plant_speed_dps(const km_plant_t *p);      /* output speed, °/s (rounded) */
+int32_t km_plant_speed_mdps(const km_plant_t *p);     /* output speed, m°/s */
+int32_t km_plant_current_ma(const km_plant_t *p);     /* motor current, mA, signed; a shunt reads its magnitude */
+int32_t km_plant_supply_ma(const km_plant_t *p);      /* supply current, mA */
+int32_t km_plant_voltage_mv(const km_plant_t *p);     /* supply terminal voltage, mV */
+int32_t km_plant_temp_dc(const km_plant_t *p);        /* winding temperature, 0.1 °C (rounded) */
+int32_t km_plant_temp_c(const km_plant_t *p);         /* winding temperature, °C (rounded) */
+bool km_plant_at_endstop(const km_plant_t *p);        /* shaft resting on a mechanical stop */
+
+#endif /* KM_PLANT_H */

@@ -1,0 +1,11 @@
+# Python tests of the host tools (tools/kmbus.py, tools/servo-bus). unittest
+# exits non-zero when any test fails or errors, which fails the CTest test;
+# FAIL_REGULAR_EXPRESSION also catches a run that collected no tests at all.
+find_program(KM_PYTHON3 python3)
+if(KM_PYTHON3)
+  add_test(NAME py_tools
+    COMMAND ${KM_PYTHON3} -m unittest discover -s ${CMAKE_SOURCE_DIR}/tests/tools -v)
+  set_tests_properties(py_tools PROPERTIES
+    LABELS tools TIMEOUT 300
+    FAIL_REGULAR_EXPRESSION "Ran 0 tests;FAILED")
+endif()
