@@ -10,6 +10,12 @@ if(KM_QEMU_ARM AND Python3_FOUND)
     COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/qemu/run_image.py
             ${KM_QEMU_IMAGES}/km-board-test-qemu-microbit.elf 30)
   set_tests_properties(qemu_board_test PROPERTIES LABELS qemu TIMEOUT 60)
+
+  # UART0 on a TCP socket: RX interrupt, TX and the one-shot timer end to end.
+  add_test(NAME qemu_uart_echo
+    COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/qemu/uart_echo.py
+            ${KM_QEMU_IMAGES}/km-uart-echo-qemu-microbit.elf 30)
+  set_tests_properties(qemu_uart_echo PROPERTIES LABELS qemu TIMEOUT 60)
 else()
   message(WARNING "qemu-system-arm or python3 missing: QEMU tests not registered")
 endif()
