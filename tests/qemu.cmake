@@ -16,6 +16,13 @@ if(KM_QEMU_ARM AND Python3_FOUND)
     COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/qemu/uart_echo.py
             ${KM_QEMU_IMAGES}/km-uart-echo-qemu-microbit.elf 30)
   set_tests_properties(qemu_uart_echo PROPERTIES LABELS qemu TIMEOUT 60)
+
+  # The bar: no heap, no stdio, no floating point linked into any image.
+  add_test(NAME qemu_image_maps
+    COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/qemu/check_map.py
+            ${KM_QEMU_IMAGES}/km-board-test-qemu-microbit.map
+            ${KM_QEMU_IMAGES}/km-uart-echo-qemu-microbit.map)
+  set_tests_properties(qemu_image_maps PROPERTIES LABELS qemu)
 else()
   message(WARNING "qemu-system-arm or python3 missing: QEMU tests not registered")
 endif()
