@@ -1,10 +1,12 @@
 /* System services (km_hal_system.h) on the nRF51: clocks, reset, watchdog,
  * interrupt lock, entropy, idle. */
 #include "km_hal_system.h"
+#include "km_hal_time.h"
 #include "nrf51_regs.h"
 
 #define PRV_WDT_CLK_HZ 32768u
-#define PRV_RNG_SPINS 10000u /* ~2 ms at 16 MHz; a real RNG byte takes ~0.7 ms */
+#define PRV_RNG_BYTE_US 2000u      /* a real (and QEMU's) bias-corrected byte takes ~0.7 ms */
+#define PRV_RNG_SPINS 2000000u     /* last resort if TIMER0 is not running yet */
 #define PRV_SYSTICK_RELOAD (NRF_HFCLK_HZ / 1000u - 1u)
 
 void km_hal_system_init(void)
@@ -71,7 +73,9 @@ void km_hal_irq_restore(uint32_t state)
 
 /* Four RNG bytes mixed with FICR DEVICEID. QEMU's FICR holds the same
  * DEVICEID for every instance (0x12345678 0x9ABCDEF1), so on QEMU the RNG is
- * what makes servos differ; a bounded wait keeps a dead RNG from hanging. */
+ * what makes servos differ. The wait is bounded in time, not in loop turns:
+ * QEMU runs a loop turn far faster than 16 MHz silicon while its RNG still
+ * takes 660 us of virtual time per byte. */
 uint32_t km_hal_entropy(void)
 {
     uint32_t value = NRF_REG(NRF_FICR, FICR_DEVICEID0) ^ NRF_REG(NRF_FICR, FICR_DEVICEID1);
@@ -80,7 +84,9 @@ uint32_t km_hal_entropy(void)
     NRF_REG(NRF_RNG, RNG_TASKS_START) = 1u;
     for (uint32_t i = 0; i < 4u; i++) {
         uint32_t spins = PRV_RNG_SPINS;
-        while (NRF_REG(NRF_RNG, RNG_EVENTS_VALRDY) == 0u && spins > 0u) {
+        uint32_t start = km_hal_time_now();
+        while (NRF_REG(NRF_RNG, RNG_EVENTS_VALRDY) == 0u && spins > 0u &&
+               km_hal_time_now() - start < PRV_RNG_BYTE_US) {
             spins--;
         }
         NRF_REG(NRF_RNG, RNG_EVENTS_VALRDY) = 0u;

@@ -1,7 +1,12 @@
 #!/usr/bin/env python3
 """Run one test image in QEMU's microbit machine with semihosting and exit
 with the guest's exit code (SYS_EXIT_EXTENDED). A missing image is a
-failure that says how to build it, never a silent skip."""
+failure that says how to build it, never a silent skip.
+
+-icount makes virtual time count instructions (64 ns each, about a 16 MHz
+M0), so the image's timer checks do not depend on host load: without it,
+a busy CI machine stalls the vCPU while QEMU's clock runs on, and a 2 ms
+one-shot may fire before the very next instruction checks it has not."""
 import subprocess
 import sys
 from pathlib import Path
@@ -18,6 +23,7 @@ def main() -> int:
         return 1
     cmd = ["qemu-system-arm", "-M", "microbit", "-display", "none", "-monitor", "none",
            "-serial", "null", "-semihosting-config", "enable=on,target=native",
+           "-icount", "shift=6,align=off,sleep=off",
            "-kernel", str(image)]
     print(" ".join(cmd), flush=True)
     try:
