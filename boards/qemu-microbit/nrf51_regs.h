@@ -16,6 +16,13 @@
 #define NRF_WDT 0x40010000u
 #define NRF_NVMC 0x4001E000u
 #define NRF_FICR 0x10000000u
+#define NRF_GPIO 0x50000000u
+
+/* GPIO (RM §14) */
+#define GPIO_OUTSET 0x508u
+#define GPIO_PIN_CNF(n) (0x700u + 4u * (n))
+#define GPIO_PIN_CNF_OUTPUT 1u /* DIR = output, input buffer connected */
+#define GPIO_PIN_CNF_INPUT 0u  /* DIR = input, buffer connected, no pull */
 
 /* Interrupt numbers = peripheral ID = (base >> 12) & 0x1F. */
 #define NRF_IRQ_UART0 2u

@@ -57,6 +57,10 @@ bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx)
     s_tx_busy = false;
     s_tx_left = 0u;
 
+    /* RM §29.2: TXD idles high as a GPIO output, RXD is an input. */
+    NRF_REG(NRF_GPIO, GPIO_OUTSET) = 1u << PRV_PIN_TXD;
+    NRF_REG(NRF_GPIO, GPIO_PIN_CNF(PRV_PIN_TXD)) = GPIO_PIN_CNF_OUTPUT;
+    NRF_REG(NRF_GPIO, GPIO_PIN_CNF(PRV_PIN_RXD)) = GPIO_PIN_CNF_INPUT;
     NRF_REG(NRF_UART0, UART_PSELTXD) = PRV_PIN_TXD;
     NRF_REG(NRF_UART0, UART_PSELRXD) = PRV_PIN_RXD;
     NRF_REG(NRF_UART0, UART_PSELRTS) = UART_PSEL_DISCONNECTED;
