@@ -1,0 +1,36 @@
+/* What the qemu-microbit board offers beyond the hal contracts: the store's
+ * flash instance and the simulated-plant hook-up (this board has no motor).
+ *
+ * A plant adapter, run from the control tick, reads the last motor command
+ * with km_board_motor_command(), steps the plant, and publishes the plant's
+ * readings with km_board_sensors_publish(); km_hal_sensors_read() then
+ * returns them. Nothing here moves by itself: no plant, no motion. */
+#ifndef KM_BOARD_H
+#define KM_BOARD_H
+
+#include <stdint.h>
+
+#include "km_hal_flash.h"
+#include "km_hal_sensors.h"
+
+/* The flash region of the user-data store (top pages, see the linker script). */
+const km_flash_t *km_board_flash(void);
+
+typedef enum {
+    KM_BOARD_MOTOR_FREE = 0, /* coast: the state after init */
+    KM_BOARD_MOTOR_DRIVE,
+    KM_BOARD_MOTOR_BRAKE,
+} km_board_motor_mode_t;
+
+typedef struct {
+    km_board_motor_mode_t mode;
+    int16_t pwm; /* -1000..1000, meaningful in DRIVE */
+} km_board_motor_cmd_t;
+
+/* The last command given through km_hal_motor.h. */
+km_board_motor_cmd_t km_board_motor_command(void);
+
+/* Replace the readings km_hal_sensors_read() returns. */
+void km_board_sensors_publish(const km_sensors_t *readings);
+
+#endif

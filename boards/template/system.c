@@ -1,0 +1,49 @@
+/* Template: reset, watchdog, interrupt lock, identity, idle (km_hal_system.h). */
+#include "km_hal_system.h"
+
+/* Clocks to full speed, flash wait states, anything other inits rely on. */
+void km_hal_system_init(void)
+{
+}
+
+/* Request a system reset (AIRCR.SYSRESETREQ on Cortex-M) and wait for it. */
+_Noreturn void km_hal_system_reset(void)
+{
+    for (;;) {
+    }
+}
+
+/* Start the independent watchdog with at least `timeout_ms`; it cannot be
+ * stopped afterwards. */
+void km_hal_watchdog_start(uint32_t timeout_ms)
+{
+    (void)timeout_ms;
+}
+
+/* Reload the watchdog counter. */
+void km_hal_watchdog_kick(void)
+{
+}
+
+/* Cortex-M: read PRIMASK, then cpsid i; return what was read. */
+uint32_t km_hal_irq_lock(void)
+{
+    return 0u;
+}
+
+/* Cortex-M: write PRIMASK back (never a blind cpsie: locks nest). */
+void km_hal_irq_restore(uint32_t state)
+{
+    (void)state;
+}
+
+/* Unique-ID words, a hardware RNG, or ADC noise: differs between parts. */
+uint32_t km_hal_entropy(void)
+{
+    return 0u;
+}
+
+/* WFI: sleep until the next interrupt. */
+void km_hal_idle(void)
+{
+}

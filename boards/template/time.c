@@ -1,0 +1,35 @@
+/* Template: the monotonic tick and the one-shot timer (km_hal_time.h). */
+#include "km_hal_time.h"
+
+/* Ticks per second of km_hal_time_now(): at least 1 MHz. */
+uint32_t km_hal_time_tick_hz(void)
+{
+    return 1000000u;
+}
+
+/* Start a free-running timer at tick_hz (ideally 32 bits wide, else extend
+ * it in software) and enable the interrupt of one compare channel. */
+void km_hal_time_init(void)
+{
+}
+
+/* Read the counter; safe from interrupts and main alike. */
+uint32_t km_hal_time_now(void)
+{
+    return 0u;
+}
+
+/* Program the compare channel for `at` and remember handler/ctx; if `at` is
+ * not in the future ((int32_t)(at - now) <= 0), pend the interrupt at once.
+ * The ISR disarms first, then calls handler(ctx); re-arming replaces. */
+void km_hal_timer_at(uint32_t at, km_timer_handler_t handler, void *ctx)
+{
+    (void)at;
+    (void)handler;
+    (void)ctx;
+}
+
+/* Disarm the compare channel and forget the handler. */
+void km_hal_timer_cancel(void)
+{
+}

@@ -1,0 +1,32 @@
+# km_add_image: one bare-metal firmware image per call, for any board.
+#
+#   km_add_image(NAME <name> LINKER_SCRIPT <file.ld>
+#                SOURCES <src>... [LIBS <target>...] [DEFINES <def>...])
+#
+# Emits <name>.elf (the target, named <name>), <name>.bin, <name>.hex and
+# <name>.map next to it, and prints arm-none-eabi-size after each link.
+# CPU and libc flags come from the board's board.cmake, not from here.
+include_guard(GLOBAL)
+
+function(km_add_image)
+  cmake_parse_arguments(IMG "" "NAME;LINKER_SCRIPT" "SOURCES;LIBS;DEFINES" ${ARGN})
+  if(NOT IMG_NAME OR NOT IMG_LINKER_SCRIPT OR NOT IMG_SOURCES)
+    message(FATAL_ERROR "km_add_image: NAME, LINKER_SCRIPT and SOURCES are required")
+  endif()
+  set(out ${CMAKE_CURRENT_BINARY_DIR}/${IMG_NAME})
+
+  add_executable(${IMG_NAME} ${IMG_SOURCES})
+  set_target_properties(${IMG_NAME} PROPERTIES SUFFIX ".elf" LINK_DEPENDS ${IMG_LINKER_SCRIPT})
+  target_link_libraries(${IMG_NAME} PRIVATE ${IMG_LIBS})
+  target_compile_definitions(${IMG_NAME} PRIVATE ${IMG_DEFINES})
+  target_link_options(${IMG_NAME} PRIVATE
+    -T${IMG_LINKER_SCRIPT} -Wl,-Map=${out}.map -Wl,--cref)
+
+  add_custom_command(TARGET ${IMG_NAME} POST_BUILD
+    COMMAND ${CMAKE_OBJCOPY} -O binary $<TARGET_FILE:${IMG_NAME}> ${out}.bin
+    COMMAND ${CMAKE_OBJCOPY} -O ihex $<TARGET_FILE:${IMG_NAME}> ${out}.hex
+    COMMAND ${CMAKE_SIZE} $<TARGET_FILE:${IMG_NAME}>
+    BYPRODUCTS ${out}.bin ${out}.hex ${out}.map
+    COMMENT "${IMG_NAME}: .bin, .hex, .map and size"
+    VERBATIM)
+endfunction()
