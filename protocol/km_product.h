@@ -1,0 +1,38 @@
+/* Product configuration: what differs between servo models (PROTOCOL.md §6).
+ * A board fills one of these; the register table takes every product-
+ * dependent default and range from it, never from literals. */
+#ifndef KM_PRODUCT_H
+#define KM_PRODUCT_H
+
+#include <stdint.h>
+
+typedef enum {
+    KM_VARIANT_POTENTIOMETER = 0, /* limited travel, absolute position */
+    KM_VARIANT_ENCODER = 1,       /* multi-turn, speed control, zeroing */
+} km_variant_t;
+
+typedef struct {
+    const char *model;            /* 0x0A, ASCII, at most 16 characters */
+    uint32_t firmware_version;    /* 0x0C, 0x@@##&&&& */
+    km_variant_t variant;
+    /* Defaults of product-dependent registers (§5). */
+    uint16_t max_current_ma;      /* 0x14 */
+    uint16_t max_speed_dps;       /* 0x15 */
+    int16_t zero_offset1;         /* 0x16, factory calibration, 0.1 deg */
+    int16_t angle_min;            /* 0x19, 0.1 deg, 0 = no limit */
+    int16_t angle_max;            /* 0x1A */
+    uint8_t voltage_high_v;       /* 0x3C first field */
+    uint8_t voltage_low_v;        /* 0x3C second field */
+    uint16_t current_threshold_ma;/* 0x3E first field */
+    /* Valid ranges. */
+    uint16_t baud_min_100;        /* 0x10 lowest, in units of 100 baud */
+    uint16_t baud_max_100;        /* 0x10 highest */
+    uint16_t current_max_ma;      /* upper bound of 0x14, 0x5C, 0x3E */
+    uint16_t speed_max_dps;       /* upper bound of 0x15, 0x5D */
+    int16_t travel_min;           /* lowest angle limit / target, 0.1 deg */
+    int16_t travel_max;           /* highest angle limit / target, 0.1 deg */
+    int16_t zero_offset2_max;     /* |0x17| bound, 0.1 deg */
+    uint8_t voltage_max_v;        /* upper bound of 0x3C fields */
+} km_product_t;
+
+#endif

@@ -1,0 +1,67 @@
+/* The register table (PROTOCOL.md §5) generated from km_registers.def:
+ * lookup by address, access, persistence, wire layout, default and range.
+ * Values are kept as the wire bytes packed little-endian into a u32
+ * (an i16 sits in the low 16 bits, two fields side by side). */
+#ifndef KM_REGISTERS_H
+#define KM_REGISTERS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "km_product.h"
+
+typedef enum { KM_R = 1, KM_W = 2, KM_RW = 3 } km_access_t;
+
+typedef enum {
+    KM_L_U8,     /* 1 B */
+    KM_L_I8,     /* 1 B */
+    KM_L_U16,    /* 2 B */
+    KM_L_I16,    /* 2 B */
+    KM_L_U32,    /* 4 B */
+    KM_L_U8U8,   /* 2 B: two u8 fields */
+    KM_L_U16U8,  /* 3 B: u16 then u8 */
+    KM_L_STATUS, /* read: status, random */
+    KM_L_MAGIC,  /* write: exactly E1 E2 E3 E4 */
+    KM_L_TEXT,   /* read: ASCII model name, up to 16 B */
+    KM_L_POS,    /* i16, or i32 when the value does not fit (length tells) */
+    KM_L_MOVE,   /* write: i16 target [, u16 time or speed] */
+    KM_L_ADV,    /* write: u8 control byte, then two 16-bit parameters */
+} km_layout_t;
+
+typedef enum {
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi) KM_REG_##ident,
+#include "km_registers.def"
+#undef KM_REG
+    KM_REG_COUNT
+} km_reg_index_t;
+
+typedef struct {
+    uint8_t addr;
+    uint8_t access;    /* km_access_t */
+    uint8_t persisted; /* 1 = user data */
+    uint8_t layout;    /* km_layout_t */
+    const char *name;
+} km_reg_t;
+
+extern const km_reg_t km_reg_table[KM_REG_COUNT];
+
+/* Table index of an address, or -1 for a reserved/unknown address. */
+int km_reg_find(uint8_t addr);
+
+uint32_t km_reg_default(km_reg_index_t reg, const km_product_t *p);
+
+/* Checks the bytes of a write: length for the layout, every field in range,
+ * cross-field rules. On success stores the packed value in *packed. */
+bool km_reg_validate(km_reg_index_t reg, const km_product_t *p, const uint8_t *data,
+                     uint8_t len, uint32_t *packed);
+
+/* Bytes a stored value takes on the wire for fixed layouts (0 otherwise). */
+uint8_t km_reg_fixed_size(km_layout_t layout);
+
+/* Encodes a value little-endian into out; returns the byte count. */
+uint8_t km_put_le(uint8_t *out, uint32_t value, uint8_t size);
+
+/* Reads n (1..4) little-endian bytes. */
+uint32_t km_get_le(const uint8_t *in, uint8_t n);
+
+#endif

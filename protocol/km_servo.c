@@ -1,0 +1,686 @@
+/* Dispatcher: one validated frame in, register changes, typed requests and
+ * at most one answer out (PROTOCOL.md §3 commands, §4 status, §5 registers).
+ * Where the spec is open, the choice is documented in
+ * docs/protocol-decisions.md and named here by its heading. */
+#include "km_servo.h"
+
+#include <string.h>
+
+#include "km_encoder.h"
+
+enum {
+    CMD_PING = 0x01,
+    CMD_READ = 0x02,
+    CMD_WRITE = 0x03,
+    CMD_SYNC_WRITE = 0x04,
+    CMD_MULTI_WRITE = 0x83,
+    CMD_SYNC_EXECUTE = 0x84,
+};
+
+#define CONFIG_RESPONSE_LEVEL 0x08u
+#define TEXT_MAX 16u
+
+static const uint8_t s_restart_magic[4] = {0xE1, 0xE2, 0xE3, 0xE4};
+
+/* ---- small helpers ---------------------------------------------------- */
+
+static uint32_t prv_reg(const km_servo_t *s, km_reg_index_t r)
+{
+    return s->value[r];
+}
+
+static void prv_fail(km_servo_t *s)
+{
+    s->flags |= KM_ST_FAILED;
+}
+
+static void prv_exception(km_servo_t *s)
+{
+    s->flags |= KM_ST_EXCEPTION;
+}
+
+static void prv_request(km_servo_t *s, const km_request_t *req)
+{
+    if (s->ops && s->ops->request) {
+        s->ops->request(s->ops->ctx, req);
+    }
+}
+
+static bool prv_commit(km_servo_t *s, const uint8_t *addrs, const uint32_t *values, uint8_t n)
+{
+    return s->ops && s->ops->commit && s->ops->commit(s->ops->ctx, addrs, values, n);
+}
+
+static uint8_t prv_next_random(km_servo_t *s)
+{
+    uint32_t x = s->prng; /* xorshift32: never 0 from a non-zero seed */
+    x ^= x << 13;
+    x ^= x >> 17;
+    x ^= x << 5;
+    s->prng = x;
+    return (uint8_t)x;
+}
+
+/* Runtime mirrors (§5.4): 0x5B/0x5C/0x5D follow 0x13/0x14/0x15 writes. */
+static void prv_apply(km_servo_t *s, km_reg_index_t r, uint32_t v)
+{
+    s->value[r] = v;
+    if (r == KM_REG_MAX_TORQUE) {
+        s->value[KM_REG_TORQUE_LIMIT] = v;
+    } else if (r == KM_REG_MAX_CURRENT) {
+        s->value[KM_REG_CURRENT_LIMIT_NOW] = v;
+    } else if (r == KM_REG_MAX_SPEED) {
+        s->value[KM_REG_SPEED_LIMIT] = v;
+    }
+}
+
+static int32_t prv_clamp16(int32_t v)
+{
+    return v > 32767 ? 32767 : (v < -32768 ? -32768 : v);
+}
+
+/* ---- status and timing ------------------------------------------------ */
+
+uint8_t km_servo_status(const km_servo_t *s)
+{
+    uint8_t st = (uint8_t)(s->flags & (KM_ST_FAILED | KM_ST_EXCEPTION));
+    if (s->live.running) {
+        st |= KM_ST_RUNNING;
+    }
+    if (s->hw_latched) {
+        st |= KM_ST_HW_FAULT;
+    }
+    st |= (uint8_t)(s->live.protections & KM_ST_PROTECTION);
+    return st;
+}
+
+/* "Super-ID answer slots": servo i starts response_delay + i * slot after
+ * the frame, slot = the longest answer this read can give on the wire at
+ * the active baud plus a guard of 2 byte times, rounded up to 1 us. */
+static uint32_t prv_slot_us(const km_servo_t *s, uint16_t answer_bytes)
+{
+    const uint32_t bits = (uint32_t)(answer_bytes + 2u) * 10u;
+    return (bits * 1000000u + s->active_baud - 1u) / s->active_baud;
+}
+
+static uint32_t prv_delay_us(const km_servo_t *s, uint8_t frame_id, uint16_t max_answer_bytes)
+{
+    const uint32_t base = prv_reg(s, KM_REG_RESPONSE_DELAY);
+    if (frame_id != KM_ID_SUPER) {
+        return base;
+    }
+    return base + km_servo_id(s) * prv_slot_us(s, max_answer_bytes);
+}
+
+static void prv_answer_status(km_servo_t *s, uint8_t answer_id, uint8_t frame_id, km_reply_t *reply)
+{
+    reply->len = km_encode_status(reply->bytes, answer_id, km_servo_status(s));
+    reply->delay_us = prv_delay_us(s, frame_id, 6u);
+}
+
+/* ---- init and accessors ----------------------------------------------- */
+
+uint8_t km_servo_persisted_count(void)
+{
+    uint8_t n = 0;
+    for (unsigned i = 0; i < KM_REG_COUNT; i++) {
+        n = (uint8_t)(n + km_reg_table[i].persisted);
+    }
+    return n;
+}
+
+uint8_t km_servo_persisted_addr(uint8_t k)
+{
+    for (unsigned i = 0; i < KM_REG_COUNT; i++) {
+        if (km_reg_table[i].persisted && k-- == 0) {
+            return km_reg_table[i].addr;
+        }
+    }
+    return 0;
+}
+
+void km_servo_init(km_servo_t *s, const km_product_t *product, const uint32_t *persisted,
+                   uint32_t seed, const km_servo_ops_t *ops)
+{
+    memset(s, 0, sizeof *s);
+    s->product = product;
+    s->ops = ops;
+    unsigned k = 0;
+    for (unsigned i = 0; i < KM_REG_COUNT; i++) {
+        uint32_t v = km_reg_default((km_reg_index_t)i, product);
+        if (km_reg_table[i].persisted && persisted) {
+            v = persisted[k];
+        }
+        k += km_reg_table[i].persisted;
+        prv_apply(s, (km_reg_index_t)i, v);
+    }
+    s->active_baud = prv_reg(s, KM_REG_BAUD) * 100u;
+    s->prng = seed ? seed : 0x2545F491u;
+}
+
+uint8_t km_servo_id(const km_servo_t *s)
+{
+    return (uint8_t)prv_reg(s, KM_REG_ID);
+}
+
+uint32_t km_servo_active_baud(const km_servo_t *s)
+{
+    return s->active_baud;
+}
+
+uint32_t km_servo_reg(const km_servo_t *s, km_reg_index_t reg)
+{
+    return s->value[reg];
+}
+
+void km_servo_note_checksum_error(km_servo_t *s)
+{
+    s->checksum_pending = true;
+}
+
+void km_servo_set_live(km_servo_t *s, const km_live_t *live)
+{
+    s->live = *live;
+    s->hw_latched |= live->hw_faults; /* §5.2 0x35: latched until restart */
+}
+
+void km_servo_set_torque_switch(km_servo_t *s, uint8_t value)
+{
+    s->value[KM_REG_TORQUE_SWITCH] = value;
+}
+
+void km_servo_set_userdata_defaults_flag(km_servo_t *s, bool defaults)
+{
+    s->userdata_defaults = defaults;
+}
+
+/* ---- read ------------------------------------------------------------- */
+
+static uint8_t prv_put_pos(uint8_t *out, int32_t v)
+{
+    /* §5.3: i16 when it fits, else i32; the length tells the master. */
+    if (v >= -32768 && v <= 32767) {
+        return km_put_le(out, (uint32_t)v, 2);
+    }
+    return km_put_le(out, (uint32_t)v, 4);
+}
+
+/* Longest value a register can answer with (for the super-ID slot). */
+static uint8_t prv_max_value_size(km_layout_t layout)
+{
+    switch (layout) {
+    case KM_L_TEXT:
+        return TEXT_MAX;
+    case KM_L_POS:
+        return 4;
+    default:
+        return km_reg_fixed_size(layout);
+    }
+}
+
+/* Encodes register r's current value; returns its byte count. */
+static uint8_t prv_encode_value(km_servo_t *s, km_reg_index_t r, uint8_t *out)
+{
+    const km_layout_t layout = (km_layout_t)km_reg_table[r].layout;
+    switch (r) {
+    case KM_REG_STATUS:
+        out[0] = km_servo_status(s);
+        out[1] = prv_next_random(s);
+        return 2;
+    case KM_REG_PRODUCT_INFO: {
+        uint8_t n = 0;
+        const char *m = s->product->model;
+        while (m && m[n] && n < TEXT_MAX) {
+            out[n] = (uint8_t)m[n];
+            n++;
+        }
+        return n;
+    }
+    case KM_REG_PROTOCOL_VERSION:
+    case KM_REG_FIRMWARE_VERSION:
+        return km_put_le(out, km_reg_default(r, s->product), 4);
+    case KM_REG_HW_FAULTS:
+        out[0] = s->hw_latched;
+        return 1;
+    case KM_REG_PROT_FLAGS:
+        out[0] = (uint8_t)(s->live.protections & KM_ST_PROTECTION);
+        return 1;
+    case KM_REG_POSITION:
+        return prv_put_pos(out, s->live.position);
+    case KM_REG_DEVIATION:
+        return prv_put_pos(out, s->live.deviation);
+    case KM_REG_SPEED:
+        return km_put_le(out, (uint32_t)prv_clamp16(s->live.speed), 2);
+    case KM_REG_CURRENT:
+        return km_put_le(out, (uint32_t)prv_clamp16(s->live.current), 2);
+    case KM_REG_PWM:
+        return km_put_le(out, (uint32_t)prv_clamp16(s->live.pwm), 2);
+    case KM_REG_TEMPERATURE:
+        return km_put_le(out, (uint32_t)prv_clamp16(s->live.temperature), 2);
+    case KM_REG_VOLTAGE:
+        return km_put_le(out, (uint32_t)prv_clamp16(s->live.voltage), 2);
+    case KM_REG_ROTATION_TIME:
+        return km_put_le(out, s->live.rotation_ms, 4);
+    default:
+        return km_put_le(out, s->value[r], km_reg_fixed_size(layout));
+    }
+}
+
+static void prv_read(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
+{
+    /* "Malformed frames": a read carries exactly one address byte. */
+    const int r = f->body_len == 1 ? km_reg_find(f->body[0]) : -1;
+    if (r < 0 || !(km_reg_table[r].access & KM_R)) {
+        prv_exception(s);
+        prv_answer_status(s, km_servo_id(s), f->id, reply);
+        return;
+    }
+    uint8_t body[1 + TEXT_MAX];
+    body[0] = f->body[0];
+    const uint8_t n = prv_encode_value(s, (km_reg_index_t)r, &body[1]);
+    reply->len = km_encode_response(reply->bytes, km_servo_id(s), CMD_READ, body, (uint8_t)(1u + n));
+    const uint8_t longest = prv_max_value_size((km_layout_t)km_reg_table[r].layout);
+    reply->delay_us = prv_delay_us(s, f->id, (uint16_t)(7u + longest));
+}
+
+/* ---- write ------------------------------------------------------------ */
+
+static void prv_commit_one(km_servo_t *s, km_reg_index_t r, uint32_t v)
+{
+    const uint8_t addr = km_reg_table[r].addr;
+    if (!prv_commit(s, &addr, &v, 1)) {
+        prv_fail(s); /* the store failed: the old value stays in force */
+        return;
+    }
+    prv_apply(s, r, v);
+}
+
+static void prv_userdata_reset(km_servo_t *s, uint8_t level)
+{
+    uint8_t addrs[KM_REG_COUNT];
+    uint32_t values[KM_REG_COUNT];
+    uint8_t n = 0;
+    for (unsigned i = 0; i < KM_REG_COUNT; i++) {
+        if (!km_reg_table[i].persisted) {
+            continue;
+        }
+        /* §5.1 0x03 level 1 keeps ID, baud and both zero offsets. */
+        if (level == 1 && (i == KM_REG_ID || i == KM_REG_BAUD || i == KM_REG_ZERO_OFFSET1 ||
+                           i == KM_REG_ZERO_OFFSET2)) {
+            continue;
+        }
+        addrs[n] = km_reg_table[i].addr;
+        values[n] = km_reg_default((km_reg_index_t)i, s->product);
+        n++;
+    }
+    if (!prv_commit(s, addrs, values, n)) {
+        prv_fail(s);
+        return;
+    }
+    for (uint8_t j = 0; j < n; j++) {
+        prv_apply(s, (km_reg_index_t)km_reg_find(addrs[j]), values[j]);
+    }
+}
+
+/* Servo-mode rotation (0x65..0x68): "Motion preconditions". */
+static bool prv_servo_motion_allowed(km_servo_t *s)
+{
+    const uint32_t ts = prv_reg(s, KM_REG_TORQUE_SWITCH);
+    return !s->hw_latched && prv_reg(s, KM_REG_CONTROL_MODE) != 2u && (ts == 2u || ts == 3u);
+}
+
+static bool prv_motor_motion_allowed(km_servo_t *s)
+{
+    return !s->hw_latched && prv_reg(s, KM_REG_CONTROL_MODE) != 1u;
+}
+
+static bool prv_is_encoder(const km_servo_t *s)
+{
+    return s->product->variant == KM_VARIANT_ENCODER;
+}
+
+static void prv_servo_motion(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t len)
+{
+    km_request_t req = {0};
+    switch (r) {
+    case KM_REG_MOVE_TIME:
+    case KM_REG_MOVE_SPEED:
+        if (len != 2 && len != 4) {
+            prv_fail(s);
+            return;
+        }
+        req.kind = r == KM_REG_MOVE_TIME ? KM_REQ_MOVE_TIME : KM_REQ_MOVE_SPEED;
+        req.u.move.target = (int16_t)km_get_le(d, 2);
+        req.u.move.param = len == 4 ? (uint16_t)km_get_le(d + 2, 2) : 0u; /* omitted = fastest */
+        break;
+    case KM_REG_INTERPOLATE:
+        if (len != 2) {
+            prv_fail(s);
+            return;
+        }
+        req.kind = KM_REQ_INTERPOLATE;
+        req.u.move.target = (int16_t)km_get_le(d, 2);
+        break;
+    default: { /* KM_REG_SERVO_ADVANCED */
+        if (len != 5) {
+            prv_fail(s);
+            return;
+        }
+        const uint8_t hi = (uint8_t)(d[0] >> 4), lo = (uint8_t)(d[0] & 0x0Fu);
+        const int16_t p2 = (int16_t)km_get_le(d + 3, 2);
+        if (hi > 1u || lo > 2u || (lo == 2u && (p2 < 0 || p2 > 1000))) {
+            prv_fail(s);
+            return;
+        }
+        req.kind = KM_REQ_SERVO_ADVANCED;
+        req.u.adv.control = d[0];
+        req.u.adv.p1 = (uint16_t)km_get_le(d + 1, 2);
+        req.u.adv.p2 = (uint16_t)p2;
+        break;
+    }
+    }
+    if (!prv_servo_motion_allowed(s)) {
+        prv_fail(s);
+        return;
+    }
+    if (prv_reg(s, KM_REG_TORQUE_SWITCH) == 3u) {
+        s->value[KM_REG_TORQUE_SWITCH] = 2u; /* §5.4 0x64 = 3: on at the next rotation */
+    }
+    prv_request(s, &req);
+}
+
+static void prv_motor_motion(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t len)
+{
+    km_request_t req = {0};
+    if (r == KM_REG_MOTOR_ADVANCED) {
+        if (len != 5) {
+            prv_fail(s);
+            return;
+        }
+        const uint8_t c = d[0];
+        const uint8_t p1_kind = (uint8_t)((c >> 4) & 3u), p2_kind = (uint8_t)((c >> 2) & 3u);
+        const uint16_t p2 = (uint16_t)km_get_le(d + 3, 2);
+        const bool encoder_only = p1_kind >= 2u || p2_kind == 1u;
+        if ((c & 0x40u) || p2_kind > 1u || (p2_kind == 0u && p2 > 1000u) ||
+            (encoder_only && !prv_is_encoder(s))) {
+            prv_fail(s);
+            return;
+        }
+        req.kind = KM_REQ_MOTOR_ADVANCED;
+        req.u.adv.control = c;
+        req.u.adv.p1 = (uint16_t)km_get_le(d + 1, 2);
+        req.u.adv.p2 = p2;
+    } else {
+        uint32_t packed;
+        if (!km_reg_validate(r, s->product, d, len, &packed) ||
+            (r == KM_REG_MOTOR_SPEED && !prv_is_encoder(s))) {
+            prv_fail(s);
+            return;
+        }
+        req.kind = r == KM_REG_MOTOR_TORQUE ? KM_REQ_MOTOR_TORQUE : KM_REQ_MOTOR_SPEED;
+        req.u.i16 = (int16_t)packed;
+    }
+    if (!prv_motor_motion_allowed(s)) {
+        prv_fail(s);
+        return;
+    }
+    prv_request(s, &req);
+}
+
+/* Executes a write of `len` bytes to `addr` (0x03, 0x84, an 0x83 entry).
+ * Returns false when no answer may follow (a restart). */
+static bool prv_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t len)
+{
+    const int ri = km_reg_find(addr);
+    if (ri < 0 || !(km_reg_table[ri].access & KM_W)) {
+        prv_exception(s); /* reserved address, or read-only (0x16 included) */
+        return true;
+    }
+    const km_reg_index_t r = (km_reg_index_t)ri;
+    uint32_t v = 0;
+    km_request_t req = {0};
+    switch (r) {
+    case KM_REG_RESTART:
+        if (len == 4 && memcmp(d, s_restart_magic, 4) == 0) {
+            if (s->ops && s->ops->restart) {
+                s->ops->restart(s->ops->ctx);
+            }
+            return false;
+        }
+        prv_fail(s);
+        return true;
+    case KM_REG_USERDATA_RESET:
+        if (!km_reg_validate(r, s->product, d, len, &v)) {
+            prv_fail(s);
+        } else {
+            prv_userdata_reset(s, (uint8_t)v);
+        }
+        return true;
+    case KM_REG_ZERO_INCREMENT: {
+        if (!km_reg_validate(r, s->product, d, len, &v)) {
+            prv_fail(s);
+            return true;
+        }
+        const int8_t inc = (int8_t)v;
+        if (inc == 0 && prv_is_encoder(s)) { /* §5.1 0x18: 0 zeroes an encoder */
+            req.kind = KM_REQ_ZERO_POSITION;
+            prv_request(s, &req);
+            return true;
+        }
+        const int32_t next = (int16_t)prv_reg(s, KM_REG_ZERO_OFFSET2) + inc;
+        if (next < -s->product->zero_offset2_max || next > s->product->zero_offset2_max) {
+            prv_fail(s);
+            return true;
+        }
+        prv_commit_one(s, KM_REG_ZERO_OFFSET2, (uint32_t)(uint16_t)(int16_t)next);
+        return true;
+    }
+    case KM_REG_POSITION:
+        /* §5.3 0x46: any value zeroes it, on motor (encoder) products. */
+        if ((len != 2 && len != 4) || !prv_is_encoder(s) || s->hw_latched) {
+            prv_fail(s);
+            return true;
+        }
+        req.kind = KM_REQ_ZERO_POSITION;
+        prv_request(s, &req);
+        return true;
+    case KM_REG_PROT_FLAGS:
+        if (!km_reg_validate(r, s->product, d, len, &v)) {
+            prv_fail(s);
+            return true;
+        }
+        req.kind = KM_REQ_PROTECTION_CLEAR;
+        req.u.u8 = (uint8_t)v;
+        prv_request(s, &req);
+        return true;
+    case KM_REG_TORQUE_SWITCH:
+        if (!km_reg_validate(r, s->product, d, len, &v) || (v == 2u && s->hw_latched)) {
+            prv_fail(s); /* 4, 5 and up are not writable; no holding with a fault */
+            return true;
+        }
+        s->value[r] = v;
+        req.kind = KM_REQ_TORQUE_SWITCH;
+        req.u.u8 = (uint8_t)v;
+        prv_request(s, &req);
+        return true;
+    case KM_REG_CONTROL_MODE:
+        /* §5.4 0x5A: motor-only only when idle or with torque off. */
+        if (!km_reg_validate(r, s->product, d, len, &v) ||
+            (v == 2u && s->live.running && prv_reg(s, KM_REG_TORQUE_SWITCH) == 2u)) {
+            prv_fail(s);
+            return true;
+        }
+        s->value[r] = v;
+        return true;
+    case KM_REG_MOVE_TIME:
+    case KM_REG_MOVE_SPEED:
+    case KM_REG_SERVO_ADVANCED:
+    case KM_REG_INTERPOLATE:
+        prv_servo_motion(s, r, d, len);
+        return true;
+    case KM_REG_MOTOR_TORQUE:
+    case KM_REG_MOTOR_SPEED:
+    case KM_REG_MOTOR_ADVANCED:
+        prv_motor_motion(s, r, d, len);
+        return true;
+    default:
+        if (!km_reg_validate(r, s->product, d, len, &v)) {
+            prv_fail(s);
+        } else if (km_reg_table[r].persisted) {
+            prv_commit_one(s, r, v); /* ID and baud too: committed before they apply */
+        } else {
+            s->value[r] = v;
+        }
+        return true;
+    }
+}
+
+/* ---- multi-ID write 0x83 ---------------------------------------------- */
+
+/* §3: only these addresses, each with the parameter sizes its write takes. */
+static bool prv_multi_k_ok(uint8_t addr, uint8_t k)
+{
+    switch (addr) {
+    case 0x64:
+        return k == 1;
+    case 0x65:
+    case 0x66:
+        return k == 2 || k == 4;
+    case 0x68:
+    case 0x6E:
+    case 0x6F:
+        return k == 2;
+    default:
+        return false;
+    }
+}
+
+/* "Multi-ID write": returns true if the frame was a command to this servo. */
+static bool prv_multi_write(km_servo_t *s, const km_frame_t *f)
+{
+    const uint8_t n_params = f->body_len >= 2 ? (uint8_t)(f->body_len - 2u) : 0u;
+    const uint8_t k = f->body_len >= 2 ? f->body[1] : 0u;
+    const bool well_formed = f->body_len >= 2 && prv_multi_k_ok(f->body[0], k) &&
+                             n_params > 0 && n_params % (k + 1u) == 0;
+    if (!well_formed) {
+        /* Every servo saw a broken command: each flags it, nothing runs. */
+        s->flags = KM_ST_FAILED;
+        s->sync.full = false;
+        return true;
+    }
+    for (uint8_t off = 2; off < f->body_len; off = (uint8_t)(off + k + 1u)) {
+        if (f->body[off] == km_servo_id(s)) {
+            s->flags = 0;
+            s->sync.full = false;
+            (void)prv_write(s, f->body[0], &f->body[off + 1u], k);
+            return true;
+        }
+    }
+    return false; /* not in the list: this servo does nothing at all */
+}
+
+/* ---- dispatch --------------------------------------------------------- */
+
+void km_servo_handle(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
+{
+    reply->len = 0;
+    reply->delay_us = 0;
+    const uint8_t own = km_servo_id(s);
+    const bool to_me = f->id == own;
+    const bool super = f->id == KM_ID_SUPER;
+    const bool broadcast = f->id == KM_ID_BROADCAST;
+    if (!to_me && !super && !broadcast) {
+        return; /* another servo's frame: it changes nothing here (§3 sync write) */
+    }
+    if (f->cmd == CMD_MULTI_WRITE) {
+        if (broadcast) {
+            (void)prv_multi_write(s, f);
+        } else if (to_me) {
+            s->flags = KM_ST_EXCEPTION; /* "Multi-ID write": broadcast only */
+            s->sync.full = false;
+        }
+        return;
+    }
+    /* "Super ID": a query address; commands other than ping and read sent
+     * to it are ignored by every servo. */
+    if (super && f->cmd != CMD_PING && f->cmd != CMD_READ) {
+        return;
+    }
+    /* A command to this servo: bits 5 and 6 now describe it (§4), starting
+     * from a checksum error seen since the last answer. */
+    s->flags = s->checksum_pending ? KM_ST_EXCEPTION : 0u;
+    s->checksum_pending = false;
+    if (f->cmd != CMD_SYNC_WRITE && f->cmd != CMD_SYNC_EXECUTE) {
+        s->sync.full = false; /* §3: any other command clears the 0x04 buffer */
+    }
+
+    switch (f->cmd) {
+    case CMD_PING:
+        if (f->body_len != 0) {
+            prv_exception(s);
+        }
+        if (!broadcast) {
+            prv_answer_status(s, own, f->id, reply);
+        }
+        return;
+    case CMD_READ:
+        if (!broadcast) {
+            prv_read(s, f, reply);
+        }
+        return;
+    case CMD_WRITE: {
+        bool may_answer = true;
+        if (f->body_len < 1) {
+            prv_exception(s);
+        } else {
+            may_answer = prv_write(s, f->body[0], &f->body[1], (uint8_t)(f->body_len - 1u));
+        }
+        /* §3: writes answer only at response level 1 and to our own ID; the
+         * answer uses the ID the frame was sent to (the old one, §3). */
+        if (may_answer && to_me && (prv_reg(s, KM_REG_CONFIG) & CONFIG_RESPONSE_LEVEL)) {
+            prv_answer_status(s, own, f->id, reply);
+        }
+        return;
+    }
+    case CMD_SYNC_WRITE:
+        /* "Sync write": target ID only; the address is checked now, the
+         * value when 0x84 runs it (motion rules depend on that moment). */
+        s->sync.full = false;
+        if (!to_me || f->body_len < 1) {
+            prv_exception(s);
+            return;
+        }
+        {
+            const int r = km_reg_find(f->body[0]);
+            const uint8_t len = (uint8_t)(f->body_len - 1u);
+            if (r < 0 || !(km_reg_table[r].access & KM_W)) {
+                prv_exception(s);
+                return;
+            }
+            if (len > sizeof s->sync.data) {
+                prv_fail(s);
+                return;
+            }
+            s->sync.full = true;
+            s->sync.addr = f->body[0];
+            s->sync.len = len;
+            memcpy(s->sync.data, &f->body[1], len);
+        }
+        return;
+    case CMD_SYNC_EXECUTE:
+        if (f->body_len != 0) {
+            prv_exception(s);
+            s->sync.full = false;
+            return;
+        }
+        if (s->sync.full) {
+            s->sync.full = false;
+            (void)prv_write(s, s->sync.addr, s->sync.data, s->sync.len);
+        }
+        return; /* no buffered write: nothing to do (not an error, §3) */
+    default:
+        /* 0x82, 0x78, 0x7E, 0x7F and unknown commands: not supported. */
+        prv_exception(s);
+        return;
+    }
+}

@@ -1,0 +1,137 @@
+/* The servo as the bus sees it: the register file, the status byte, the
+ * sync-write buffer, and the dispatcher that turns a validated frame into
+ * changes, typed requests to the rest of the firmware, and an answer
+ * (PROTOCOL.md §3, §4, §5). Pure logic: no hardware, no heap. Decisions
+ * where the spec is open are in docs/protocol-decisions.md. */
+#ifndef KM_SERVO_H
+#define KM_SERVO_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "km_frame.h"
+#include "km_product.h"
+#include "km_registers.h"
+
+/* Status byte bits (§4). */
+#define KM_ST_RUNNING    0x80u
+#define KM_ST_FAILED     0x40u
+#define KM_ST_EXCEPTION  0x20u
+#define KM_ST_HW_FAULT   0x10u
+#define KM_ST_PROTECTION 0x0Fu /* stall, temperature, current, voltage */
+
+/* Typed requests to control (motion, torque, zeroing, protection). */
+typedef enum {
+    KM_REQ_TORQUE_SWITCH,   /* .u8 = new 0x64 value (0, 1, 2, 3) */
+    KM_REQ_MOVE_TIME,       /* .move: target 0.1 deg, param ms (0 = fastest) */
+    KM_REQ_MOVE_SPEED,      /* .move: target 0.1 deg, param deg/s (0 = fastest) */
+    KM_REQ_SERVO_ADVANCED,  /* .adv: control byte, p1, p2 (§5.4 0x67) */
+    KM_REQ_INTERPOLATE,     /* .move.target */
+    KM_REQ_MOTOR_TORQUE,    /* .i16 PWM -1000..1000 */
+    KM_REQ_MOTOR_SPEED,     /* .i16 deg/s */
+    KM_REQ_MOTOR_ADVANCED,  /* .adv: control byte, p1, p2 (§5.4 0x70) */
+    KM_REQ_ZERO_POSITION,   /* make the current position zero (0x46 write, 0x18 = 0 on encoders) */
+    KM_REQ_PROTECTION_CLEAR,/* .u8 = mask of protections to release (0x36) */
+} km_request_kind_t;
+
+typedef struct {
+    km_request_kind_t kind;
+    union {
+        uint8_t u8;
+        int16_t i16;
+        struct {
+            int16_t target;
+            uint16_t param;
+        } move;
+        struct {
+            uint8_t control;
+            uint16_t p1;  /* as sent: an i16 for 0x67, a u16 for 0x70 */
+            uint16_t p2;
+        } adv;
+    } u;
+} km_request_t;
+
+/* What the firmware provides: narrow, typed, no hardware types. */
+typedef struct {
+    /* Commit persisted registers all-or-nothing; true once durable. On
+     * false the old values stay in force and status bit 6 is set. */
+    bool (*commit)(void *ctx, const uint8_t *addrs, const uint32_t *values, uint8_t n);
+    /* 0x02 with the exact magic: restart now, no answer. */
+    void (*restart)(void *ctx);
+    /* Motion and protection requests; `req` is valid during the call only. */
+    void (*request)(void *ctx, const km_request_t *req);
+    void *ctx;
+} km_servo_ops_t;
+
+/* Live state from control, copied in every control tick. */
+typedef struct {
+    int32_t position;      /* 0.1 deg, zero offsets applied */
+    int32_t speed;         /* deg/s */
+    int32_t current;       /* mA */
+    int32_t pwm;           /* 0..1000 */
+    int32_t temperature;   /* deg C */
+    int32_t voltage;       /* mV */
+    int32_t deviation;     /* 0.1 deg */
+    uint32_t rotation_ms;  /* 0x4D */
+    bool running;          /* status bit 7 */
+    uint8_t protections;   /* active protections, 0x36 bits / status bits 0..3 */
+    uint8_t hw_faults;     /* 0x35 bits seen by power-on checks */
+} km_live_t;
+
+/* The answer to send: `len` 0 = none. Starts `delay_us` after the frame's
+ * last byte. */
+typedef struct {
+    uint8_t bytes[KM_FRAME_MAX];
+    uint16_t len;
+    uint32_t delay_us;
+} km_reply_t;
+
+typedef struct {
+    const km_product_t *product;
+    const km_servo_ops_t *ops;
+    uint32_t value[KM_REG_COUNT]; /* register file, wire bytes packed LE */
+    uint32_t active_baud;         /* bps in force until restart (0x10 applies then) */
+    uint32_t prng;                /* xorshift32 state for the 0x01 random byte */
+    km_live_t live;
+    uint8_t flags;                /* KM_ST_FAILED | KM_ST_EXCEPTION of the last command */
+    bool checksum_pending;        /* a bad-checksum frame carried our ID */
+    uint8_t hw_latched;           /* 0x35, latched until restart */
+    bool userdata_defaults;       /* user data came from product defaults */
+    struct {
+        bool full;
+        uint8_t addr;
+        uint8_t len;
+        uint8_t data[8];
+    } sync;                       /* 0x04 buffer */
+} km_servo_t;
+
+/* Persisted values by register address, in table order of the P registers;
+ * `persisted` may be NULL (product defaults). */
+void km_servo_init(km_servo_t *s, const km_product_t *product, const uint32_t *persisted,
+                   uint32_t seed, const km_servo_ops_t *ops);
+
+/* Processes one validated frame; fills *reply (len 0 = no answer). */
+void km_servo_handle(km_servo_t *s, const km_frame_t *frame, km_reply_t *reply);
+
+/* The parser saw a bad-checksum frame with our ID: bit 5 for the next answer. */
+void km_servo_note_checksum_error(km_servo_t *s);
+
+void km_servo_set_live(km_servo_t *s, const km_live_t *live);
+
+/* Control sets 0x64 to 5 after a protection (not writable from the bus). */
+void km_servo_set_torque_switch(km_servo_t *s, uint8_t value);
+
+void km_servo_set_userdata_defaults_flag(km_servo_t *s, bool defaults);
+
+uint8_t km_servo_id(const km_servo_t *s);
+uint32_t km_servo_active_baud(const km_servo_t *s);
+uint8_t km_servo_status(const km_servo_t *s);
+
+/* Stored register value (packed wire bytes), for control and the store. */
+uint32_t km_servo_reg(const km_servo_t *s, km_reg_index_t reg);
+
+/* The persisted registers in table order: their count and addresses. */
+uint8_t km_servo_persisted_count(void);
+uint8_t km_servo_persisted_addr(uint8_t i);
+
+#endif
