@@ -35,24 +35,25 @@ uint32_t km_store_all_keys(const km_store_schema_t *schema)
     return (schema->count >= 32u) ? 0xFFFFFFFFu : ((1u << schema->count) - 1u);
 }
 
-static void prv_defaults(km_store_t *s)
+static void prv_defaults(const km_store_schema_t *schema, uint32_t *values)
 {
-    for (uint32_t i = 0; i < s->schema->count; i++) {
-        s->values[i] = s->schema->keys[i].def;
+    for (uint32_t i = 0; i < schema->count; i++) {
+        values[i] = schema->keys[i].def;
     }
 }
 
 /* Applies a record's entries whose keys the schema still has; returns the
  * bitmap of those keys. Keys dropped from the schema are ignored. */
-static uint32_t prv_apply(km_store_t *s, const km_rec_t *rec, bool apply)
+static uint32_t prv_apply(const km_store_schema_t *schema, const km_rec_t *rec, uint32_t *values,
+                          bool apply)
 {
     uint32_t mask = 0;
     for (uint32_t i = 0; i < rec->count; i++) {
-        const int32_t at = km_store_index(s->schema, km_rec_key(rec, i));
+        const int32_t at = km_store_index(schema, km_rec_key(rec, i));
         if (at >= 0) {
             mask |= 1u << (uint32_t)at;
             if (apply) {
-                s->values[at] = km_rec_value(rec, i);
+                values[at] = km_rec_value(rec, i);
             }
         }
     }
@@ -60,9 +61,11 @@ static uint32_t prv_apply(km_store_t *s, const km_rec_t *rec, bool apply)
 }
 
 /* Walks a page record by record. A cell that starts no valid record is
- * skipped one cell at a time, never trusted. With apply, the state becomes
- * the last valid snapshot plus the valid deltas after it. */
-static void prv_scan(km_store_t *s, uint32_t page, prv_page_t *pi, bool apply)
+ * skipped one cell at a time, never trusted. values becomes the page's
+ * state: its last valid snapshot plus the valid deltas after it. Each page
+ * is read once: a torn cell may read differently at each read, so the
+ * choice of page and its state must come from the same reads. */
+static void prv_scan(const km_store_t *s, uint32_t page, prv_page_t *pi, uint32_t *values)
 {
     const km_flash_t *f = s->flash;
     uint8_t buf[KM_REC_MAX_BYTES];
@@ -78,13 +81,11 @@ static void prv_scan(km_store_t *s, uint32_t page, prv_page_t *pi, bool apply)
                 pi->gen = rec.gen;
                 pi->version = rec.version;
                 pi->hash = rec.hash;
-                if (apply) {
-                    prv_defaults(s);
-                }
+                prv_defaults(s->schema, values);
             }
             /* Another schema version: the values mean something else. */
             const bool same = (pi->version == s->schema->version);
-            pi->last_keys = prv_apply(s, &rec, apply && same);
+            pi->last_keys = prv_apply(s->schema, &rec, values, same);
             pi->last_type = rec.type;
             pi->erased = false;
             off += rec.size;
@@ -133,16 +134,22 @@ km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash,
     for (uint32_t i = 0; i < schema->count; i++) {
         s->hash = km_crc32(s->hash, &schema->keys[i].key, 1u);
     }
-    prv_defaults(s);
+    prv_defaults(schema, s->values);
 
     bool all_erased = true;
     prv_page_t pi;
+    prv_page_t best;
+    uint32_t cand[KM_STORE_MAX_KEYS];
+    memset(&best, 0, sizeof best);
     for (uint32_t p = 0; p < flash->page_count; p++) {
-        prv_scan(s, p, &pi, false);
+        prv_defaults(schema, cand);
+        prv_scan(s, p, &pi, cand);
         if (pi.has_snapshot) {
             if (s->active == KM_STORE_NO_PAGE || pi.gen > s->gen) {
                 s->active = (uint8_t)p;
                 s->gen = pi.gen;
+                best = pi;
+                memcpy(s->values, cand, schema->count * sizeof cand[0]);
             }
         } else if (!pi.erased) {
             /* May hold a torn snapshot that a later read finds valid:
@@ -156,7 +163,7 @@ km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash,
     if (s->active == KM_STORE_NO_PAGE) {
         result = all_erased ? KM_STORE_MOUNT_DEFAULTS_BLANK : KM_STORE_MOUNT_DEFAULTS_INVALID;
     } else {
-        prv_scan(s, s->active, &pi, true);
+        pi = best;
         s->tail = pi.valid_end;
         s->dirty = pi.used_end > pi.valid_end;
         s->restate = true;
