@@ -120,16 +120,36 @@ static bool prv_append(km_store_t *s, const uint32_t *next, uint32_t changed)
                     .version = s->schema->version,
                     .gen = s->gen,
                     .hash = s->hash};
-    uint32_t mask = changed;
-    if (s->restate) {
-        if (s->restate_snapshot) {
-            hdr.type = KM_REC_SNAPSHOT; /* a copy, same generation */
-            mask = km_store_all_keys(s->schema);
-        } else {
-            mask |= s->last_keys;
-        }
-    }
     uint8_t buf[KM_REC_MAX_BYTES];
+    uint32_t mask = changed;
+    if (s->restate && s->restate_snapshot) {
+        /* The page's snapshot may be torn and read valid only by chance: a
+         * copy of it (the old state, same generation) keeps the page valid
+         * on its own. The change follows as a delta, so the next session
+         * restates that small delta instead of copying the snapshot again. */
+        hdr.type = KM_REC_SNAPSHOT;
+        const uint32_t all = km_store_all_keys(s->schema);
+        const uint32_t copy = km_rec_encode(buf, &hdr, s->schema, s->values, all, f->prog_size);
+        uint32_t n = 0;
+        for (uint32_t m = changed; m != 0u; m &= m - 1u) {
+            n++;
+        }
+        const uint32_t after = km_rec_size(KM_REC_DELTA, n, f->prog_size);
+        if (copy + after > f->page_size - s->tail) {
+            return prv_compact(s, next);
+        }
+        if (!prv_write(s, s->active, s->tail, buf, copy)) {
+            s->dirty = true;
+            return false;
+        }
+        s->tail += copy;
+        s->last_keys = all;
+        s->restate = false;
+        s->restate_snapshot = false;
+        hdr.type = KM_REC_DELTA;
+    } else if (s->restate) {
+        mask |= s->last_keys;
+    }
     const uint32_t size = km_rec_encode(buf, &hdr, s->schema, next, mask, f->prog_size);
     if (size > f->page_size - s->tail) {
         return prv_compact(s, next);
