@@ -5,7 +5,9 @@
  * fills one km_flash_t. Rules every implementation keeps, as NOR flash does:
  *  - erase sets a whole page to 0xFF;
  *  - program writes whole cells (`prog_size` bytes, aligned) and only onto
- *    erased cells: programming a cell twice between erases is an error;
+ *    erased cells: programming a cell twice between erases is an error
+ *    (a program cut by power loss before any bit moved leaves the cell
+ *    reading erased, and the controller's erased check accepts it again);
  *  - read may report an ECC error for a cell whose program was torn. */
 #ifndef KM_HAL_FLASH_H
 #define KM_HAL_FLASH_H

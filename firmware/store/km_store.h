@@ -1,0 +1,98 @@
+/* User-data store: the persisted (P) registers in a power-loss-safe journal
+ * over the hal flash contract. Knows nothing of the protocol: the firmware
+ * hands it a schema (key = register address, default value).
+ *
+ * Guarantees (see docs/store.md for the format and the proof):
+ *  - km_store_commit() acknowledges only after the record is read back;
+ *    a multi-key commit is all-or-nothing, at any power cut;
+ *  - after a cut, mount shows the last acknowledged state or the one being
+ *    committed, never a mix, never older;
+ *  - mount, and a session that commits nothing, do zero flash operations
+ *    (km_store_maintain() stays idle until the first commit of the session).
+ * Not thread-safe: call from the main loop only. */
+#ifndef KM_STORE_H
+#define KM_STORE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "km_hal_flash.h"
+
+#define KM_STORE_MAX_KEYS 32u   /* bitmaps of keys are one u32 */
+#define KM_STORE_MAX_PAGES 32u  /* bitmaps of pages are one u32 */
+#define KM_STORE_NO_PAGE 0xFFu
+
+typedef struct {
+    uint8_t key;    /* register address */
+    uint32_t def;   /* product default */
+} km_store_key_t;
+
+typedef struct {
+    const km_store_key_t *keys;
+    uint8_t count;       /* 1..KM_STORE_MAX_KEYS, keys unique */
+    /* Bump when a key's meaning or encoding changes: stored values are then
+     * dropped for the defaults. Adding or removing keys needs no bump. */
+    uint16_t version;
+} km_store_schema_t;
+
+typedef enum {
+    KM_STORE_MOUNT_LOADED = 0,       /* stored values loaded */
+    KM_STORE_MOUNT_MIGRATED,         /* key list changed: kept keys loaded, new keys default */
+    KM_STORE_MOUNT_DEFAULTS_BLANK,   /* flash erased: first boot */
+    KM_STORE_MOUNT_DEFAULTS_INVALID, /* no valid snapshot (garbage, QEMU 0x00 pages) */
+    KM_STORE_MOUNT_DEFAULTS_SCHEMA,  /* schema version changed */
+    KM_STORE_MOUNT_ERR_ARG,          /* bad geometry or schema: store unusable */
+} km_store_mount_t;
+
+typedef enum {
+    KM_STORE_OK = 0,
+    KM_STORE_ERR_ARG,    /* unknown or repeated key, store not mounted */
+    KM_STORE_ERR_FLASH,  /* program/erase error or read-back mismatch: old values stay */
+} km_store_status_t;
+
+/* All RAM of the store; contents are private. */
+typedef struct {
+    const km_flash_t *flash;
+    const km_store_schema_t *schema;
+    uint32_t values[KM_STORE_MAX_KEYS]; /* committed values, schema order */
+    uint32_t hash;          /* of the schema's key list */
+    uint32_t gen;           /* generation of the active page's snapshot */
+    uint32_t tail;          /* next free byte offset in the active page */
+    uint32_t last_keys;     /* keys of the newest record (restated, see .c) */
+    uint32_t suspect;       /* pages to erase before the next acknowledgement */
+    uint32_t erased;        /* pages erased and blank-checked in this session */
+    uint8_t active;         /* page of the newest valid snapshot, or KM_STORE_NO_PAGE */
+    bool mounted;
+    bool wrote;             /* a commit was attempted in this session */
+    bool dirty;             /* unreadable cells after the last record: compact first */
+    bool need_snapshot;     /* schema changed since the snapshot: compact first */
+    bool restate;           /* newest record is from a past session: restate it */
+    bool restate_snapshot;  /* ... and it is a snapshot */
+} km_store_t;
+
+/* Reads the flash and loads values (schema order) into values_out (may be
+ * NULL). No flash write or erase, whatever the flash holds. */
+km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash,
+                                const km_store_schema_t *schema, uint32_t *values_out);
+
+/* True if the mount result means product defaults are in force. */
+bool km_store_mount_is_defaults(km_store_mount_t m);
+
+/* Commits n key/value pairs, all or nothing. KM_STORE_OK once they are in
+ * flash and read back (or unchanged: then no flash op). On any error the old
+ * values stay in force. */
+km_store_status_t km_store_commit(km_store_t *s, const uint8_t *keys, const uint32_t *values,
+                                  uint32_t n);
+
+/* User data reset: commits the default of every key not listed in keep. */
+km_store_status_t km_store_reset(km_store_t *s, const uint8_t *keep, uint32_t n_keep);
+
+/* Idle work: compacts ahead of time so a commit rarely waits on an erase.
+ * Does at most one erase or one record per call, nothing before the
+ * session's first commit. Returns true if it did flash work. */
+bool km_store_maintain(km_store_t *s);
+
+/* The committed value of key; false if key is not in the schema. */
+bool km_store_get(const km_store_t *s, uint8_t key, uint32_t *value);
+
+#endif

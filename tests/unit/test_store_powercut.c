@@ -1,0 +1,446 @@
+/* Power-cut runner for the store. For each scenario, each flash geometry,
+ * every program and every erase the scenario issues is cut with every
+ * outcome the NOR simulator models; the store is then rebooted, and the
+ * first commit after the reboot (the recovery) is cut again at each of its
+ * operations with each outcome. Invariants checked after every reboot:
+ *  (a) the state is the last acknowledged one or one being committed when
+ *      power went: never older, never a mix;
+ *  (b) mount returns a usable result and issues no flash operation;
+ *  (c) the simulator saw no illegal program (cell not erased, misaligned);
+ *  (d) after each first-level cut, 1,000 further commits (with reboots and
+ *      idle maintenance) match a reference model. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "km_nor_sim.h"
+#include "km_store.h"
+#include "km_store_test_schema.h"
+
+#define NKEYS (sizeof k_test_keys / sizeof k_test_keys[0])
+#define MAX_ALLOWED 8u
+#define FURTHER_COMMITS 1000u
+
+typedef struct {
+    uint32_t v[NKEYS];
+} prv_state_t;
+
+typedef enum { STEP_COMMIT, STEP_RESET, STEP_MAINTAIN } prv_step_kind_t;
+
+typedef struct {
+    prv_step_kind_t kind;
+    uint8_t n;
+    uint8_t keys[6];
+    uint32_t vals[6];
+} prv_step_t;
+
+typedef struct {
+    const char *name;
+    uint8_t fill;       /* 0xFF shipped part, 0x00 QEMU nRF51 */
+    int prologue;       /* 0 none, 1 a few commits, 2 fill the page, 3 all keys set */
+    uint8_t nsteps;
+    prv_step_t steps[4];
+} prv_scenario_t;
+
+static const prv_scenario_t s_scenarios[] = {
+    {"single writes", 0xFF, 1, 3,
+     {{STEP_COMMIT, 1, {0x12}, {301}}, {STEP_COMMIT, 1, {0x13}, {302}},
+      {STEP_COMMIT, 1, {0x12}, {303}}}},
+    {"multi-register writes", 0xFF, 1, 2,
+     {{STEP_COMMIT, 4, {0x3C, 0x3D, 0x3E, 0x3F}, {0x6478, 0x0A46, 0x1E0400, 0x0A0300}},
+      {STEP_COMMIT, 2, {0x11, 0x12}, {0x0A, 999}}}},
+    {"writes spanning compaction", 0xFF, 2, 3,
+     {{STEP_COMMIT, 1, {0x13}, {401}}, {STEP_COMMIT, 3, {0x13, 0x14, 0x15}, {402, 403, 404}},
+      {STEP_COMMIT, 1, {0x0F}, {9}}}},
+    {"compaction by idle maintenance", 0xFF, 2, 4,
+     {{STEP_COMMIT, 1, {0x13}, {501}}, {STEP_MAINTAIN, 0, {0}, {0}},
+      {STEP_COMMIT, 2, {0x13, 0x34}, {502, 0x55}}, {STEP_MAINTAIN, 0, {0}, {0}}}},
+    {"user data reset", 0xFF, 3, 2,
+     {{STEP_RESET, 4, {0x0F, 0x10, 0x16, 0x17}, {0}}, {STEP_RESET, 1, {0x16}, {0}}}},
+    {"ID and baud change", 0xFF, 1, 2,
+     {{STEP_COMMIT, 1, {0x0F}, {42}}, {STEP_COMMIT, 1, {0x10}, {10000}}}},
+    {"first commit on blank flash", 0xFF, 0, 2,
+     {{STEP_COMMIT, 1, {0x0F}, {3}}, {STEP_COMMIT, 2, {0x0F, 0x10}, {4, 5000}}}},
+    {"first commit on QEMU 0x00 flash", 0x00, 0, 2,
+     {{STEP_COMMIT, 1, {0x0F}, {3}}, {STEP_COMMIT, 1, {0x12}, {250}}}},
+};
+
+static const km_nor_sim_config_t s_geoms[] = {
+    {2048u, 8u, 2u, 0xFFu}, /* STM32G0 */
+    {1024u, 2u, 2u, 0xFFu}, /* STM32F0 / GD32 */
+    {1024u, 4u, 2u, 0xFFu}, /* nRF51 */
+};
+
+static km_nor_sim_t s_sim;   /* the flash under test; s_flash points at it */
+static km_nor_sim_t s_base;  /* image after the prologue */
+static km_nor_sim_t s_post;  /* image after a first-level cut */
+static km_flash_t s_flash;
+static km_store_t s_store;
+
+static prv_state_t s_allowed[MAX_ALLOWED];
+static unsigned s_nallowed;
+
+static unsigned long s_cuts1, s_cuts2, s_outcomes, s_reboots, s_further, s_failures;
+static const char *s_where_scn;
+static unsigned s_where_geom, s_where_n, s_where_o, s_where_m, s_where_o2;
+
+static void prv_fail(const char *what)
+{
+    if (s_failures < 20u) {
+        fprintf(stderr, "INVARIANT %s: scenario '%s' geom %u cut %u outcome %u / recovery cut %u outcome %u\n",
+                what, s_where_scn, s_where_geom, s_where_n, s_where_o, s_where_m, s_where_o2);
+    }
+    s_failures++;
+}
+
+static void prv_read_state(prv_state_t *st)
+{
+    for (unsigned i = 0; i < NKEYS; i++) {
+        st->v[i] = s_store.values[i];
+    }
+}
+
+static void prv_allow(const prv_state_t *st)
+{
+    for (unsigned i = 0; i < s_nallowed; i++) {
+        if (memcmp(&s_allowed[i], st, sizeof *st) == 0) {
+            return;
+        }
+    }
+    if (s_nallowed < MAX_ALLOWED) {
+        s_allowed[s_nallowed++] = *st;
+    } else {
+        prv_fail("allowed set overflow");
+    }
+}
+
+static void prv_ack(const prv_state_t *st)
+{
+    s_nallowed = 0;
+    prv_allow(st);
+}
+
+/* The state a step would leave, from the store's current one. */
+static void prv_step_target(const prv_step_t *step, prv_state_t *out)
+{
+    prv_read_state(out);
+    if (step->kind == STEP_COMMIT) {
+        for (unsigned k = 0; k < step->n; k++) {
+            for (unsigned i = 0; i < NKEYS; i++) {
+                if (k_test_keys[i].key == step->keys[k]) {
+                    out->v[i] = step->vals[k];
+                }
+            }
+        }
+    } else if (step->kind == STEP_RESET) {
+        for (unsigned i = 0; i < NKEYS; i++) {
+            int keep = 0;
+            for (unsigned k = 0; k < step->n; k++) {
+                keep |= (k_test_keys[i].key == step->keys[k]);
+            }
+            if (!keep) {
+                out->v[i] = k_test_keys[i].def;
+            }
+        }
+    }
+}
+
+/* Runs one step; true if acknowledged (or nothing to acknowledge). */
+static bool prv_run_step(const prv_step_t *step)
+{
+    prv_state_t target;
+    prv_step_target(step, &target);
+    km_store_status_t r = KM_STORE_OK;
+    if (step->kind == STEP_COMMIT) {
+        r = km_store_commit(&s_store, step->keys, step->vals, step->n);
+    } else if (step->kind == STEP_RESET) {
+        r = km_store_reset(&s_store, step->keys, step->n);
+    } else {
+        for (int i = 0; i < 8 && km_store_maintain(&s_store); i++) {
+        }
+        return !km_nor_sim_cut_fired(&s_sim);
+    }
+    if (r == KM_STORE_OK) {
+        prv_state_t now;
+        prv_read_state(&now);
+        if (memcmp(&now, &target, sizeof now) != 0) {
+            prv_fail("acknowledged commit not in RAM");
+        }
+        prv_ack(&target);
+        return true;
+    }
+    prv_allow(&target); /* in doubt: may or may not have landed */
+    return false;
+}
+
+/* Power returns and the store mounts: checks (a), (b), (c). */
+static void prv_reboot_and_check(void)
+{
+    s_reboots++;
+    if (s_sim.count.illegal != 0u || s_sim.count.align_errors != 0u) {
+        prv_fail("(c) illegal program");
+    }
+    km_nor_sim_power_cycle(&s_sim);
+    const uint32_t ops = s_sim.count.programs + s_sim.count.erases;
+    const km_store_mount_t m = km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
+    if (m == KM_STORE_MOUNT_ERR_ARG || m == KM_STORE_MOUNT_DEFAULTS_SCHEMA ||
+        m == KM_STORE_MOUNT_MIGRATED || s_sim.count.programs + s_sim.count.erases != ops) {
+        prv_fail("(b) mount fault or flash op at mount");
+    }
+    prv_state_t now;
+    prv_read_state(&now);
+    for (unsigned i = 0; i < s_nallowed; i++) {
+        if (memcmp(&now, &s_allowed[i], sizeof now) == 0) {
+            return;
+        }
+    }
+    prv_fail("(a) state is neither acknowledged nor in flight");
+}
+
+static uint32_t s_lcg;
+static uint32_t prv_rand(void)
+{
+    s_lcg = s_lcg * 1664525u + 1013904223u;
+    return s_lcg >> 8;
+}
+
+/* (d): from the current mounted store, FURTHER_COMMITS commits of 1..4 keys
+ * (some user data resets), idle maintenance and reboots, checked against a
+ * model after each one. */
+static void prv_further_commits(uint32_t seed)
+{
+    prv_state_t model;
+    prv_read_state(&model);
+    s_lcg = seed;
+    for (uint32_t c = 0; c < FURTHER_COMMITS; c++) {
+        const uint32_t r = prv_rand();
+        prv_step_t step = {STEP_COMMIT, (uint8_t)(1u + r % 4u), {0}, {0}};
+        if (r % 97u == 0u) {
+            step.kind = STEP_RESET;
+            step.n = 2;
+            step.keys[0] = 0x0F;
+            step.keys[1] = 0x10;
+        } else {
+            for (unsigned k = 0; k < step.n; k++) {
+                step.keys[k] = k_test_keys[(r / 7u + k * 5u) % NKEYS].key;
+                step.vals[k] = prv_rand() & 0xFFFFu;
+            }
+        }
+        prv_state_t target = model;
+        prv_step_target(&step, &target);
+        const km_store_status_t st = (step.kind == STEP_RESET)
+                                         ? km_store_reset(&s_store, step.keys, step.n)
+                                         : km_store_commit(&s_store, step.keys, step.vals, step.n);
+        if (st != KM_STORE_OK) {
+            prv_fail("(d) commit failed on a healthy flash");
+            return;
+        }
+        model = target;
+        prv_state_t now;
+        prv_read_state(&now);
+        if (memcmp(&now, &model, sizeof now) != 0) {
+            prv_fail("(d) store differs from model");
+            return;
+        }
+        if (r % 3u == 0u) {
+            while (km_store_maintain(&s_store)) {
+            }
+        }
+        if (c % 200u == 199u) {
+            km_nor_sim_power_cycle(&s_sim);
+            (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
+            prv_read_state(&now);
+            if (memcmp(&now, &model, sizeof now) != 0) {
+                prv_fail("(d) reboot differs from model");
+                return;
+            }
+        }
+    }
+    s_further += FURTHER_COMMITS;
+    if (s_sim.count.illegal != 0u) {
+        prv_fail("(d)(c) illegal program");
+    }
+}
+
+static void prv_prologue(const prv_scenario_t *scn)
+{
+    (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
+    if (scn->prologue == 1) {
+        const uint8_t keys[] = {0x12, 0x13, 0x17};
+        for (uint32_t i = 0; i < 3; i++) {
+            const uint32_t v = 100u + i;
+            assert_int_equal(km_store_commit(&s_store, &keys[i], &v, 1), KM_STORE_OK);
+        }
+    } else if (scn->prologue == 2) {
+        /* Fill the active page to just short of needing a compaction. */
+        const uint32_t delta = 4u * s_flash.prog_size + 16u;
+        for (uint32_t v = 1; s_flash.page_size - s_store.tail > 2u * delta || v < 3u; v++) {
+            const uint8_t k = 0x19;
+            assert_int_equal(km_store_commit(&s_store, &k, &v, 1), KM_STORE_OK);
+        }
+    } else if (scn->prologue == 3) {
+        for (unsigned i = 0; i < NKEYS; i++) {
+            const uint32_t v = 1000u + i;
+            assert_int_equal(km_store_commit(&s_store, &k_test_keys[i].key, &v, 1), KM_STORE_OK);
+        }
+    }
+    km_nor_sim_power_cycle(&s_sim);
+    (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
+    s_base = s_sim;
+}
+
+/* Runs the scenario's steps after the base image; returns ops issued. */
+static uint32_t prv_run_steps(const prv_scenario_t *scn)
+{
+    s_sim = s_base;
+    (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
+    prv_state_t st;
+    prv_read_state(&st);
+    prv_ack(&st);
+    for (unsigned i = 0; i < scn->nsteps; i++) {
+        if (!prv_run_step(&scn->steps[i])) {
+            break;
+        }
+    }
+    return km_nor_sim_ops(&s_sim);
+}
+
+static const prv_step_t k_recovery = {STEP_COMMIT, 2, {0x12, 0x33}, {777, 0x05}};
+
+/* Level 2: the first commit after the reboot is cut at each op. */
+static void prv_cut_recovery(void)
+{
+    s_post = s_sim;
+    const prv_state_t *saved = s_allowed;
+    prv_state_t allowed1[MAX_ALLOWED];
+    const unsigned n1 = s_nallowed;
+    memcpy(allowed1, saved, sizeof allowed1);
+
+    (void)prv_run_step(&k_recovery); /* dry run: count its ops */
+    const uint32_t total = km_nor_sim_ops(&s_sim);
+    for (uint32_t m = 0; m < total; m++) {
+        s_cuts2++;
+        unsigned nout = KM_NOR_PROG_OUTCOMES;
+        for (unsigned o = 0; o < nout; o++) {
+            s_sim = s_post;
+            memcpy(s_allowed, allowed1, sizeof allowed1);
+            s_nallowed = n1;
+            s_where_m = m;
+            s_where_o2 = o;
+            km_nor_sim_seed(&s_sim, 0x9E3779B9u ^ (m * 131u + o));
+            km_nor_sim_arm_cut(&s_sim, m, (km_nor_prog_outcome_t)o, (km_nor_erase_outcome_t)o);
+            (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
+            (void)prv_run_step(&k_recovery);
+            if (o == 0u && s_sim.cut_was_erase) {
+                nout = KM_NOR_ERASE_OUTCOMES;
+            }
+            s_outcomes++;
+            prv_reboot_and_check();
+        }
+    }
+    s_sim = s_post;
+    memcpy(s_allowed, allowed1, sizeof allowed1);
+    s_nallowed = n1;
+    s_where_m = 0xFFFFu;
+    s_where_o2 = 0xFFFFu;
+    (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
+}
+
+static void prv_run_geometry(unsigned g)
+{
+    const unsigned long f0 = s_failures, c1 = s_cuts1, c2 = s_cuts2, oc = s_outcomes;
+    for (unsigned si = 0; si < sizeof s_scenarios / sizeof s_scenarios[0]; si++) {
+        const prv_scenario_t *scn = &s_scenarios[si];
+        km_nor_sim_config_t cfg = s_geoms[g];
+        cfg.fill = scn->fill;
+        assert_true(km_nor_sim_init(&s_sim, &cfg, &s_flash));
+        s_where_scn = scn->name;
+        s_where_geom = g;
+        prv_prologue(scn);
+        const uint32_t total = prv_run_steps(scn);
+        assert_true(total > 0u);
+        for (uint32_t n = 0; n < total; n++) {
+            s_cuts1++;
+            unsigned nout = KM_NOR_PROG_OUTCOMES;
+            for (unsigned o = 0; o < nout; o++) {
+                s_where_n = n;
+                s_where_o = o;
+                s_where_m = 0xFFFFu;
+                s_where_o2 = 0xFFFFu;
+                s_sim = s_base;
+                km_nor_sim_seed(&s_sim, 0x1234567u ^ (n * 7919u + o * 31u + g));
+                s_base.rng = s_sim.rng;
+                /* prv_run_steps copies s_base: arm the cut after it. */
+                s_sim = s_base;
+                (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
+                prv_state_t st;
+                prv_read_state(&st);
+                prv_ack(&st);
+                km_nor_sim_arm_cut(&s_sim, n, (km_nor_prog_outcome_t)o, (km_nor_erase_outcome_t)o);
+                for (unsigned i = 0; i < scn->nsteps; i++) {
+                    if (!prv_run_step(&scn->steps[i])) {
+                        break;
+                    }
+                }
+                if (!km_nor_sim_cut_fired(&s_sim)) {
+                    prv_fail("cut did not fire: scenario not deterministic");
+                }
+                if (o == 0u && s_sim.cut_was_erase) {
+                    nout = KM_NOR_ERASE_OUTCOMES;
+                }
+                s_outcomes++;
+                prv_reboot_and_check();
+                prv_cut_recovery();
+                prv_further_commits(n * 1000003u + o * 17u + g);
+            }
+        }
+    }
+    printf("geometry %u (%u B pages, %u B cells): %lu cut points, %lu recovery cut points, "
+           "%lu cut outcomes, %lu invariant failures\n",
+           g, s_geoms[g].page_size, s_geoms[g].prog_size, s_cuts1 - c1, s_cuts2 - c2,
+           s_outcomes - oc, s_failures - f0);
+}
+
+static void test_powercut_stm32g0(void **state)
+{
+    (void)state;
+    prv_run_geometry(0);
+    assert_int_equal(s_failures, 0);
+}
+
+static void test_powercut_stm32f0(void **state)
+{
+    (void)state;
+    prv_run_geometry(1);
+    assert_int_equal(s_failures, 0);
+}
+
+static void test_powercut_nrf51(void **state)
+{
+    (void)state;
+    prv_run_geometry(2);
+    assert_int_equal(s_failures, 0);
+}
+
+static int prv_summary(void **state)
+{
+    (void)state;
+    printf("total: %lu first-level cut points, %lu recovery cut points, %lu cut outcomes, "
+           "%lu reboots checked, %lu further commits checked, %lu invariant failures\n",
+           s_cuts1, s_cuts2, s_outcomes, s_reboots, s_further, s_failures);
+    return 0;
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_powercut_stm32g0),
+        cmocka_unit_test(test_powercut_stm32f0),
+        cmocka_unit_test(test_powercut_nrf51),
+    };
+    return cmocka_run_group_tests(tests, NULL, prv_summary);
+}
