@@ -24,7 +24,10 @@ void km_hal_irq_restore(uint32_t state);
  * the PRNG behind the status read's random byte (§5.1 0x01). */
 uint32_t km_hal_entropy(void);
 
-/* Sleep until the next interrupt (WFI) when the main loop has nothing to do. */
+/* Sleep until the next interrupt (WFI) when the main loop has nothing to do.
+ * Called with the interrupt lock held (so a byte that arrives between the
+ * main loop's last check and the sleep still wakes it). Returns at the
+ * latest 1 ms later: the board keeps a periodic wake-up for the control tick. */
 void km_hal_idle(void);
 
 #endif

@@ -3,7 +3,7 @@
 # be built first; a missing image fails the test with that advice.
 find_program(KM_QEMU_ARM qemu-system-arm)
 find_package(Python3 COMPONENTS Interpreter)
-set(KM_QEMU_IMAGES ${CMAKE_SOURCE_DIR}/build/qemu/board)
+set(KM_QEMU_IMAGES ${CMAKE_SOURCE_DIR}/build/qemu/boards/qemu-microbit)
 
 if(KM_QEMU_ARM AND Python3_FOUND)
   add_test(NAME qemu_board_test

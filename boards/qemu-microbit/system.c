@@ -18,14 +18,21 @@ void km_hal_system_init(void)
     NRF_REG(NRF_CLOCK, CLOCK_TASKS_HFCLKSTART) = 1u;
     while (NRF_REG(NRF_CLOCK, CLOCK_EVENTS_HFCLKSTARTED) == 0u) {
     }
-    /* SysTick runs free, its interrupt off: QEMU only re-polls the UART
+    /* SysTick runs at 1 kHz: QEMU only re-polls the UART
      * socket promptly while a guest timer is active (DESIGN.md). TIMER0's
      * pending compare already keeps one active (echo round trip measured
      * 1.2 ms median without SysTick, 0.95 ms with), so this is a cheap
      * belt-and-braces. A real nRF51 has no SysTick: the writes are ignored. */
     NRF_REG(SCS_SYST_RVR, 0) = PRV_SYSTICK_RELOAD;
     NRF_REG(SCS_SYST_CVR, 0) = 0u;
-    NRF_REG(SCS_SYST_CSR, 0) = (1u << 2) | (1u << 0); /* CPU clock, enable */
+    /* Its interrupt is the 1 kHz wake-up km_hal_idle() promises (hal
+     * contract), so WFI never sleeps through a control tick. */
+    NRF_REG(SCS_SYST_CSR, 0) = (1u << 2) | (1u << 1) | (1u << 0); /* CPU clock, TICKINT, enable */
+}
+
+/* Only wakes the core from WFI: the main loop reads the time itself. */
+void SysTick_Handler(void)
+{
 }
 
 _Noreturn void km_hal_system_reset(void)

@@ -42,3 +42,9 @@ bool km_rx_queue_pop(km_rx_queue_t *q, uint8_t *byte, uint32_t *tick, uint8_t *f
     atomic_store_explicit(&q->tail, tail + 1u, memory_order_release);
     return true;
 }
+
+bool km_rx_queue_empty(km_rx_queue_t *q)
+{
+    return atomic_load_explicit(&q->head, memory_order_acquire) ==
+           atomic_load_explicit(&q->tail, memory_order_relaxed);
+}

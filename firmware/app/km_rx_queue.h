@@ -41,6 +41,9 @@ void km_rx_queue_init(km_rx_queue_t *q);
  * stored as following a loss, so the parser drops the broken frame. */
 void km_rx_queue_push(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost);
 
+/* Main loop: true when nothing is waiting. */
+bool km_rx_queue_empty(km_rx_queue_t *q);
+
 /* Main loop. Returns false when empty. */
 bool km_rx_queue_pop(km_rx_queue_t *q, uint8_t *byte, uint32_t *tick, uint8_t *flags);
 

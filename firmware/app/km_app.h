@@ -1,0 +1,17 @@
+/* The firmware application, the same on every board: hal -> receive queue ->
+ * parser -> dispatcher -> answer timer -> hal; the user-data store; the fixed
+ * control tick. A board's main() prepares its hal and calls km_app_run(). */
+#ifndef KM_APP_H
+#define KM_APP_H
+
+#include "km_hal_flash.h"
+#include "km_product.h"
+
+/* Provided by the board: its product config and its user-data flash region. */
+const km_product_t *km_board_product(void);
+const km_flash_t *km_board_flash(void);
+
+/* Initialises everything and runs the main loop; never returns. */
+_Noreturn void km_app_run(void);
+
+#endif

@@ -1,0 +1,45 @@
+/* Persisted registers over the store (see km_app_userdata.h). */
+#include "km_app_userdata.h"
+
+#include "km_servo.h"
+
+/* Bump when a persisted register's meaning or encoding changes: stored
+ * values are then replaced by the product defaults (the store reports it). */
+#define KM_USERDATA_SCHEMA_VERSION 1u
+
+static km_store_key_t s_keys[KM_USERDATA_MAX];
+static km_store_schema_t s_schema;
+static km_store_t s_store;
+
+km_store_mount_t km_app_userdata_mount(const km_flash_t *flash, const km_product_t *product,
+                                       uint32_t *values)
+{
+    uint8_t n = 0;
+    for (unsigned i = 0; i < KM_REG_COUNT && n < KM_USERDATA_MAX; i++) {
+        if (km_reg_table[i].persisted) {
+            s_keys[n].key = km_reg_table[i].addr;
+            s_keys[n].def = km_reg_default((km_reg_index_t)i, product);
+            n++;
+        }
+    }
+    s_schema.keys = s_keys;
+    s_schema.count = n;
+    s_schema.version = KM_USERDATA_SCHEMA_VERSION;
+    const km_store_mount_t m = km_store_mount(&s_store, flash, &s_schema, values);
+    if (m == KM_STORE_MOUNT_ERR_ARG) {
+        for (uint8_t i = 0; i < n; i++) {
+            values[i] = s_keys[i].def; /* store unusable: run on defaults */
+        }
+    }
+    return m;
+}
+
+bool km_app_userdata_commit(const uint8_t *addrs, const uint32_t *values, uint8_t n)
+{
+    return km_store_commit(&s_store, addrs, values, n) == KM_STORE_OK;
+}
+
+bool km_app_userdata_maintain(void)
+{
+    return km_store_maintain(&s_store);
+}

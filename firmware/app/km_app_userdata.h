@@ -1,0 +1,26 @@
+/* The persisted registers (P in PROTOCOL.md §5) over the user-data store:
+ * the schema is built from the register table, defaults from the product. */
+#ifndef KM_APP_USERDATA_H
+#define KM_APP_USERDATA_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "km_hal_flash.h"
+#include "km_product.h"
+#include "km_store.h"
+
+#define KM_USERDATA_MAX KM_STORE_MAX_KEYS
+
+/* Mounts the store (zero flash operations) and fills `values` in the
+ * register table's order of P registers. Returns how they were found. */
+km_store_mount_t km_app_userdata_mount(const km_flash_t *flash, const km_product_t *product,
+                                       uint32_t *values);
+
+/* The dispatcher's commit: all-or-nothing, true once durable. */
+bool km_app_userdata_commit(const uint8_t *addrs, const uint32_t *values, uint8_t n);
+
+/* Idle-time compaction; true if it did flash work. */
+bool km_app_userdata_maintain(void);
+
+#endif
