@@ -216,11 +216,21 @@ static unsigned prv_settle(km_parser_t *p, km_frame_t *out)
     return events;
 }
 
-/* Every byte in the window precedes a cut: none may join a later byte. */
+/* Every byte in the window precedes a cut: none may join a later byte.
+ * Only one cut is tracked (stale). A second cut can only find bytes after
+ * the first one still unjudged while frames wait in `pending` (a settle
+ * drains the stale bytes otherwise); those bytes since the first cut are
+ * dropped, so no frame can ever span a cut. The price, a frame complete
+ * among them is lost, needs two frames hidden in one failed candidate and
+ * two cuts before they are handed out. */
 static void prv_cut(km_parser_t *p, bool by_gap)
 {
-    p->stale = p->fill;
-    p->stale_tick = p->last_tick;
+    if (p->stale == 0u) {
+        p->stale = p->fill;
+        p->stale_tick = p->last_tick;
+    } else if (p->fill > p->stale) {
+        p->fill = p->stale;
+    }
     p->stale_by_gap = p->stale_by_gap || by_gap;
     p->need = 0u;
 }

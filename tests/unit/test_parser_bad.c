@@ -230,6 +230,40 @@ static void test_s2_two_hidden_frames_one_per_call(void **state)
     }
 }
 
+/* §7: while frames found by a resync wait to be handed out, a second cut
+ * (here two overruns) must not let a frame span the first cut: ping 9
+ * starts before the first overrun and ends between the two. The waiting
+ * frames still come out, in order. */
+static void test_s7_no_frame_across_two_cuts_while_pending(void **state)
+{
+    (void)state;
+    uint8_t stream[80] = {0xF9, 0xFF, 0x01, 0x32}; /* candidate: needs 54 bytes */
+    size_t n = 4;
+    for (uint8_t id = 1; id <= 8; id++) {
+        n += rig_command(&stream[n], id, 0x01, NULL, 0); /* eight hidden pings */
+    }
+    stream[n++] = 0x00;
+    stream[n++] = 0x00; /* the candidate's bad checksum */
+    assert_int_equal(n, 54);
+    uint8_t ping9[8];
+    rig_command(ping9, 9, 0x01, NULL, 0);
+    rig_t r;
+    rig_init(&r, GAP, 0u);
+    rig_feed(&r, stream, n, 1u);    /* hands out ping 1 */
+    rig_feed(&r, ping9, 5, 1u);     /* pings 2..6; ping 9 lacks its checksum */
+    assert_int_equal(r.n, 6);
+    km_parser_overrun(&r.p);
+    rig_feed(&r, &ping9[5], 1, 1u); /* ping 7 */
+    km_parser_overrun(&r.p);
+    rig_poll(&r, r.tick);           /* ping 8 */
+    rig_poll(&r, r.tick + GAP + 1u);
+    assert_int_equal(r.n, 8);
+    for (unsigned i = 0; i < 8; i++) {
+        assert_int_equal(r.frames[i].id, i + 1u); /* never ID 9 */
+    }
+    assert_int_equal(r.p.fill, 0);
+}
+
 /* §2: other servos' responses are skipped whole, even when their body holds
  * a valid command frame. */
 static void test_s2_response_with_embedded_command_skipped(void **state)
@@ -365,6 +399,7 @@ int main(void)
         cmocka_unit_test(test_s2_nested_candidate_released_by_gap),
         cmocka_unit_test(test_s2_good_frame_hidden_in_bad_candidate_length),
         cmocka_unit_test(test_s2_two_hidden_frames_one_per_call),
+        cmocka_unit_test(test_s7_no_frame_across_two_cuts_while_pending),
         cmocka_unit_test(test_s2_response_with_embedded_command_skipped),
         cmocka_unit_test(test_s2_bad_response_resyncs_inside),
         cmocka_unit_test(test_s2_garbage_around_frames),
