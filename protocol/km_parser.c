@@ -13,9 +13,10 @@
  *
  * Work per byte (the bound an interrupt handler can rely on):
  *  - normal path: O(1). A byte that is not F9 on an idle bus returns at once;
- *    a byte inside a candidate whose length is known is stored and compared
- *    with the length (need); the byte that completes it costs one checksum
- *    check and, for a command frame, one copy of its body (<= 250 bytes).
+ *    a header byte is checked alone (prv_header_grows); a byte inside a
+ *    candidate whose length is known is stored and compared with the length
+ *    (need); the byte that completes it costs one checksum check and, for a
+ *    command frame, one copy of its body (<= 250 bytes).
  *  - worst case, after a failure: prv_settle() removes at least one byte
  *    from the window per iteration and the window holds at most 256 bytes,
  *    so one call runs at most 257 iterations of O(1) work (four compares and
@@ -235,6 +236,32 @@ static void prv_cut(km_parser_t *p, bool by_gap)
     p->need = 0u;
 }
 
+/* Fast path for the first four bytes of a candidate: when nothing waits
+ * (not pending, no cut), the window before this byte was a viable candidate,
+ * so only the byte just stored needs the check prv_judge() would make at its
+ * offset. True if it passes; once the length is in, `need` takes over. On
+ * false, prv_settle() judges again and counts the error. */
+static bool prv_header_grows(km_parser_t *p, uint8_t byte)
+{
+    switch (p->fill) {
+    case 1u:
+        return true; /* the F9 checked on entry */
+    case 2u:
+        return byte == KM_HDR1_COMMAND || byte == KM_HDR1_RESPONSE;
+    case 3u:
+        return prv_at(p, 1) == KM_HDR1_COMMAND ? km_id_is_addressable(byte) != 0
+                                               : byte <= KM_ID_MAX;
+    case 4u:
+        if (byte < KM_LENGTH_MIN || byte > KM_LENGTH_MAX) {
+            return false;
+        }
+        p->need = (uint16_t)(byte + 4u);
+        return true;
+    default:
+        return false;
+    }
+}
+
 void km_parser_init(km_parser_t *p, uint32_t gap_ticks)
 {
     memset(p, 0, sizeof *p);
@@ -263,6 +290,9 @@ unsigned km_parser_feed(km_parser_t *p, uint8_t byte, uint32_t now, km_frame_t *
     p->last_tick = now;
     if (p->fill < p->need) {
         return 0u; /* inside a candidate of known length */
+    }
+    if (!p->pending && p->stale == 0u && prv_header_grows(p, byte)) {
+        return 0u; /* a header byte that keeps the candidate viable */
     }
     return prv_settle(p, out);
 }
