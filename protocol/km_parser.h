@@ -59,9 +59,10 @@ void km_parser_set_gap(km_parser_t *p, uint32_t gap_ticks);
  * only when KM_PARSE_FRAME is set. */
 unsigned km_parser_feed(km_parser_t *p, uint8_t byte, uint32_t now, km_frame_t *out);
 
-/* Time alone: drops a partial frame once the gap has passed in silence, and
- * hands out a frame found by resync that a previous call had no room for
- * (call it until it returns 0 to drain them). */
+/* Time alone: drops a partial frame once the gap has passed in silence
+ * (handing out any whole frame found inside it), and hands out a frame found
+ * by a resync that an earlier call had no room for. Call it until the result
+ * lacks KM_PARSE_FRAME to drain them. */
 unsigned km_parser_poll(km_parser_t *p, uint32_t now, km_frame_t *out);
 
 /* The caller (UART driver) lost bytes: the partial frame is dropped. */
