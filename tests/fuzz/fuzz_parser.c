@@ -18,7 +18,8 @@
  *    at or before the byte just fed;
  *  - end_tick is the tick of the frame's last byte or of a later byte;
  *  - counters never decrease; frames_ok counts the frames handed out; a
- *    checksum event comes with a checksum_errors increment;
+ *    checksum event comes with a checksum_errors increment and exactly then
+ *    an addressable ID is recorded for km_parser_take_checksum_error();
  *  - the window holds at most 256 bytes, and after the final polls it is
  *    empty with nothing pending. */
 #include <stddef.h>
@@ -100,13 +101,34 @@ static void prv_check_frame(const km_frame_t *f)
     prv_check(0); /* not fed as one run, or end_tick not a tick from its end on */
 }
 
-static void prv_take(const km_parser_t *p, unsigned ev, const km_frame_t *f)
+/* A checksum event leaves at least one addressable ID recorded; taking an
+ * ID clears it. Taking them all keeps the next event's check meaningful. */
+static void prv_check_bad_ids(km_parser_t *p, unsigned ev)
+{
+    static const uint8_t none[sizeof p->bad_ids];
+    if (!(ev & KM_PARSE_CHECKSUM_ERR)) {
+        prv_check(memcmp(p->bad_ids, none, sizeof none) == 0); /* cheap path */
+        return;
+    }
+    int recorded = 0;
+    for (unsigned id = 0; id <= 255u; id++) {
+        if (km_parser_take_checksum_error(p, (uint8_t)id)) {
+            prv_check(km_id_is_addressable((uint8_t)id));
+            prv_check(!km_parser_take_checksum_error(p, (uint8_t)id));
+            recorded = 1;
+        }
+    }
+    prv_check(recorded == ((ev & KM_PARSE_CHECKSUM_ERR) != 0u));
+}
+
+static void prv_take(km_parser_t *p, unsigned ev, const km_frame_t *f)
 {
     if (ev & KM_PARSE_FRAME) {
         s_delivered++;
         prv_check_frame(f);
     }
     prv_check_stats(p, ev);
+    prv_check_bad_ids(p, ev);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
