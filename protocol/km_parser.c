@@ -26,7 +26,7 @@
  *    and is copied out at most once, so the iterations over a whole stream
  *    are <= bytes fed + calls.
  *  Measured on the bench mix (tools/bench-parser): about 42 instructions per
- *  byte at -O2 on x86-64; 882 bytes of Cortex-M0 code at -Os.
+ *  byte at -O2 on x86-64; 978 bytes of Cortex-M0 code at -Os.
  *
  * Only one frame can be handed out per call (there is one `out`). If a
  * rescan finds a second complete command frame, it stays at the head with
