@@ -30,10 +30,23 @@ typedef struct {
 #define KM_PARSE_CHECKSUM_ERR 0x02u /* see km_parser_take_checksum_error() */
 
 typedef struct {
-    uint8_t window[KM_FRAME_MAX];   /* bytes of the candidate frame so far */
-    uint8_t psum[KM_FRAME_MAX + 1]; /* prefix sums mod 256 for O(1) re-checks */
-    uint16_t fill;                  /* bytes in window */
+    /* A 256-byte ring indexed by uint8_t, so wrap-around is free: the bytes
+     * not yet resolved, oldest at `head` (a candidate's F9, or bytes still to
+     * rescan after a failure). A frame is at most 256 bytes, so one ring
+     * always holds a whole candidate. */
+    uint8_t window[KM_FRAME_MAX];
+    /* psum[i]: sum mod 256 of every byte fed before window[i]; the checksum
+     * of any candidate inside the ring is then one subtraction. */
+    uint8_t psum[KM_FRAME_MAX];
+    uint8_t head;                   /* ring index of the oldest byte */
+    uint8_t acc;                    /* sum mod 256 of every byte fed */
+    uint16_t fill;                  /* bytes in window (0..256) */
+    uint16_t need;                  /* bytes the head candidate needs; 0 = re-judge */
+    uint16_t stale;                 /* leading bytes cut off by a gap or overrun */
+    bool pending;                   /* a complete frame waits for the next call */
+    bool stale_by_gap;              /* the stale cut was a gap: count a timeout */
     uint32_t last_tick;             /* tick of the newest byte */
+    uint32_t stale_tick;            /* tick of the newest stale byte */
     uint32_t gap_ticks;             /* inter-byte gap that drops a frame */
     uint8_t bad_ids[32];            /* bitset: IDs seen on checksum-failed frames */
     km_parser_stats_t stats;
@@ -42,10 +55,14 @@ typedef struct {
 void km_parser_init(km_parser_t *p, uint32_t gap_ticks);
 void km_parser_set_gap(km_parser_t *p, uint32_t gap_ticks);
 
-/* One received byte at tick `now`. Returns KM_PARSE_* bits. */
+/* One received byte at tick `now`. Returns KM_PARSE_* bits; *out is written
+ * only when KM_PARSE_FRAME is set. */
 unsigned km_parser_feed(km_parser_t *p, uint8_t byte, uint32_t now, km_frame_t *out);
 
-/* Time alone: drops a partial frame once the gap has passed in silence. */
+/* Time alone: drops a partial frame once the gap has passed in silence
+ * (handing out any whole frame found inside it), and hands out a frame found
+ * by a resync that an earlier call had no room for. Call it until the result
+ * lacks KM_PARSE_FRAME to drain them. */
 unsigned km_parser_poll(km_parser_t *p, uint32_t now, km_frame_t *out);
 
 /* The caller (UART driver) lost bytes: the partial frame is dropped. */
