@@ -44,12 +44,6 @@ void km_adc_start(void)
                 (3u << ADC_CFGR2_OVSR_SHIFT) |  /* 16 samples */
                 (4u << ADC_CFGR2_OVSS_SHIFT);   /* >> 4: back to 12 bits */
     ADC_SMPR = ADC_SMPR_SMP1_160_5; /* pot and NTC are high-impedance dividers */
-    ADC_CHSELR = (1u << ADC_CH_POT) | (1u << ADC_CH_SHUNT) |
-                 (1u << ADC_CH_VSUPPLY) | (1u << ADC_CH_NTC);
-    while ((ADC_ISR & ADC_ISR_CCRDY) == 0u) {
-    }
-    ADC_ISR = ADC_ISR_CCRDY;
-
     /* DMAMUX channel 0 routes the ADC request to DMA1 channel 1. */
     DMAMUX_C0CR = DMAMUX_REQ_ADC;
     DMA1_CCR1 = 0u;
@@ -62,6 +56,13 @@ void km_adc_start(void)
     ADC_CR |= ADC_CR_ADEN;
     while ((ADC_ISR & ADC_ISR_ADRDY) == 0u) {
     }
+    /* Channel selection is applied by the running ADC: wait for CCRDY
+     * before the first start (§15.3.7). Upward scan: index = channel. */
+    ADC_CHSELR = (1u << ADC_CH_POT) | (1u << ADC_CH_SHUNT) |
+                 (1u << ADC_CH_VSUPPLY) | (1u << ADC_CH_NTC);
+    while ((ADC_ISR & ADC_ISR_CCRDY) == 0u) {
+    }
+    ADC_ISR = ADC_ISR_CCRDY;
     ADC_CR |= ADC_CR_ADSTART;
 }
 
