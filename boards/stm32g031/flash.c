@@ -121,7 +121,9 @@ static km_flash_result_t prv_program(void *ctx, uint32_t offset, const void *dat
         dst[0] = word[0];
         dst[1] = word[1]; /* the second word starts the operation */
         km_hal_irq_restore(key);
-        if (!prv_end()) {
+        /* Read back: a cell that does not hold what we wrote (supply dip,
+         * worn page) is a program error, not a silent corruption. */
+        if (!prv_end() || dst[0] != word[0] || dst[1] != word[1]) {
             return KM_FLASH_ERR_PROGRAM;
         }
     }

@@ -9,7 +9,6 @@
 #define G0_REG(addr) (*(volatile uint32_t *)(uintptr_t)(addr))
 
 /* System control block (ARMv6-M B3.2.2). */
-#define SCB_VTOR  G0_REG(0xE000ED08u)
 #define SCB_AIRCR G0_REG(0xE000ED0Cu)
 #define SCB_AIRCR_VECTKEY      (0x05FAu << 16)
 #define SCB_AIRCR_SYSRESETREQ  (1u << 2)

@@ -56,7 +56,6 @@
 #define RCC_AHBENR     G0_REG(RCC_BASE_R + 0x38u)
 #define RCC_APBENR1    G0_REG(RCC_BASE_R + 0x3Cu)
 #define RCC_APBENR2    G0_REG(RCC_BASE_R + 0x40u)
-#define RCC_CSR        G0_REG(RCC_BASE_R + 0x60u)
 #define RCC_CR_HSION           (1u << 8)     /* §5.4.1 */
 #define RCC_CR_HSIRDY          (1u << 10)
 #define RCC_CR_PLLON           (1u << 24)
@@ -76,7 +75,6 @@
 #define RCC_APBENR1_TIM3       (1u << 1)
 #define RCC_APBENR2_USART1     (1u << 14)    /* §5.4.16 */
 #define RCC_APBENR2_ADC        (1u << 20)
-#define RCC_CSR_LSION          (1u << 0)     /* §5.4.22 */
 
 /* ---- GPIO (RM0444 §7.4), IOPORT bus 0x5000 0000 ---- */
 #define GPIOA_BASE_R   0x50000000u
@@ -157,7 +155,6 @@
 #define ADC_CHSELR     G0_REG(ADC_BASE_R + 0x28u)
 #define ADC_DR         G0_REG(ADC_BASE_R + 0x40u)
 #define ADC_ISR_ADRDY          (1u << 0)     /* §15.12.1 */
-#define ADC_ISR_OVR            (1u << 4)
 #define ADC_ISR_EOCAL          (1u << 11)
 #define ADC_ISR_CCRDY          (1u << 13)
 #define ADC_CR_ADEN            (1u << 0)     /* §15.12.3 */
