@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "g0_regs.h"
+#include "g0_vectors.h"
 #include "km_hal_system.h"
 
 extern const uint8_t __km_store_start[];

@@ -13,6 +13,14 @@
 #define SCB_AIRCR_VECTKEY      (0x05FAu << 16)
 #define SCB_AIRCR_SYSRESETREQ  (1u << 2)
 
+/* SysTick (ARMv6-M B3.3): 24-bit down counter on the core clock. */
+#define SYST_CSR  G0_REG(0xE000E010u)
+#define SYST_RVR  G0_REG(0xE000E014u)
+#define SYST_CVR  G0_REG(0xE000E018u)
+#define SYST_CSR_ENABLE    (1u << 0)
+#define SYST_CSR_TICKINT   (1u << 1)
+#define SYST_CSR_CLKSOURCE (1u << 2)   /* processor clock */
+
 /* NVIC (ARMv6-M B3.4.2): 32 interrupts, 2 priority bits per 8-bit field
  * (bits 7:6), priority registers word-access only on M0+. */
 #define NVIC_ISER G0_REG(0xE000E100u)

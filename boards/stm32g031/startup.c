@@ -5,17 +5,11 @@
  * watchdog, once started, resets it. */
 #include <stdint.h>
 
+#include "g0_vectors.h"
+
 extern uint32_t _sidata, _sdata, _edata, _sbss, _ebss, _estack;
 extern int main(void);
 
-void Reset_Handler(void);
-void NMI_Handler(void);
-void HardFault_Handler(void);
-void SVC_Handler(void);
-void PendSV_Handler(void);
-void SysTick_Handler(void);
-void TIM2_IRQHandler(void);
-void USART1_IRQHandler(void);
 
 static void prv_default_handler(void)
 {

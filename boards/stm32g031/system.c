@@ -1,10 +1,13 @@
 /* km_hal_system for the STM32G031: 64 MHz clock tree, reset, independent
- * watchdog, PRIMASK lock, unique-ID entropy and WFI idle. */
+ * watchdog, PRIMASK lock, unique-ID entropy and WFI idle bounded by a 1 kHz
+ * SysTick wake-up. */
 #include "km_hal_system.h"
 
 #include "km_hal_time.h"
 
+#include "board_clock.h"
 #include "g0_regs.h"
+#include "g0_vectors.h"
 
 /* HSI16 -> PLL (M=1, N=8: VCO 128 MHz, R=2) -> SYSCLK 64 MHz; AHB and APB
  * undivided (RM0444 §5.2.3, §5.4.4). Flash needs 2 wait states above 48 MHz
@@ -29,10 +32,24 @@ static void prv_clock_64mhz(void)
     }
 }
 
+#define WAKE_HZ 1000u
+
 void km_hal_system_init(void)
 {
     prv_clock_64mhz();
     RCC_IOPENR |= RCC_IOPENR_GPIOA | RCC_IOPENR_GPIOB;
+    /* km_hal_idle() sleeps until the next interrupt; the bus may be silent
+     * and the ADC runs by DMA without interrupts, so SysTick guarantees one
+     * per millisecond and the main loop (control tick, watchdog kick) never
+     * sleeps longer than that. */
+    SYST_RVR = BOARD_SYSCLK_HZ / WAKE_HZ - 1u;
+    SYST_CVR = 0u;
+    SYST_CSR = SYST_CSR_CLKSOURCE | SYST_CSR_TICKINT | SYST_CSR_ENABLE;
+}
+
+void SysTick_Handler(void)
+{
+    /* Nothing to do: waking the CPU from WFI is the whole job. */
 }
 
 _Noreturn void km_hal_system_reset(void)

@@ -5,6 +5,7 @@
 
 #include "board_clock.h"
 #include "g0_regs.h"
+#include "g0_vectors.h"
 #include "km_hal_system.h"
 
 #define TICK_HZ 1000000u

@@ -9,6 +9,7 @@
 #include "board_clock.h"
 #include "board_pins.h"
 #include "g0_gpio.h"
+#include "g0_vectors.h"
 #include "km_hal_system.h"
 #include "km_hal_time.h"
 
