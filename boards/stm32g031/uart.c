@@ -138,13 +138,14 @@ static void prv_tx(uint32_t isr, uint32_t cr1)
             USART1_TDR = s_tx_data[s_tx_next++];
         }
         if (s_tx_next >= s_tx_len) {
-            /* Last byte is in the shifter: wait for it to leave the wire. */
+            /* Last byte queued: TC tells when its stop bit has left the wire. */
             USART1_ICR = USART_ICR_TCCF;
             USART1_CR1 = (USART1_CR1 & ~USART_CR1_TXEIE) | USART_CR1_TCIE;
         }
     } else if ((cr1 & USART_CR1_TCIE) != 0u && (isr & USART_ISR_TC) != 0u) {
         prv_de(false);
-        /* Whatever the receiver latched before RE dropped is our own echo. */
+        /* RE was off for the whole send, so nothing of our own frame was
+         * received; clear any error flag latched around the RE switch. */
         USART1_ICR = USART_ICR_TCCF | USART_ICR_ORECF | USART_ICR_FECF | USART_ICR_NECF | USART_ICR_PECF;
         USART1_CR1 = (USART1_CR1 & ~USART_CR1_TCIE) | USART_CR1_RE | USART_CR1_RXNEIE;
         s_tx_busy = false;
