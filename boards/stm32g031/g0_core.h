@@ -12,6 +12,7 @@
 #define SCB_AIRCR G0_REG(0xE000ED0Cu)
 #define SCB_AIRCR_VECTKEY      (0x05FAu << 16)
 #define SCB_AIRCR_SYSRESETREQ  (1u << 2)
+#define SCB_SHPR3 G0_REG(0xE000ED20u)     /* bits 31:24 SysTick priority */
 
 /* SysTick (ARMv6-M B3.3): 24-bit down counter on the core clock. */
 #define SYST_CSR  G0_REG(0xE000E010u)

@@ -42,6 +42,9 @@ void km_hal_system_init(void)
      * and the ADC runs by DMA without interrupts, so SysTick guarantees one
      * per millisecond and the main loop (control tick, watchdog kick) never
      * sleeps longer than that. */
+    /* Lowest priority (system handlers reset to 0, the highest): the wake
+     * tick must never delay a bus byte's time stamp. */
+    SCB_SHPR3 = (SCB_SHPR3 & 0x00FFFFFFu) | (0xC0u << 24);
     SYST_RVR = BOARD_SYSCLK_HZ / WAKE_HZ - 1u;
     SYST_CVR = 0u;
     SYST_CSR = SYST_CSR_CLKSOURCE | SYST_CSR_TICKINT | SYST_CSR_ENABLE;
