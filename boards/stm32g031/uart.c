@@ -12,6 +12,7 @@
 #include "g0_vectors.h"
 #include "km_hal_system.h"
 #include "km_hal_time.h"
+#include "usart_brr.h"
 
 static km_uart_rx_handler_t s_rx_handler;
 static void *s_rx_ctx;
@@ -21,25 +22,6 @@ static const uint8_t *s_tx_data;
 static uint16_t s_tx_len;
 static uint16_t s_tx_next;
 static volatile bool s_tx_busy;
-
-/* Oversampling by 16: BRR = fck / baud, at least 16 (§33.5.7). Returns 0 if
- * the rate is out of reach or off by more than 2 %. */
-static uint32_t prv_brr(uint32_t baud)
-{
-    if (baud == 0u) {
-        return 0u;
-    }
-    uint32_t brr = (BOARD_PCLK_HZ + baud / 2u) / baud;
-    if (brr < 16u || brr > 0xFFFFu) {
-        return 0u;
-    }
-    uint32_t actual = BOARD_PCLK_HZ / brr;
-    uint32_t diff = actual > baud ? actual - baud : baud - actual;
-    if (diff * 50u > baud) { /* diff / baud > 2 % */
-        return 0u;
-    }
-    return brr;
-}
 
 static void prv_de(bool on)
 {
@@ -56,7 +38,7 @@ static void prv_de(bool on)
 
 bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx)
 {
-    uint32_t brr = prv_brr(baud);
+    uint32_t brr = km_usart_brr(BOARD_PCLK_HZ, baud);
     if (brr == 0u) {
         return false;
     }
