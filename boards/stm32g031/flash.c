@@ -1,0 +1,185 @@
+/* km_flash_t over the store pages at the end of the G031's single flash bank
+ * (RM0444 §3.3): 2 KiB pages, 64-bit double-word programming with ECC.
+ *
+ * The G031 has one bank, and the code runs from it: while a program (~85 µs)
+ * or a page erase (~22 ms, 40 ms max) is under way, every instruction fetch
+ * and vector fetch from flash stalls the CPU. Interrupts are therefore late,
+ * not lost, except that UART bytes arriving during an erase overrun the
+ * receiver. The store erases ahead of time while the bus is idle (it
+ * compacts into a spare page before it needs one), and an answer that falls
+ * due during an erase leaves late. Interrupts are masked only around the
+ * two-word write of one double word, which must reach the controller
+ * back to back. */
+#include "km_board.h"
+
+#include <stdbool.h>
+#include <string.h>
+
+#include "g0_regs.h"
+#include "g0_vectors.h"
+#include "km_hal_system.h"
+
+extern const uint8_t __km_store_start[];
+extern const uint8_t __km_store_size[]; /* linker symbol: its address is the size */
+
+#define PROG_SIZE 8u
+/* Generous bound on BSY polling: an erase takes at most 40 ms (datasheet
+ * DS12992 table "Flash memory characteristics"); the CPU mostly stalls. */
+#define BUSY_SPINS 2000000u
+
+static volatile bool s_ecc_nmi;
+
+static uint32_t prv_region_base(void)
+{
+    return (uint32_t)(uintptr_t)__km_store_start;
+}
+
+static uint32_t prv_region_size(void)
+{
+    return (uint32_t)(uintptr_t)__km_store_size;
+}
+
+static bool prv_wait_idle(void)
+{
+    for (uint32_t i = 0u; i < BUSY_SPINS; i++) {
+        if ((FLASH_SR & (FLASH_SR_BSY1 | FLASH_SR_CFGBSY)) == 0u) {
+            return true;
+        }
+    }
+    return false;
+}
+
+/* Unlock with the KEYR sequence (§3.3.6); clear stale flags (rc_w1). */
+static bool prv_begin(void)
+{
+    if (!prv_wait_idle()) {
+        return false;
+    }
+    if ((FLASH_CR & FLASH_CR_LOCK) != 0u) {
+        FLASH_KEYR = FLASH_KEY1;
+        FLASH_KEYR = FLASH_KEY2;
+    }
+    FLASH_SR = FLASH_SR_ERRORS | FLASH_SR_EOP;
+    return (FLASH_CR & FLASH_CR_LOCK) == 0u;
+}
+
+/* Wait for the end, check EOP and the error flags, drop the operation bits
+ * and lock again. */
+static bool prv_end(void)
+{
+    bool idle = prv_wait_idle();
+    uint32_t sr = FLASH_SR;
+    FLASH_SR = FLASH_SR_ERRORS | FLASH_SR_EOP;
+    FLASH_CR = FLASH_CR_LOCK;
+    return idle && (sr & FLASH_SR_ERRORS) == 0u && (sr & FLASH_SR_EOP) != 0u;
+}
+
+static km_flash_result_t prv_erase(void *ctx, uint32_t page)
+{
+    (void)ctx;
+    if (page >= prv_region_size() / FLASH_PAGE_SIZE) {
+        return KM_FLASH_ERR_ALIGN;
+    }
+    uint32_t pnb = (prv_region_base() - FLASH_MAIN_BASE) / FLASH_PAGE_SIZE + page;
+    if (!prv_begin()) {
+        FLASH_CR = FLASH_CR_LOCK;
+        return KM_FLASH_ERR_ERASE;
+    }
+    /* §3.3.7 page erase: PER + PNB, then STRT. */
+    FLASH_CR = FLASH_CR_EOPIE | FLASH_CR_PER | ((pnb << FLASH_CR_PNB_SHIFT) & FLASH_CR_PNB_MASK);
+    FLASH_CR |= FLASH_CR_STRT;
+    return prv_end() ? KM_FLASH_OK : KM_FLASH_ERR_ERASE;
+}
+
+static bool prv_range_ok(uint32_t offset, uint32_t len)
+{
+    uint32_t size = prv_region_size();
+    return offset <= size && len <= size - offset;
+}
+
+static km_flash_result_t prv_program(void *ctx, uint32_t offset, const void *data, uint32_t len)
+{
+    (void)ctx;
+    if ((offset % PROG_SIZE) != 0u || (len % PROG_SIZE) != 0u || !prv_range_ok(offset, len)) {
+        return KM_FLASH_ERR_ALIGN;
+    }
+    const uint8_t *src = data;
+    for (uint32_t done = 0u; done < len; done += PROG_SIZE) {
+        volatile uint32_t *dst = (volatile uint32_t *)(uintptr_t)(prv_region_base() + offset + done);
+        uint32_t word[2];
+        memcpy(word, src + done, sizeof word);
+        /* Only onto erased cells (NOR rule of the contract; the controller
+         * would also refuse with PROGERR). */
+        if (dst[0] != 0xFFFFFFFFu || dst[1] != 0xFFFFFFFFu) {
+            return KM_FLASH_ERR_PROGRAM;
+        }
+        if (!prv_begin()) {
+            FLASH_CR = FLASH_CR_LOCK;
+            return KM_FLASH_ERR_PROGRAM;
+        }
+        FLASH_CR = FLASH_CR_EOPIE | FLASH_CR_PG; /* §3.3.8 */
+        uint32_t key = km_hal_irq_lock();
+        dst[0] = word[0];
+        dst[1] = word[1]; /* the second word starts the operation */
+        km_hal_irq_restore(key);
+        /* Read back: a cell that does not hold what we wrote (supply dip,
+         * worn page) is a program error, not a silent corruption. */
+        if (!prv_end() || dst[0] != word[0] || dst[1] != word[1]) {
+            return KM_FLASH_ERR_PROGRAM;
+        }
+    }
+    return KM_FLASH_OK;
+}
+
+/* A double ECC error on a flash read raises the NMI on the G0 (§3.3.10). The
+ * NMI records it and clears ECCD, so the read below can report the cell as
+ * untrustworthy instead of the CPU hanging in a default handler. */
+void NMI_Handler(void)
+{
+    if ((FLASH_ECCR & FLASH_ECCR_ECCD) != 0u) {
+        FLASH_ECCR = FLASH_ECCR_ECCD; /* rc_w1 */
+        s_ecc_nmi = true;
+        return;
+    }
+    for (;;) { /* any other NMI source: park; the watchdog resets */
+    }
+}
+
+static km_flash_result_t prv_read(void *ctx, uint32_t offset, void *data, uint32_t len)
+{
+    (void)ctx;
+    if (!prv_range_ok(offset, len)) {
+        return KM_FLASH_ERR_ALIGN;
+    }
+    FLASH_ECCR = FLASH_ECCR_ECCC | FLASH_ECCR_ECCD;
+    s_ecc_nmi = false;
+    const volatile uint8_t *src = (const volatile uint8_t *)(uintptr_t)(prv_region_base() + offset);
+    uint8_t *dst = data;
+    for (uint32_t i = 0u; i < len; i++) {
+        dst[i] = src[i];
+    }
+    bool ecc = s_ecc_nmi || (FLASH_ECCR & FLASH_ECCR_ECCD) != 0u;
+    FLASH_ECCR = FLASH_ECCR_ECCC | FLASH_ECCR_ECCD;
+    return ecc ? KM_FLASH_ERR_ECC : KM_FLASH_OK;
+}
+
+static const km_flash_t s_flash_template = {
+    .page_size = FLASH_PAGE_SIZE,
+    .prog_size = PROG_SIZE,
+    .page_count = 0u, /* filled from the linker symbols below */
+    .erase = prv_erase,
+    .program = prv_program,
+    .read = prv_read,
+    .ctx = 0,
+};
+
+static km_flash_t s_flash;
+
+const km_flash_t *km_board_flash(void)
+{
+    if (s_flash.erase == 0) {
+        s_flash = s_flash_template;
+        s_flash.page_count = prv_region_size() / FLASH_PAGE_SIZE;
+    }
+    return &s_flash;
+}

@@ -1,0 +1,16 @@
+/* Names of the exception and interrupt handlers in the vector table
+ * (startup.c). Drivers include this so their handler definitions are checked
+ * against the same declarations the table uses. */
+#ifndef G0_VECTORS_H
+#define G0_VECTORS_H
+
+void Reset_Handler(void);
+void NMI_Handler(void);
+void HardFault_Handler(void);
+void SVC_Handler(void);
+void PendSV_Handler(void);
+void SysTick_Handler(void);
+void TIM2_IRQHandler(void);
+void USART1_IRQHandler(void);
+
+#endif

@@ -1,0 +1,103 @@
+/* Reset entry and vector table of the STM32G031 (RM0444 §12.3 table 61).
+ * The reset handler copies .data from flash, zeroes .bss and calls main();
+ * no C library start-up (no constructors are used, no heap exists). Unused
+ * vectors fall into prv_default_handler, which parks the CPU so the
+ * watchdog, once started, resets it. */
+#include <stdint.h>
+
+#include "g0_vectors.h"
+
+extern uint32_t _sidata, _sdata, _edata, _sbss, _ebss, _estack;
+extern int main(void);
+
+
+static void prv_default_handler(void)
+{
+    for (;;) {
+    }
+}
+
+/* Handlers a board file may define; otherwise they park in the default. */
+#define KM_WEAK_ALIAS __attribute__((weak, alias("prv_default_handler")))
+void NMI_Handler(void) KM_WEAK_ALIAS;
+void HardFault_Handler(void) KM_WEAK_ALIAS;
+void SVC_Handler(void) KM_WEAK_ALIAS;
+void PendSV_Handler(void) KM_WEAK_ALIAS;
+void SysTick_Handler(void) KM_WEAK_ALIAS;
+void TIM2_IRQHandler(void) KM_WEAK_ALIAS;
+void USART1_IRQHandler(void) KM_WEAK_ALIAS;
+
+typedef void (*prv_vector_t)(void);
+
+/* Initial stack pointer, then 15 core exceptions, then 32 device IRQs. */
+typedef struct {
+    uint32_t *initial_sp;
+    prv_vector_t core[15];
+    prv_vector_t irq[32];
+} prv_vector_table_t;
+
+__attribute__((section(".isr_vector"), used))
+static const prv_vector_table_t s_vectors = {
+    .initial_sp = &_estack,
+    .core = {
+        [0] = Reset_Handler,      /* 1 */
+        [1] = NMI_Handler,        /* 2: also flash ECC double errors */
+        [2] = HardFault_Handler,  /* 3 */
+        [3] = prv_default_handler, [4] = prv_default_handler,
+        [5] = prv_default_handler, [6] = prv_default_handler,
+        [7] = prv_default_handler, [8] = prv_default_handler,
+        [9] = prv_default_handler,
+        [10] = SVC_Handler,       /* 11 */
+        [11] = prv_default_handler, [12] = prv_default_handler,
+        [13] = PendSV_Handler,    /* 14 */
+        [14] = SysTick_Handler,   /* 15 */
+    },
+    .irq = {
+        prv_default_handler, /* 0 */
+        prv_default_handler, /* 1 */
+        prv_default_handler, /* 2 */
+        prv_default_handler, /* 3 */
+        prv_default_handler, /* 4 */
+        prv_default_handler, /* 5 */
+        prv_default_handler, /* 6 */
+        prv_default_handler, /* 7 */
+        prv_default_handler, /* 8 */
+        prv_default_handler, /* 9 */
+        prv_default_handler, /* 10 */
+        prv_default_handler, /* 11 */
+        prv_default_handler, /* 12 */
+        prv_default_handler, /* 13 */
+        prv_default_handler, /* 14 */
+        TIM2_IRQHandler, /* 15 */
+        prv_default_handler, /* 16 */
+        prv_default_handler, /* 17 */
+        prv_default_handler, /* 18 */
+        prv_default_handler, /* 19 */
+        prv_default_handler, /* 20 */
+        prv_default_handler, /* 21 */
+        prv_default_handler, /* 22 */
+        prv_default_handler, /* 23 */
+        prv_default_handler, /* 24 */
+        prv_default_handler, /* 25 */
+        prv_default_handler, /* 26 */
+        USART1_IRQHandler, /* 27 */
+        prv_default_handler, /* 28 */
+        prv_default_handler, /* 29 */
+        prv_default_handler, /* 30 */
+        prv_default_handler, /* 31 */
+    },
+};
+
+void Reset_Handler(void)
+{
+    uint32_t *src = &_sidata;
+    for (uint32_t *dst = &_sdata; dst < &_edata;) {
+        *dst++ = *src++;
+    }
+    for (uint32_t *dst = &_sbss; dst < &_ebss;) {
+        *dst++ = 0u;
+    }
+    (void)main();
+    for (;;) {
+    }
+}

@@ -1,0 +1,139 @@
+/* km_hal_system for the STM32G031: 64 MHz clock tree, reset, independent
+ * watchdog, PRIMASK lock, unique-ID entropy and WFI idle bounded by a 1 kHz
+ * SysTick wake-up. */
+#include "km_hal_system.h"
+
+#include "km_hal_time.h"
+
+#include "board_clock.h"
+#include "g0_regs.h"
+#include "g0_vectors.h"
+
+/* HSI16 -> PLL (M=1, N=8: VCO 128 MHz, R=2) -> SYSCLK 64 MHz; AHB and APB
+ * undivided (RM0444 §5.2.3, §5.4.4). Flash needs 2 wait states above 48 MHz
+ * in range 1 (§3.3.4 table 12), set and read back before the switch. */
+static void prv_clock_64mhz(void)
+{
+    FLASH_ACR = (FLASH_ACR & ~FLASH_ACR_LATENCY_MASK) | 2u | FLASH_ACR_PRFTEN | FLASH_ACR_ICEN;
+    while ((FLASH_ACR & FLASH_ACR_LATENCY_MASK) != 2u) {
+    }
+
+    RCC_CR |= RCC_CR_HSION; /* on after reset; made explicit */
+    while ((RCC_CR & RCC_CR_HSIRDY) == 0u) {
+    }
+    RCC_PLLCFGR = RCC_PLLCFGR_SRC_HSI16 | (0u << RCC_PLLCFGR_M_SHIFT) |
+                  (8u << RCC_PLLCFGR_N_SHIFT) | (1u << RCC_PLLCFGR_R_SHIFT) |
+                  RCC_PLLCFGR_REN;
+    RCC_CR |= RCC_CR_PLLON;
+    while ((RCC_CR & RCC_CR_PLLRDY) == 0u) {
+    }
+    RCC_CFGR = (RCC_CFGR & ~RCC_CFGR_SW_MASK) | RCC_CFGR_SW_PLLRCLK;
+    while (((RCC_CFGR >> RCC_CFGR_SWS_SHIFT) & 7u) != RCC_CFGR_SW_PLLRCLK) {
+    }
+}
+
+#define WAKE_HZ 1000u
+
+void km_hal_system_init(void)
+{
+    prv_clock_64mhz();
+    RCC_IOPENR |= RCC_IOPENR_GPIOA | RCC_IOPENR_GPIOB;
+    /* km_hal_idle() sleeps until the next interrupt; the bus may be silent
+     * and the ADC runs by DMA without interrupts, so SysTick guarantees one
+     * per millisecond and the main loop (control tick, watchdog kick) never
+     * sleeps longer than that. */
+    /* Lowest priority (system handlers reset to 0, the highest): the wake
+     * tick must never delay a bus byte's time stamp. */
+    SCB_SHPR3 = (SCB_SHPR3 & 0x00FFFFFFu) | (0xC0u << 24);
+    SYST_RVR = BOARD_SYSCLK_HZ / WAKE_HZ - 1u;
+    SYST_CVR = 0u;
+    SYST_CSR = SYST_CSR_CLKSOURCE | SYST_CSR_TICKINT | SYST_CSR_ENABLE;
+}
+
+void SysTick_Handler(void)
+{
+    /* Nothing to do: waking the CPU from WFI is the whole job. */
+}
+
+_Noreturn void km_hal_system_reset(void)
+{
+    __asm volatile("dsb" ::: "memory");
+    SCB_AIRCR = SCB_AIRCR_VECTKEY | SCB_AIRCR_SYSRESETREQ;
+    __asm volatile("dsb" ::: "memory");
+    for (;;) {
+    }
+}
+
+/* IWDG on the ~32 kHz LSI (RM0444 §27.3): timeout = (RLR+1) * 4 * 2^PR / 32 kHz.
+ * The smallest prescaler whose 12-bit reload covers the timeout gives the
+ * finest resolution. LSI varies by tens of percent: callers leave margin. */
+void km_hal_watchdog_start(uint32_t timeout_ms)
+{
+    uint32_t pr = 0u;
+    uint32_t ticks = 0u;
+    for (; pr <= 6u; pr++) {
+        ticks = (timeout_ms * 32u) / (4u << pr);
+        if (ticks <= 4096u) {
+            break;
+        }
+    }
+    if (pr > 6u) {
+        pr = 6u;
+        ticks = 4096u;
+    }
+    if (ticks == 0u) {
+        ticks = 1u;
+    }
+    IWDG_KR = IWDG_KEY_START; /* starts LSI and the counter (§27.3.2) */
+    IWDG_KR = IWDG_KEY_UNLOCK;
+    IWDG_PR = pr;
+    IWDG_RLR = ticks - 1u;
+    while (IWDG_SR != 0u) { /* PVU/RVU: registers updated in the LSI domain */
+    }
+    IWDG_KR = IWDG_KEY_KICK;
+}
+
+void km_hal_watchdog_kick(void)
+{
+    IWDG_KR = IWDG_KEY_KICK;
+}
+
+uint32_t km_hal_irq_lock(void)
+{
+    uint32_t primask;
+    __asm volatile("mrs %0, primask\n cpsid i" : "=r"(primask)::"memory");
+    return primask;
+}
+
+void km_hal_irq_restore(uint32_t state)
+{
+    __asm volatile("msr primask, %0" ::"r"(state) : "memory");
+}
+
+/* The 96-bit unique ID (RM0444 §40.1) differs between parts; the free-running
+ * µs counter adds boot-to-boot variation. Mixed with a multiply-xorshift
+ * finaliser so every input bit reaches every output bit. */
+static uint32_t prv_mix(uint32_t h)
+{
+    h ^= h >> 16;
+    h *= 0x7FEB352Du;
+    h ^= h >> 15;
+    h *= 0x846CA68Bu;
+    h ^= h >> 16;
+    return h;
+}
+
+uint32_t km_hal_entropy(void)
+{
+    const volatile uint32_t *uid = (const volatile uint32_t *)(uintptr_t)UID_BASE_R;
+    uint32_t h = 0x9E3779B9u;
+    for (uint32_t i = 0u; i < 3u; i++) {
+        h = prv_mix(h ^ uid[i]);
+    }
+    return prv_mix(h ^ km_hal_time_now());
+}
+
+void km_hal_idle(void)
+{
+    __asm volatile("wfi" ::: "memory");
+}

@@ -1,0 +1,144 @@
+/* km_hal_uart on USART1, single-wire half-duplex (HDSEL, RM0444 §33.5.14):
+ * TX and RX share PB6, open drain with the bus pull-up. In HDSEL the
+ * receiver hears our own transmission; we clear RE for the length of a send
+ * and set it again at TC, so the echo never reaches the parser and costs no
+ * interrupts. An optional RS-485 DE pin is raised before the first byte and
+ * dropped at TC (after the last stop bit). */
+#include "km_hal_uart.h"
+
+#include "board_clock.h"
+#include "board_pins.h"
+#include "g0_gpio.h"
+#include "g0_vectors.h"
+#include "km_hal_system.h"
+#include "km_hal_time.h"
+#include "usart_brr.h"
+
+static km_uart_rx_handler_t s_rx_handler;
+static void *s_rx_ctx;
+static bool s_rx_lost;
+
+static const uint8_t *s_tx_data;
+static uint16_t s_tx_len;
+static uint16_t s_tx_next;
+static volatile bool s_tx_busy;
+
+static void prv_de(bool on)
+{
+#ifdef KM_BOARD_RS485_DE
+    if (on) {
+        g0_gpio_set(PIN_DE_PORT, PIN_DE_PIN);
+    } else {
+        g0_gpio_clear(PIN_DE_PORT, PIN_DE_PIN);
+    }
+#else
+    (void)on;
+#endif
+}
+
+bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx)
+{
+    uint32_t brr = km_usart_brr(BOARD_PCLK_HZ, baud);
+    if (brr == 0u) {
+        return false;
+    }
+    g0_nvic_disable(G0_IRQ_USART1);
+    s_rx_handler = handler;
+    s_rx_ctx = ctx;
+    s_rx_lost = false;
+    s_tx_busy = false;
+
+    RCC_APBENR2 |= RCC_APBENR2_USART1;
+    g0_gpio_open_drain_pullup(PIN_BUS_PORT, PIN_BUS_PIN);
+    g0_gpio_fast(PIN_BUS_PORT, PIN_BUS_PIN);
+    g0_gpio_af(PIN_BUS_PORT, PIN_BUS_PIN, PIN_BUS_AF);
+#ifdef KM_BOARD_RS485_DE
+    g0_gpio_clear(PIN_DE_PORT, PIN_DE_PIN);
+    g0_gpio_mode(PIN_DE_PORT, PIN_DE_PIN, G0_GPIO_MODE_OUTPUT);
+#endif
+
+    /* Configuration bits are only writable with UE = 0 (§33.8.1). 8N1 and
+     * FIFO off are the reset values of CR1/CR2. */
+    USART1_CR1 = 0u;
+    USART1_CR2 = 0u;
+    USART1_CR3 = USART_CR3_HDSEL | USART_CR3_EIE;
+    USART1_BRR = brr;
+    USART1_ICR = USART_ICR_PECF | USART_ICR_FECF | USART_ICR_NECF | USART_ICR_ORECF | USART_ICR_TCCF;
+    USART1_CR1 = USART_CR1_UE | USART_CR1_TE | USART_CR1_RE | USART_CR1_RXNEIE;
+
+    /* Highest priority: the byte's time stamp is the answer's reference. */
+    g0_nvic_enable(G0_IRQ_USART1, 0u);
+    return true;
+}
+
+bool km_hal_uart_send(const uint8_t *data, uint16_t len)
+{
+    if (len == 0u) {
+        return true;
+    }
+    uint32_t key = km_hal_irq_lock();
+    if (s_tx_busy) {
+        km_hal_irq_restore(key);
+        return false;
+    }
+    s_tx_busy = true;
+    s_tx_data = data;
+    s_tx_len = len;
+    s_tx_next = 0u;
+    prv_de(true);
+    USART1_CR1 = (USART1_CR1 & ~(USART_CR1_RE | USART_CR1_RXNEIE)) | USART_CR1_TXEIE;
+    km_hal_irq_restore(key);
+    return true;
+}
+
+bool km_hal_uart_tx_busy(void)
+{
+    return s_tx_busy;
+}
+
+static void prv_rx(uint32_t isr, uint32_t cr1)
+{
+    if ((isr & (USART_ISR_ORE | USART_ISR_FE | USART_ISR_NE | USART_ISR_PE)) != 0u) {
+        USART1_ICR = USART_ICR_ORECF | USART_ICR_FECF | USART_ICR_NECF | USART_ICR_PECF;
+        s_rx_lost = true;
+    }
+    if ((cr1 & USART_CR1_RXNEIE) != 0u && (isr & USART_ISR_RXNE) != 0u) {
+        uint32_t tick = km_hal_time_now();
+        uint8_t byte = (uint8_t)USART1_RDR; /* reading clears RXNE */
+        bool lost = s_rx_lost;
+        s_rx_lost = false;
+        if (s_rx_handler != 0) {
+            s_rx_handler(s_rx_ctx, byte, tick, lost);
+        }
+    }
+}
+
+static void prv_tx(uint32_t isr, uint32_t cr1)
+{
+    if ((cr1 & USART_CR1_TXEIE) != 0u && (isr & USART_ISR_TXE) != 0u) {
+        if (s_tx_next < s_tx_len) {
+            USART1_TDR = s_tx_data[s_tx_next++];
+        }
+        if (s_tx_next >= s_tx_len) {
+            /* Last byte queued: TC tells when its stop bit has left the wire. */
+            USART1_ICR = USART_ICR_TCCF;
+            USART1_CR1 = (USART1_CR1 & ~USART_CR1_TXEIE) | USART_CR1_TCIE;
+        }
+    } else if ((cr1 & USART_CR1_TCIE) != 0u && (isr & USART_ISR_TC) != 0u) {
+        prv_de(false);
+        /* RE was off for the whole send, so nothing of our own frame was
+         * received; clear any error flag latched around the RE switch. */
+        USART1_ICR = USART_ICR_TCCF | USART_ICR_ORECF | USART_ICR_FECF | USART_ICR_NECF | USART_ICR_PECF;
+        USART1_CR1 = (USART1_CR1 & ~USART_CR1_TCIE) | USART_CR1_RE | USART_CR1_RXNEIE;
+        s_tx_busy = false;
+    }
+}
+
+void USART1_IRQHandler(void)
+{
+    uint32_t isr = USART1_ISR;
+    uint32_t cr1 = USART1_CR1;
+    /* Error flags interrupt through EIE even while RX is off: always clear. */
+    prv_rx(isr, cr1);
+    prv_tx(isr, cr1);
+}

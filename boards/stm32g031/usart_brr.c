@@ -1,0 +1,19 @@
+/* USART divider computation (see usart_brr.h). */
+#include "usart_brr.h"
+
+uint32_t km_usart_brr(uint32_t fck_hz, uint32_t baud)
+{
+    if (baud == 0u) {
+        return 0u;
+    }
+    uint32_t brr = (fck_hz + baud / 2u) / baud;
+    if (brr < 16u || brr > 0xFFFFu) {
+        return 0u;
+    }
+    uint32_t actual = fck_hz / brr;
+    uint32_t diff = actual > baud ? actual - baud : baud - actual;
+    if (diff * 50u > baud) { /* diff / baud > 2 % */
+        return 0u;
+    }
+    return brr;
+}
