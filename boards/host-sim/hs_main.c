@@ -15,7 +15,7 @@ void hs_board_set_flash(const km_flash_t *flash);
 
 static int prv_usage(const char *argv0)
 {
-    fprintf(stderr, "usage: %s (--listen HOST:PORT | --pty) --flash FILE\n", argv0);
+    fprintf(stderr, "usage: %s (--listen HOST:PORT | --pty) --flash FILE [--baud N]\n", argv0);
     return 2;
 }
 
@@ -29,6 +29,8 @@ int main(int argc, char **argv)
             listen_at = argv[++i];
         } else if (strcmp(argv[i], "--flash") == 0 && i + 1 < argc) {
             flash_path = argv[++i];
+        } else if (strcmp(argv[i], "--baud") == 0 && i + 1 < argc) {
+            i++; /* bytes over TCP have no line rate; the stored 0x10 is what the servo reports */
         } else if (strcmp(argv[i], "--pty") == 0) {
             use_pty = 1;
         } else {

@@ -2,7 +2,7 @@
  * connect after the old one leaves) or over a pseudo-terminal. Bytes the
  * client sends arrive as RX "interrupts"; answers are written back whole.
  * Like a real half-duplex transceiver, the servo does not hear its own TX. */
-#define _DEFAULT_SOURCE
+#define _GNU_SOURCE /* posix_openpt, ptsname */
 #include <errno.h>
 #include <fcntl.h>
 #include <netdb.h>

@@ -7,3 +7,7 @@ add_compile_options(${KM_CPU_FLAGS} -ffunction-sections -fdata-sections -fstack-
 # nosys.specs, so anything reaching for syscalls or a heap fails to link.
 add_link_options(${KM_CPU_FLAGS} --specs=nano.specs -nostartfiles -Wl,--gc-sections)
 include(${CMAKE_SOURCE_DIR}/cmake/km_image.cmake)
+
+# QEMU delivers UART bytes when the host schedules it: a frame may pause
+# for milliseconds mid-way (see KM_APP_GAP_MIN_US in firmware/app/km_app.c).
+add_compile_definitions(KM_APP_GAP_MIN_US=20000u)

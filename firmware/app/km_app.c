@@ -28,6 +28,15 @@
 #define KM_APP_RX_BUDGET 64u      /* bytes parsed per loop pass: bounds tick jitter */
 #define KM_APP_WATCHDOG_MS 500u
 
+/* Lowest inter-byte gap that drops a frame. A real UART delivers a frame's
+ * bytes at line rate, so the parser's default (10 byte times, >= 1 ms)
+ * holds. An emulated UART (QEMU, host-sim) delivers them when the host
+ * schedules the emulator, which can pause for milliseconds between two
+ * bytes of one frame: simulated boards raise this floor at build time. */
+#ifndef KM_APP_GAP_MIN_US
+#define KM_APP_GAP_MIN_US 0u
+#endif
+
 static km_rx_queue_t s_rxq;
 static km_parser_t s_parser;
 static km_frame_t s_frame;
@@ -201,7 +210,11 @@ _Noreturn void km_app_run(void)
     km_control_init(&s_control, &cfg);
 
     const uint32_t baud = km_servo_active_baud(&s_servo);
-    km_parser_init(&s_parser, prv_us_to_ticks(km_parser_default_gap_us(baud)));
+    uint32_t gap_us = km_parser_default_gap_us(baud);
+    if (gap_us < KM_APP_GAP_MIN_US) {
+        gap_us = KM_APP_GAP_MIN_US;
+    }
+    km_parser_init(&s_parser, prv_us_to_ticks(gap_us));
     km_rx_queue_init(&s_rxq);
     (void)km_hal_uart_init(baud, ISR_rx_byte, NULL);
     km_hal_watchdog_start(KM_APP_WATCHDOG_MS);
