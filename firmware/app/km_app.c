@@ -34,7 +34,7 @@
  * schedules the emulator, which can pause for milliseconds between two
  * bytes of one frame: simulated boards raise this floor at build time. */
 #ifndef KM_APP_GAP_MIN_US
-#define KM_APP_GAP_MIN_US 0u
+#define KM_APP_GAP_MIN_US 1000u /* the parser default's own floor */
 #endif
 
 static km_rx_queue_t s_rxq;
