@@ -147,6 +147,11 @@ static bool prv_append(km_store_t *s, const uint32_t *next, uint32_t changed)
         s->restate = false;
         s->restate_snapshot = false;
         hdr.type = KM_REC_DELTA;
+        if (mask == 0u) {
+            /* Nothing changed: one key still follows, so the copy is not
+             * the newest record and the next session need not copy it. */
+            mask = 1u;
+        }
     } else if (s->restate) {
         mask |= s->last_keys;
     }
@@ -168,6 +173,16 @@ static bool prv_append(km_store_t *s, const uint32_t *next, uint32_t changed)
     return true;
 }
 
+/* True if a later mount could show another state than RAM holds: a torn
+ * record or page from a past cut, which a read may find valid or not, has
+ * not been settled by a write in this session yet. An acknowledgement must
+ * be durable for the whole state, so even an unchanged commit then writes
+ * (once per session at most; a session that commits nothing writes nothing). */
+static bool prv_in_doubt(const km_store_t *s)
+{
+    return s->dirty || s->suspect != 0u || s->restate;
+}
+
 static km_store_status_t prv_commit_state(km_store_t *s, const uint32_t *next)
 {
     uint32_t changed = 0;
@@ -176,7 +191,7 @@ static km_store_status_t prv_commit_state(km_store_t *s, const uint32_t *next)
             changed |= 1u << i;
         }
     }
-    if (changed == 0u) {
+    if (changed == 0u && !prv_in_doubt(s)) {
         return KM_STORE_OK;
     }
     s->wrote = true;

@@ -79,8 +79,11 @@ km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash,
 bool km_store_mount_is_defaults(km_store_mount_t m);
 
 /* Commits n key/value pairs, all or nothing. KM_STORE_OK once they are in
- * flash and read back (or unchanged: then no flash op). On any error the old
- * values stay in force. */
+ * flash and read back. Unchanged values cost no flash op, except on the
+ * session's first commit after a mount that left the flash in doubt (a
+ * record from a past session, a torn record or page), which writes once to
+ * make the acknowledged state durable. On any error the old values stay in
+ * force. Commit an ID or baud change before applying it. */
 km_store_status_t km_store_commit(km_store_t *s, const uint8_t *keys, const uint32_t *values,
                                   uint32_t n);
 
@@ -89,7 +92,8 @@ km_store_status_t km_store_reset(km_store_t *s, const uint8_t *keep, uint32_t n_
 
 /* Idle work: compacts ahead of time so a commit rarely waits on an erase.
  * Does at most one erase or one record per call, nothing before the
- * session's first commit. Returns true if it did flash work. */
+ * session's first commit. Returns true if it did flash work (call again on
+ * a later idle tick; a failing flash keeps it returning true). */
 bool km_store_maintain(km_store_t *s);
 
 /* The committed value of key; false if key is not in the schema. */
