@@ -95,8 +95,8 @@ static void prv_check_registers(void)
     for (unsigned i = 0; i < KM_REG_COUNT; i++) {
         const km_reg_t *r = &km_reg_table[i];
         const uint8_t size = km_reg_fixed_size((km_layout_t)r->layout);
-        if (!(r->access & KM_W) || size == 0 || r->layout == KM_L_MAGIC || i == KM_REG_PROT_FLAGS) {
-            continue; /* computed, action-only or write-1-to-clear: nothing stored */
+        if (r->access != KM_RW || size == 0 || i == KM_REG_PROT_FLAGS) {
+            continue; /* read-only, write-only actions, write-1-to-clear: nothing stored */
         }
         uint8_t bytes[4];
         uint32_t packed;
