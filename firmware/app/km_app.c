@@ -49,6 +49,10 @@ static uint32_t s_last_control_tick;
 static uint8_t s_tx[KM_FRAME_MAX];
 static uint16_t s_tx_len;
 static volatile bool s_tx_armed;
+static uint32_t s_answer_frame_end;      /* tick of the answered frame's last byte */
+static uint32_t s_answer_delay_us;       /* the delay it asked for */
+static volatile uint32_t s_answer_start; /* tick the answer's first byte was handed to the UART */
+static volatile bool s_answer_started;
 static bool s_restart_pending;
 
 static void ISR_rx_byte(void *ctx, uint8_t byte, uint32_t tick, bool lost)
@@ -60,6 +64,8 @@ static void ISR_rx_byte(void *ctx, uint8_t byte, uint32_t tick, bool lost)
 static void ISR_answer_due(void *ctx)
 {
     (void)ctx;
+    s_answer_start = km_hal_time_now();
+    s_answer_started = true;
     (void)km_hal_uart_send(s_tx, s_tx_len);
     s_tx_armed = false;
 }
@@ -80,7 +86,20 @@ static void prv_schedule_answer(const km_reply_t *reply, uint32_t frame_end)
     memcpy(s_tx, reply->bytes, reply->len);
     s_tx_len = reply->len;
     s_tx_armed = true;
+    s_answer_frame_end = frame_end;
+    s_answer_delay_us = reply->delay_us;
     km_hal_timer_at(frame_end + prv_us_to_ticks(reply->delay_us), ISR_answer_due, NULL);
+}
+
+/* Measurement hook, called from the main loop after each answer started:
+ * the frame's end tick, the tick the answer was handed to the UART, and the
+ * delay asked for. Empty here; the QEMU timing image (boards/qemu-microbit/
+ * test/answer_timing.c) prints it to measure answer-delay accuracy. */
+__attribute__((weak)) void km_app_answer_started(uint32_t frame_end, uint32_t started, uint32_t delay_us)
+{
+    (void)frame_end;
+    (void)started;
+    (void)delay_us;
 }
 
 static void prv_on_frame(void)
@@ -222,6 +241,10 @@ _Noreturn void km_app_run(void)
     s_last_control_tick = km_hal_time_now();
     uint32_t next_tick = s_last_control_tick;
     for (;;) {
+        if (s_answer_started) {
+            s_answer_started = false;
+            km_app_answer_started(s_answer_frame_end, s_answer_start, s_answer_delay_us);
+        }
         prv_drain_rx();
         if (s_restart_pending) {
             prv_restart_when_sent();

@@ -11,6 +11,9 @@
 const km_product_t *km_board_product(void);
 const km_flash_t *km_board_flash(void);
 
+/* Measurement hook (weak, empty by default): see km_app.c. */
+void km_app_answer_started(uint32_t frame_end, uint32_t started, uint32_t delay_us);
+
 /* Initialises everything and runs the main loop; never returns. */
 _Noreturn void km_app_run(void);
 
