@@ -154,6 +154,12 @@ void km_servo_init(km_servo_t *s, const km_product_t *product, const uint32_t *p
         k += km_reg_table[i].persisted;
         prv_apply(s, (km_reg_index_t)i, v);
     }
+    /* §5.4: 0x5B..0x5D start equal to the stored 0x13..0x15. They come later
+     * in the table than their sources, so the loop above set them to the
+     * product defaults after the mirror had been applied: apply it again. */
+    prv_apply(s, KM_REG_MAX_TORQUE, s->value[KM_REG_MAX_TORQUE]);
+    prv_apply(s, KM_REG_MAX_CURRENT, s->value[KM_REG_MAX_CURRENT]);
+    prv_apply(s, KM_REG_MAX_SPEED, s->value[KM_REG_MAX_SPEED]);
     s->active_baud = prv_reg(s, KM_REG_BAUD) * 100u;
     s->prng = seed ? seed : 0x2545F491u;
 }
