@@ -293,6 +293,36 @@ static void test_s5_2_0x3E_0x3F_thresholds_and_detection_time(void **state)
     }
 }
 
+/* User data handed over at power-on passes the same checks as a write: a
+ * stored value out of range (a baud of 0, a torque of 5000, an ID of 251)
+ * falls back to its default instead of running with it (a baud of 0 made the
+ * super-ID slot divide by zero). */
+static void test_s5_persisted_values_checked_at_init(void **state)
+{
+    (void)state;
+    static const struct { uint8_t addr; uint32_t bad; uint32_t want; } c[] = {
+        {0x10, 0, 1152}, {0x10, 10001, 1152}, {0x13, 5000, 1000}, {0x0F, 251, 0},
+        {0x11, 0xF2, 0x02}, {0x3D, 60u | (60u << 8), 60u | (5u << 8)},
+        {0x13, 0x10000u | 500u, 1000}, /* garbage above the wire bytes */
+    };
+    for (unsigned i = 0; i < sizeof c / sizeof c[0]; i++) {
+        kt_init(&fx, kt_product_pot(), ID);
+        unsigned k = 0;
+        for (unsigned j = 0; j < KM_REG_COUNT; j++) {
+            if (!km_reg_table[j].persisted) continue;
+            if (km_reg_table[j].addr == c[i].addr) fx.persisted[k] = c[i].bad;
+            k++;
+        }
+        km_servo_init(&fx.s, kt_product_pot(), fx.persisted, 1, &fx.ops);
+        const int r = km_reg_find(c[i].addr);
+        assert_int_equal(km_servo_reg(&fx.s, (km_reg_index_t)r), c[i].want);
+        kt_ping(&fx, KM_ID_SUPER);
+        assert_int_equal(fx.reply.len, 6);
+    }
+    assert_int_equal(km_servo_active_baud(&fx.s), 115200);
+    assert_int_equal(km_servo_reg(&fx.s, KM_REG_TORQUE_LIMIT), 1000);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -300,6 +330,7 @@ int main(void)
         cmocka_unit_test(test_s5_every_rw_register_covered),
         cmocka_unit_test(test_s5_rw_range_edges),
         cmocka_unit_test(test_s5_persisted_writes_committed),
+        cmocka_unit_test(test_s5_persisted_values_checked_at_init),
         cmocka_unit_test(test_s5_2_0x34_field_rules),
         cmocka_unit_test(test_s5_2_0x3C_voltage_thresholds),
         cmocka_unit_test(test_s5_2_0x3D_temperature_thresholds),
