@@ -161,6 +161,27 @@ static void test_s3_multi_id_clears_sync_buffer_of_listed_only(void **state)
     assert_int_equal(km_servo_reg(&bus[1].s, KM_REG_MAX_TORQUE), 500);
 }
 
+/* "Multi-ID write": a servo listed twice runs its first entry only; an 0x83
+ * sent to the super ID or another servo's ID is ignored (bits kept). */
+static void test_s3_multi_id_first_entry_and_non_broadcast(void **state)
+{
+    (void)state;
+    kt_init(&fx, kt_product_pot(), ID);
+    const uint8_t twice[] = {0x64, 0x01, ID, 0x01, ID, 0x02};
+    kt_send(&fx, KM_ID_BROADCAST, 0x83, twice, sizeof twice);
+    assert_int_equal(fx.fake.n_requests, 1);
+    assert_int_equal(fx.fake.requests[0].u.u8, 1);
+    kt_write_u8(&fx, ID, 0x64, 9); /* bit 6 pending */
+    const uint8_t m[] = {0x64, 0x01, ID, 0x02};
+    kt_snap_t sn;
+    kt_snap(&fx, &sn);
+    kt_send(&fx, KM_ID_SUPER, 0x83, m, sizeof m);
+    kt_send(&fx, ID + 1, 0x83, m, sizeof m);
+    kt_no_reply(&fx);
+    kt_assert_unchanged(&fx, &sn);
+    assert_int_equal(km_servo_status(&fx.s), KM_ST_FAILED);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -172,6 +193,7 @@ int main(void)
         cmocka_unit_test(test_s3_sync_write_restart),
         cmocka_unit_test(test_s3_multi_id_status_bits_and_addresses),
         cmocka_unit_test(test_s3_multi_id_clears_sync_buffer_of_listed_only),
+        cmocka_unit_test(test_s3_multi_id_first_entry_and_non_broadcast),
     };
     return cmocka_run_group_tests_name("dispatch_sync_multi", tests, NULL, NULL);
 }
