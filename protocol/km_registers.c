@@ -30,7 +30,7 @@ int km_reg_find(uint8_t addr)
     return -1;
 }
 
-uint32_t km_reg_default(km_reg_index_t reg, const km_product_t *p)
+static uint32_t prv_default_raw(km_reg_index_t reg, const km_product_t *p)
 {
     (void)p;
     switch (reg) {
@@ -42,6 +42,16 @@ uint32_t km_reg_default(km_reg_index_t reg, const km_product_t *p)
     default:
         return 0;
     }
+}
+
+uint32_t km_reg_default(km_reg_index_t reg, const km_product_t *p)
+{
+    /* Packed as the wire bytes: a negative i16 default (an angle limit, a
+     * zero offset) is its two bytes, not a sign-extended u32, the same as
+     * km_reg_validate() packs a written value. */
+    const uint32_t v = prv_default_raw(reg, p);
+    const uint8_t size = km_reg_fixed_size((km_layout_t)km_reg_table[reg].layout);
+    return size > 0u && size < 4u ? v & ((1u << (8u * size)) - 1u) : v;
 }
 
 static void prv_range(km_reg_index_t reg, const km_product_t *p, int32_t *lo_out, int32_t *hi_out)

@@ -139,6 +139,21 @@ uint8_t km_servo_persisted_addr(uint8_t k)
     return 0;
 }
 
+/* A stored value passes the checks a write of it would: right bytes, in
+ * range, cross-field rules. Anything else (a baud of 0 from a damaged or
+ * older store) is replaced by the default rather than run with. */
+static bool prv_persisted_ok(km_reg_index_t r, const km_product_t *p, uint32_t v)
+{
+    uint8_t b[4];
+    uint32_t packed;
+    const uint8_t n = km_reg_fixed_size((km_layout_t)km_reg_table[r].layout);
+    if (n == 0u || n > 3u) {
+        return false;
+    }
+    km_put_le(b, v, n);
+    return km_reg_validate(r, p, b, n, &packed) && packed == v;
+}
+
 void km_servo_init(km_servo_t *s, const km_product_t *product, const uint32_t *persisted,
                    uint32_t seed, const km_servo_ops_t *ops)
 {
@@ -148,12 +163,19 @@ void km_servo_init(km_servo_t *s, const km_product_t *product, const uint32_t *p
     unsigned k = 0;
     for (unsigned i = 0; i < KM_REG_COUNT; i++) {
         uint32_t v = km_reg_default((km_reg_index_t)i, product);
-        if (km_reg_table[i].persisted && persisted) {
+        if (km_reg_table[i].persisted && persisted &&
+            prv_persisted_ok((km_reg_index_t)i, product, persisted[k])) {
             v = persisted[k];
         }
         k += km_reg_table[i].persisted;
         prv_apply(s, (km_reg_index_t)i, v);
     }
+    /* §5.4: 0x5B..0x5D start equal to the stored 0x13..0x15. They come later
+     * in the table than their sources, so the loop above set them to the
+     * product defaults after the mirror had been applied: apply it again. */
+    prv_apply(s, KM_REG_MAX_TORQUE, s->value[KM_REG_MAX_TORQUE]);
+    prv_apply(s, KM_REG_MAX_CURRENT, s->value[KM_REG_MAX_CURRENT]);
+    prv_apply(s, KM_REG_MAX_SPEED, s->value[KM_REG_MAX_SPEED]);
     s->active_baud = prv_reg(s, KM_REG_BAUD) * 100u;
     s->prng = seed ? seed : 0x2545F491u;
 }
