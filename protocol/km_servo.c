@@ -628,9 +628,18 @@ void km_servo_handle(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
     if (super && f->cmd != CMD_PING && f->cmd != CMD_READ) {
         return;
     }
-    /* A command to this servo: bits 5 and 6 now describe it (§4), starting
-     * from a checksum error seen since the last answer. */
-    s->flags = s->checksum_pending ? KM_ST_EXCEPTION : 0u;
+    /* "Status bits 5 and 6": a ping or read is how a master asks how the
+     * previous command went (writes answer nothing at response level 0), so
+     * its answer reports the bits that command left, plus its own, and
+     * then they clear. Any other command replaces them with its own result.
+     * A checksum error with our ID since the last answer adds bit 5. */
+    const bool query = f->cmd == CMD_PING || f->cmd == CMD_READ;
+    if (!query) {
+        s->flags = 0u;
+    }
+    if (s->checksum_pending) {
+        s->flags |= KM_ST_EXCEPTION;
+    }
     s->checksum_pending = false;
     if (f->cmd != CMD_SYNC_WRITE && f->cmd != CMD_SYNC_EXECUTE) {
         s->sync.full = false; /* §3: any other command clears the 0x04 buffer */
@@ -644,11 +653,13 @@ void km_servo_handle(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
         if (!broadcast) {
             prv_answer_status(s, own, f->id, reply);
         }
+        s->flags = 0u; /* reported (or, broadcast, not askable): cleared */
         return;
     case CMD_READ:
         if (!broadcast) {
             prv_read(s, f, reply);
         }
+        s->flags = 0u;
         return;
     case CMD_WRITE: {
         bool may_answer = true;

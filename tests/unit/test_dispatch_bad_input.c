@@ -473,7 +473,9 @@ static void test_s3_unsupported_commands(void **state)
         kt_no_reply(&fx);
         kt_assert_unchanged(&fx, &sn);
         assert_int_equal(km_servo_status(&fx.s), KM_ST_EXCEPTION);
-        kt_ping(&fx, ID); /* the next command clears it */
+        kt_ping(&fx, ID); /* the next ping reports it, then it clears */
+        kt_reply_is_status(&fx, ID, KM_ST_EXCEPTION);
+        kt_ping(&fx, ID);
         kt_reply_is_status(&fx, ID, 0);
     }
 }

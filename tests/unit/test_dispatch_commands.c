@@ -39,10 +39,14 @@ static void test_s5_1_0x01_status_read(void **state)
     live.running = true;
     live.protections = 0x02;
     km_servo_set_live(&fx.s, &live);
-    kt_write_u8(&fx, ID, 0x64, 9); /* bit 6 now, cleared by the read itself */
+    kt_write_u8(&fx, ID, 0x64, 9); /* bit 6: the status read reports it, then clears it */
     kt_read(&fx, ID, 0x01);
-    const uint8_t want[2] = {0x82, (uint8_t)kt_xorshift32(0xC0FFEEu)};
+    const uint32_t r1 = kt_xorshift32(0xC0FFEEu);
+    const uint8_t want[2] = {0xC2, (uint8_t)r1};
     kt_reply_is_read(&fx, ID, 0x01, want, 2);
+    kt_read(&fx, ID, 0x01);
+    const uint8_t want2[2] = {0x82, (uint8_t)kt_xorshift32(r1)};
+    kt_reply_is_read(&fx, ID, 0x01, want2, 2);
 }
 
 /* §5.1 0x0A: model name as ASCII, up to 16 B (Decision). */
@@ -115,6 +119,8 @@ static void test_s5_1_0x0F_id_change_commit_fails(void **state)
     kt_reply_is_status(&fx, ID, KM_ST_FAILED);
     kt_ping(&fx, 42);
     kt_no_reply(&fx);
+    kt_ping(&fx, ID); /* the previous command failed: reported once more, then cleared */
+    kt_reply_is_status(&fx, ID, KM_ST_FAILED);
     kt_ping(&fx, ID);
     kt_reply_is_status(&fx, ID, 0);
 }
