@@ -211,9 +211,9 @@ void km_servo_set_torque_switch(km_servo_t *s, uint8_t value)
     s->value[KM_REG_TORQUE_SWITCH] = value;
 }
 
-void km_servo_set_userdata_defaults_flag(km_servo_t *s, bool defaults)
+void km_servo_set_userdata_source(km_servo_t *s, uint8_t source)
 {
-    s->userdata_defaults = defaults;
+    s->userdata_source = source;
 }
 
 /* ---- read ------------------------------------------------------------- */
@@ -263,6 +263,9 @@ static uint8_t prv_encode_value(km_servo_t *s, km_reg_index_t r, uint8_t *out)
         return km_put_le(out, km_reg_default(r, s->product), 4);
     case KM_REG_HW_FAULTS:
         out[0] = s->hw_latched;
+        return 1;
+    case KM_REG_USERDATA_SOURCE:
+        out[0] = s->userdata_source;
         return 1;
     case KM_REG_PROT_FLAGS:
         out[0] = (uint8_t)(s->live.protections & KM_ST_PROTECTION);

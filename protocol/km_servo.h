@@ -96,7 +96,7 @@ typedef struct {
     uint8_t flags;                /* KM_ST_FAILED | KM_ST_EXCEPTION of the last command */
     bool checksum_pending;        /* a bad-checksum frame carried our ID */
     uint8_t hw_latched;           /* 0x35, latched until restart */
-    bool userdata_defaults;       /* user data came from product defaults */
+    uint8_t userdata_source;      /* KM_USERDATA_*, read as register 0x0D */
     struct {
         bool full;
         uint8_t addr;
@@ -121,7 +121,15 @@ void km_servo_set_live(km_servo_t *s, const km_live_t *live);
 /* Control sets 0x64 to 5 after a protection (not writable from the bus). */
 void km_servo_set_torque_switch(km_servo_t *s, uint8_t value);
 
-void km_servo_set_userdata_defaults_flag(km_servo_t *s, bool defaults);
+/* Register 0x0D (this firmware's extension): where the user data in force
+ * came from at boot. The values follow the store's mount results. */
+#define KM_USERDATA_LOADED 0u           /* from flash, as committed */
+#define KM_USERDATA_MIGRATED 1u         /* from flash; registers new to this firmware at defaults */
+#define KM_USERDATA_DEFAULTS_BLANK 2u   /* product defaults: flash erased (first boot) */
+#define KM_USERDATA_DEFAULTS_INVALID 3u /* product defaults: no valid record in flash */
+#define KM_USERDATA_DEFAULTS_SCHEMA 4u  /* product defaults: stored layout from another version */
+#define KM_USERDATA_UNAVAILABLE 5u      /* store unusable: defaults, commits fail (bit 6) */
+void km_servo_set_userdata_source(km_servo_t *s, uint8_t source);
 
 uint8_t km_servo_id(const km_servo_t *s);
 uint32_t km_servo_active_baud(const km_servo_t *s);

@@ -224,7 +224,9 @@ _Noreturn void km_app_run(void)
     uint32_t persisted[KM_USERDATA_MAX];
     const km_store_mount_t mount = km_app_userdata_mount(km_board_flash(), product, persisted);
     km_servo_init(&s_servo, product, persisted, km_hal_entropy(), &s_ops);
-    km_servo_set_userdata_defaults_flag(&s_servo, km_store_mount_is_defaults(mount));
+    /* Register 0x0D tells the master where the user data came from; the
+     * store's mount results are in the same order as KM_USERDATA_*. */
+    km_servo_set_userdata_source(&s_servo, (uint8_t)mount);
     const km_control_config_t cfg = prv_control_config();
     km_control_init(&s_control, &cfg);
 

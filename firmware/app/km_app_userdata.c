@@ -3,6 +3,14 @@
 
 #include "km_servo.h"
 
+_Static_assert(KM_STORE_MOUNT_LOADED == KM_USERDATA_LOADED &&
+                   KM_STORE_MOUNT_MIGRATED == KM_USERDATA_MIGRATED &&
+                   KM_STORE_MOUNT_DEFAULTS_BLANK == KM_USERDATA_DEFAULTS_BLANK &&
+                   KM_STORE_MOUNT_DEFAULTS_INVALID == KM_USERDATA_DEFAULTS_INVALID &&
+                   KM_STORE_MOUNT_DEFAULTS_SCHEMA == KM_USERDATA_DEFAULTS_SCHEMA &&
+                   KM_STORE_MOUNT_ERR_ARG == KM_USERDATA_UNAVAILABLE,
+               "register 0x0D reports the store's mount result as is");
+
 /* Bump when a persisted register's meaning or encoding changes: stored
  * values are then replaced by the product defaults (the store reports it). */
 #define KM_USERDATA_SCHEMA_VERSION 1u

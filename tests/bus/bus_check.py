@@ -100,6 +100,8 @@ def smoke(backend):
         check(wait_ping(bus, 1), "answers again after the restart")
         r = bus.exchange(kmbus.read(1, 0x12), 1)
         check(len(r) == 1 and r[0].params == (350).to_bytes(2, "little"), "§5 user data 0x12 survived the restart")
+        r = bus.exchange(kmbus.read(1, 0x0D), 1)
+        check(len(r) == 1 and r[0].params == b"\x00", "0x0D (extension): user data loaded from flash at boot")
     finally:
         bus.close()
 

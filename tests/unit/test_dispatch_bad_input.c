@@ -29,6 +29,8 @@ static const spec_reg_t spec_regs[] = {
     {0x0A, 1, 0, 0, {0}},
     {0x0B, 1, 0, 0, {0}},
     {0x0C, 1, 0, 0, {0}},
+    /* not in §5: this firmware's read-only extension (docs/protocol-decisions.md) */
+    {0x0D, 1, 0, 0, {0}},
     {0x0F, 3, 1, 1, {5}},
     {0x10, 3, 2, 2, {0x80, 0x04}},
     {0x11, 3, 1, 1, {0x0A}},

@@ -573,9 +573,29 @@ static void test_s5_4_servo_commands_requests(void **state)
     assert_int_equal(km_servo_status(&fx.s), KM_ST_FAILED);
 }
 
+/* 0x0D (this firmware's extension, docs/protocol-decisions.md): where the
+ * user data came from at boot; read-only. */
+static void test_s7_0x0D_userdata_source(void **state)
+{
+    (void)state;
+    kt_init(&fx, kt_product_pot(), ID);
+    const uint8_t loaded[1] = {KM_USERDATA_LOADED};
+    kt_read(&fx, ID, 0x0D);
+    kt_reply_is_read(&fx, ID, 0x0D, loaded, 1);
+    km_servo_set_userdata_source(&fx.s, KM_USERDATA_DEFAULTS_INVALID);
+    const uint8_t invalid[1] = {3};
+    kt_read(&fx, ID, 0x0D);
+    kt_reply_is_read(&fx, ID, 0x0D, invalid, 1);
+    kt_write_u8(&fx, ID, 0x0D, 0);
+    assert_int_equal(km_servo_status(&fx.s), KM_ST_EXCEPTION); /* read-only: bit 5 */
+    kt_read(&fx, ID, 0x0D);
+    kt_reply_is_read(&fx, ID, 0x0D, invalid, 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_s7_0x0D_userdata_source),
         cmocka_unit_test(test_s5_1_0x01_status_read),
         cmocka_unit_test(test_s5_1_0x0A_model_text),
         cmocka_unit_test(test_s5_1_0x0B_protocol_version),
