@@ -1,5 +1,6 @@
 /* System services (km_hal_system.h) on the nRF51: clocks, reset, watchdog,
  * interrupt lock, entropy, idle. */
+#include "km_cortex_m.h"
 #include "km_hal_system.h"
 #include "km_hal_time.h"
 #include "nrf51_regs.h"
@@ -68,14 +69,12 @@ void km_hal_watchdog_kick(void)
 
 uint32_t km_hal_irq_lock(void)
 {
-    uint32_t primask;
-    __asm__ volatile("mrs %0, primask\n\tcpsid i" : "=r"(primask)::"memory");
-    return primask;
+    return km_cortex_irq_lock();
 }
 
 void km_hal_irq_restore(uint32_t state)
 {
-    __asm__ volatile("msr primask, %0" ::"r"(state) : "memory");
+    km_cortex_irq_restore(state);
 }
 
 /* Four RNG bytes mixed with FICR DEVICEID. QEMU's FICR holds the same
@@ -108,5 +107,5 @@ void km_hal_idle(void)
     /* WFI wakes on any pending enabled interrupt even under the irq lock
      * (PRIMASK set), so callers may check-then-sleep inside a lock without
      * losing a wake-up; the handler then runs after their restore. */
-    __asm__ volatile("wfi" ::: "memory");
+    km_cortex_wait_for_interrupt();
 }

@@ -1,6 +1,7 @@
 /* km_hal_system for the STM32G031: 64 MHz clock tree, reset, independent
  * watchdog, PRIMASK lock, unique-ID entropy and WFI idle bounded by a 1 kHz
  * SysTick wake-up. */
+#include "km_cortex_m.h"
 #include "km_hal_system.h"
 
 #include "km_hal_time.h"
@@ -100,14 +101,12 @@ void km_hal_watchdog_kick(void)
 
 uint32_t km_hal_irq_lock(void)
 {
-    uint32_t primask;
-    __asm volatile("mrs %0, primask\n cpsid i" : "=r"(primask)::"memory");
-    return primask;
+    return km_cortex_irq_lock();
 }
 
 void km_hal_irq_restore(uint32_t state)
 {
-    __asm volatile("msr primask, %0" ::"r"(state) : "memory");
+    km_cortex_irq_restore(state);
 }
 
 /* The 96-bit unique ID (RM0444 §40.1) differs between parts; the free-running
@@ -135,5 +134,5 @@ uint32_t km_hal_entropy(void)
 
 void km_hal_idle(void)
 {
-    __asm volatile("wfi" ::: "memory");
+    km_cortex_wait_for_interrupt();
 }
