@@ -35,6 +35,14 @@ typedef enum {
     KM_REG_COUNT
 } km_reg_index_t;
 
+/* How many registers are user data (P), at compile time, to size arrays. */
+enum {
+    KM_REG_PERSISTED_COUNT = 0
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi) +(persisted)
+#include "km_registers.def"
+#undef KM_REG
+};
+
 typedef struct {
     uint8_t addr;
     uint8_t access;    /* km_access_t */

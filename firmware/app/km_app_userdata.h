@@ -10,7 +10,10 @@
 #include "km_product.h"
 #include "km_store.h"
 
-#define KM_USERDATA_MAX KM_STORE_MAX_KEYS
+#include "km_registers.h"
+
+#define KM_USERDATA_MAX KM_REG_PERSISTED_COUNT
+_Static_assert(KM_USERDATA_MAX <= KM_STORE_MAX_KEYS, "the store holds every persisted register");
 
 /* Mounts the store (zero flash operations) and fills `values` in the
  * register table's order of P registers. Returns how they were found. */
