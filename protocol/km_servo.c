@@ -120,25 +120,6 @@ static void prv_answer_status(km_servo_t *s, uint8_t answer_id, uint8_t frame_id
 
 /* ---- init and accessors ----------------------------------------------- */
 
-uint8_t km_servo_persisted_count(void)
-{
-    uint8_t n = 0;
-    for (unsigned i = 0; i < KM_REG_COUNT; i++) {
-        n = (uint8_t)(n + km_reg_table[i].persisted);
-    }
-    return n;
-}
-
-uint8_t km_servo_persisted_addr(uint8_t k)
-{
-    for (unsigned i = 0; i < KM_REG_COUNT; i++) {
-        if (km_reg_table[i].persisted && k-- == 0) {
-            return km_reg_table[i].addr;
-        }
-    }
-    return 0;
-}
-
 /* A stored value passes the checks a write of it would: right bytes, in
  * range, cross-field rules. Anything else (a baud of 0 from a damaged or
  * older store) is replaced by the default rather than run with. */

@@ -138,8 +138,4 @@ uint8_t km_servo_status(const km_servo_t *s);
 /* Stored register value (packed wire bytes), for control and the store. */
 uint32_t km_servo_reg(const km_servo_t *s, km_reg_index_t reg);
 
-/* The persisted registers in table order: their count and addresses. */
-uint8_t km_servo_persisted_count(void);
-uint8_t km_servo_persisted_addr(uint8_t i);
-
 #endif
