@@ -6,8 +6,9 @@
 
 #include <stdint.h>
 
-/* Ticks per second of km_hal_time_now(); at least 1 MHz so the response
- * delay (µs, §5.1 0x12) is resolved. */
+/* Ticks per second of km_hal_time_now(): a whole number of MHz (at least
+ * 1), so the response delay (µs, §5.1 0x12) is resolved and converting
+ * microseconds to ticks is one multiply. */
 uint32_t km_hal_time_tick_hz(void);
 
 void km_hal_time_init(void);

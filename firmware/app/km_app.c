@@ -70,9 +70,14 @@ static void ISR_answer_due(void *ctx)
     s_tx_armed = false;
 }
 
+/* Ticks per microsecond, fixed at init: the hal tick is a whole number of
+ * MHz, so the per-tick conversions below are one 32-bit multiply or divide
+ * (a 64-bit divide is a libgcc call on Cortex-M0, and this runs every tick). */
+static uint32_t s_ticks_per_us = 1u;
+
 static uint32_t prv_us_to_ticks(uint32_t us)
 {
-    return (uint32_t)(((uint64_t)us * km_hal_time_tick_hz()) / 1000000u);
+    return us * s_ticks_per_us;
 }
 
 static void prv_schedule_answer(const km_reply_t *reply, uint32_t frame_end)
@@ -102,12 +107,25 @@ __attribute__((weak)) void km_app_answer_started(uint32_t frame_end, uint32_t st
     (void)delay_us;
 }
 
+/* Hands the last answer's timing to the hook. Called at the top of the main
+ * loop and right after each frame: with a delay of 0 the answer starts while
+ * the frame is being handled, and the next frame of the same drain pass
+ * would otherwise overwrite the record before it is reported. */
+static void prv_report_answer(void)
+{
+    if (s_answer_started) {
+        s_answer_started = false;
+        km_app_answer_started(s_answer_frame_end, s_answer_start, s_answer_delay_us);
+    }
+}
+
 static void prv_on_frame(void)
 {
     km_servo_handle(&s_servo, &s_frame, &s_reply);
     if (s_reply.len > 0) {
         prv_schedule_answer(&s_reply, s_frame.end_tick);
     }
+    prv_report_answer();
 }
 
 static void prv_on_events(unsigned events)
@@ -179,8 +197,7 @@ static void prv_control_tick(uint32_t now)
     const uint32_t dt_ticks = now - s_last_control_tick;
     s_last_control_tick = now;
     km_hal_sensors_read(&sensors);
-    km_control_step(&s_control, &sensors, &cfg,
-                    (uint32_t)(((uint64_t)dt_ticks * 1000000u) / km_hal_time_tick_hz()), &live, &bridge);
+    km_control_step(&s_control, &sensors, &cfg, dt_ticks / s_ticks_per_us, &live, &bridge);
     km_servo_set_live(&s_servo, &live);
     prv_apply_bridge(&bridge);
 }
@@ -219,6 +236,7 @@ _Noreturn void km_app_run(void)
     km_hal_time_init();
     km_hal_motor_init();
     km_hal_sensors_init();
+    s_ticks_per_us = km_hal_time_tick_hz() / 1000000u;
 
     const km_product_t *product = km_board_product();
     uint32_t persisted[KM_USERDATA_MAX];
@@ -241,19 +259,17 @@ _Noreturn void km_app_run(void)
     km_hal_watchdog_start(KM_APP_WATCHDOG_MS);
 
     s_last_control_tick = km_hal_time_now();
+    const uint32_t tick_period = prv_us_to_ticks(KM_APP_TICK_US);
     uint32_t next_tick = s_last_control_tick;
     for (;;) {
-        if (s_answer_started) {
-            s_answer_started = false;
-            km_app_answer_started(s_answer_frame_end, s_answer_start, s_answer_delay_us);
-        }
+        prv_report_answer();
         prv_drain_rx();
         if (s_restart_pending) {
             prv_restart_when_sent();
         }
         const uint32_t now = km_hal_time_now();
         if ((int32_t)(now - next_tick) >= 0) {
-            next_tick += prv_us_to_ticks(KM_APP_TICK_US);
+            next_tick += tick_period;
             prv_control_tick(now);
             km_hal_watchdog_kick();
         } else if (!km_app_userdata_maintain()) {
