@@ -24,6 +24,23 @@ void km_hal_irq_restore(uint32_t state);
  * the PRNG behind the status read's random byte (§5.1 0x01). */
 uint32_t km_hal_entropy(void);
 
+/* Why the MCU last came out of reset, read once at boot (before the
+ * hardware flags are cleared for the next one). Reported to the master in
+ * this firmware's extension space (docs/protocol-decisions.md, 0x7F), so a
+ * servo that rebooted in the field says whether it was the watchdog, a
+ * fault, a brown-out or a restart command. */
+typedef enum {
+    KM_RESET_POWER_ON = 0, /* power applied (or no flag the board can read) */
+    KM_RESET_PIN = 1,      /* the reset pin / debugger */
+    KM_RESET_SOFTWARE = 2, /* km_hal_system_reset(): a 0x02 restart */
+    KM_RESET_WATCHDOG = 3, /* the watchdog was not kicked in time */
+    KM_RESET_FAULT = 4,    /* a HardFault (or lockup) handler reset the MCU */
+    KM_RESET_BROWNOUT = 5, /* supply dipped below the brown-out level */
+    KM_RESET_OTHER = 6,    /* a flag this contract has no name for */
+} km_reset_cause_t;
+
+km_reset_cause_t km_hal_reset_cause(void);
+
 /* Sleep until the next interrupt (WFI) when the main loop has nothing to do.
  * Called with the interrupt lock held (so a byte that arrives between the
  * main loop's last check and the sleep still wakes it). Returns at the
