@@ -30,3 +30,12 @@ bool km_hal_uart_tx_busy(void)
 {
     return false;
 }
+
+/* 0 on a real UART: its RX interrupt stamps each byte as it arrives, so a
+ * frame's bytes are never further apart than they were on the wire. Only an
+ * emulated UART whose delivery the host schedules (QEMU, host-sim) needs a
+ * floor above the parser's gap rule. */
+uint32_t km_hal_uart_gap_floor_us(void)
+{
+    return 0u;
+}
