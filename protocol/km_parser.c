@@ -28,13 +28,15 @@
  *  Measured on the bench mix (tools/bench-parser): about 42 instructions per
  *  byte at -O2 on x86-64; 978 bytes of Cortex-M0 code at -Os.
  *
- * Only one frame can be handed out per call (there is one `out`). If a
- * rescan finds a second complete command frame, it stays at the head with
- * `pending` set and the next feed or poll delivers it first. The window then
- * cannot overflow: a call that leaves a frame pending has removed the
+ * Only one frame can be handed out per call (there is one `out`), and a
+ * call stops at the frame it hands out: bytes after it stay in the window
+ * with `pending` set, and the next feed or poll judges them first (so the
+ * checksum failures one call reports all precede its frame). The window
+ * then cannot overflow: a call that leaves bytes pending has removed the
  * delivered frame (>= 6 bytes), so a pending window holds <= 251 bytes and
- * shrinks by >= 5 per call; a settled window is one incomplete candidate,
- * <= 255 bytes, so the next byte always fits.
+ * shrinks by >= 5 per call while frames keep coming out of it; a settled
+ * window is one incomplete candidate, <= 255 bytes, so the next byte
+ * always fits.
  *
  * A gap longer than gap_ticks (or an overrun) marks every byte in the window
  * stale: complete frames among them are still delivered (they arrived whole),
@@ -179,7 +181,7 @@ static void prv_deliver(const km_parser_t *p, uint16_t total, km_frame_t *out)
 }
 
 /* Judges candidates from head until one is incomplete, the window is empty,
- * or a second command frame turns up in this call. See the bound above. */
+ * or a command frame is handed out. See the bound above. */
 static unsigned prv_settle(km_parser_t *p, km_frame_t *out)
 {
     unsigned events = 0u;
@@ -209,15 +211,15 @@ static unsigned prv_settle(km_parser_t *p, km_frame_t *out)
             prv_drop(p, total);
             break;
         case PRV_COMMAND:
-            if (events & KM_PARSE_FRAME) {
-                p->pending = true; /* *out is taken: next call */
-                return events;
-            }
             prv_deliver(p, total, out);
             prv_count(&p->stats.frames_ok);
-            events |= KM_PARSE_FRAME;
             prv_drop(p, total);
-            break;
+            /* Stop at the frame: bytes after it are judged by the next call,
+             * so a checksum failure this call reports always came before
+             * the frame it hands out (the caller judges "was it our ID?"
+             * with the ID in force before the frame can change it). */
+            p->pending = p->fill > 0u;
+            return events | KM_PARSE_FRAME;
         }
     }
     return events;
@@ -326,8 +328,11 @@ void km_parser_overrun(km_parser_t *p)
 
 bool km_parser_take_checksum_error(km_parser_t *p, uint8_t id)
 {
-    const uint8_t bit = (uint8_t)(1u << (id & 7u));
-    const bool set = (p->bad_ids[id >> 3] & bit) != 0u;
-    p->bad_ids[id >> 3] = (uint8_t)(p->bad_ids[id >> 3] & (uint8_t)~bit);
+    /* Every record is forgotten, not only `id`'s: the caller asks with the
+     * ID it has now, and a record kept for another ID would be claimed
+     * later by a servo that has since taken that ID (a bad frame for ID 5
+     * must not show as bit 5 after an ID change to 5). */
+    const bool set = (p->bad_ids[id >> 3] & (1u << (id & 7u))) != 0u;
+    memset(p->bad_ids, 0, sizeof p->bad_ids);
     return set;
 }

@@ -43,7 +43,7 @@ typedef struct {
     uint16_t fill;                  /* bytes in window (0..256) */
     uint16_t need;                  /* bytes the head candidate needs; 0 = re-judge */
     uint16_t stale;                 /* leading bytes cut off by a gap or overrun */
-    bool pending;                   /* a complete frame waits for the next call */
+    bool pending;                   /* bytes after a delivered frame wait to be judged */
     bool stale_by_gap;              /* the stale cut was a gap: count a timeout */
     uint32_t last_tick;             /* tick of the newest byte */
     uint32_t stale_tick;            /* tick of the newest stale byte */
@@ -68,7 +68,10 @@ unsigned km_parser_poll(km_parser_t *p, uint32_t now, km_frame_t *out);
 /* The caller (UART driver) lost bytes: the partial frame is dropped. */
 void km_parser_overrun(km_parser_t *p);
 
-/* True (and clears it) if a checksum-failed frame carried ID `id`. */
+/* True if a checksum-failed command frame since the last call carried ID
+ * `id`. Forgets every ID's record, so call it after every feed or poll that
+ * returned KM_PARSE_CHECKSUM_ERR, with the ID in force at that moment. The
+ * failures a call reports all precede the frame it delivers (if any). */
 bool km_parser_take_checksum_error(km_parser_t *p, uint8_t id);
 
 /* Default inter-byte gap in microseconds at a baud rate: 10 byte times, but

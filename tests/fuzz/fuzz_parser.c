@@ -101,8 +101,8 @@ static void prv_check_frame(const km_frame_t *f)
     prv_check(0); /* not fed as one run, or end_tick not a tick from its end on */
 }
 
-/* A checksum event leaves at least one addressable ID recorded; taking an
- * ID clears it. Taking them all keeps the next event's check meaningful. */
+/* A checksum event leaves at least one ID recorded, every one of them
+ * addressable; taking (with any ID) forgets them all. */
 static void prv_check_bad_ids(km_parser_t *p, unsigned ev)
 {
     static const uint8_t none[sizeof p->bad_ids];
@@ -112,13 +112,14 @@ static void prv_check_bad_ids(km_parser_t *p, unsigned ev)
     }
     int recorded = 0;
     for (unsigned id = 0; id <= 255u; id++) {
-        if (km_parser_take_checksum_error(p, (uint8_t)id)) {
+        if (p->bad_ids[id >> 3] & (1u << (id & 7u))) {
             prv_check(km_id_is_addressable((uint8_t)id));
-            prv_check(!km_parser_take_checksum_error(p, (uint8_t)id));
             recorded = 1;
         }
     }
-    prv_check(recorded == ((ev & KM_PARSE_CHECKSUM_ERR) != 0u));
+    prv_check(recorded);
+    (void)km_parser_take_checksum_error(p, 0);
+    prv_check(memcmp(p->bad_ids, none, sizeof none) == 0);
 }
 
 static void prv_take(km_parser_t *p, unsigned ev, const km_frame_t *f)

@@ -96,11 +96,24 @@ static void test_s4_bad_checksum_records_id(void **state)
         assert_int_equal(r->checksum_events, 1);
         assert_int_equal(r->p.stats.checksum_errors, 1);
         assert_int_equal(r->p.stats.framing_errors, 0);
-        const uint8_t other = (uint8_t)(ids[i] + 1u);
-        assert_false(km_parser_take_checksum_error(&r->p, other));
         assert_true(km_parser_take_checksum_error(&r->p, ids[i]));
         assert_false(km_parser_take_checksum_error(&r->p, ids[i])); /* cleared */
     }
+}
+
+/* §4 Decision (bit 5 only for our ID), issue 13 item 3: taking the record
+ * forgets every ID's, so a bad frame for ID 5 seen while we are ID 0 is not
+ * claimed after we become ID 5. */
+static void test_s4_take_forgets_other_ids(void **state)
+{
+    (void)state;
+    uint8_t bad[8];
+    size_t n = rig_command(bad, 5, 0x01, NULL, 0);
+    bad[n - 1u] ^= 0x01u;
+    rig_t *r = bad_then_ping(bad, n);
+    assert_int_equal(r->checksum_events, 1);
+    assert_false(km_parser_take_checksum_error(&r->p, 0)); /* asked as ID 0 */
+    assert_false(km_parser_take_checksum_error(&r->p, 5)); /* ID 5's record is gone too */
 }
 
 /* §7: a truncated frame then silence: a poll at exactly the gap keeps it, a
@@ -197,6 +210,11 @@ static void test_s2_good_frame_hidden_in_bad_candidate_length(void **state)
     assert_int_equal(r.n, 1);
     assert_ping1(&r.frames[0]);
     assert_int_equal(r.p.stats.checksum_errors, 1);
+    /* The call stopped at the ping; the filler after it is judged (and
+     * dropped) by the next call. */
+    assert_true(r.p.pending);
+    rig_poll(&r, r.p.last_tick);
+    assert_int_equal(r.n, 1);
     assert_int_equal(r.p.fill, 0);
 }
 
@@ -393,6 +411,7 @@ int main(void)
         cmocka_unit_test(test_s2_length_out_of_range),
         cmocka_unit_test(test_s1_unaddressable_ids_fail_header),
         cmocka_unit_test(test_s4_bad_checksum_records_id),
+        cmocka_unit_test(test_s4_take_forgets_other_ids),
         cmocka_unit_test(test_s7_truncated_then_silence),
         cmocka_unit_test(test_s7_truncated_then_late_frame),
         cmocka_unit_test(test_s2_truncated_then_good_without_gap),
