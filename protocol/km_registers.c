@@ -76,6 +76,7 @@ uint8_t km_reg_fixed_size(km_layout_t layout)
 {
     switch (layout) {
     case KM_L_U8:
+    case KM_L_BITS8:
     case KM_L_I8:
         return 1;
     case KM_L_U16:
@@ -149,6 +150,12 @@ bool km_reg_validate(km_reg_index_t reg, const km_product_t *p, const uint8_t *d
         if (len != 1) return false;
         first = data[0];
         break;
+    case KM_L_BITS8:
+        /* "Reserved bits": the vendor's tables mark them "retain", and
+         * masters write whole bytes: accepted, kept at 0. */
+        if (len != 1) return false;
+        *packed = (uint32_t)data[0] & (uint32_t)hi;
+        return true;
     case KM_L_I8:
         if (len != 1) return false;
         first = (int8_t)data[0];

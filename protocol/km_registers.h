@@ -14,6 +14,7 @@ typedef enum { KM_R = 1, KM_W = 2, KM_RW = 3 } km_access_t;
 
 typedef enum {
     KM_L_U8,     /* 1 B */
+    KM_L_BITS8,  /* 1 B bit field: bits above `max` are reserved, ignored on write, read 0 */
     KM_L_I8,     /* 1 B */
     KM_L_U16,    /* 2 B */
     KM_L_I16,    /* 2 B */

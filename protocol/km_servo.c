@@ -81,9 +81,10 @@ static int32_t prv_clamp16(int32_t v)
 
 /* ---- status and timing ------------------------------------------------ */
 
-uint8_t km_servo_status(const km_servo_t *s)
+/* Bits 7 and 4..0: the live and latched state, the same in every answer. */
+static uint8_t prv_state_bits(const km_servo_t *s)
 {
-    uint8_t st = (uint8_t)(s->flags & (KM_ST_FAILED | KM_ST_EXCEPTION));
+    uint8_t st = 0u;
     if (s->live.running) {
         st |= KM_ST_RUNNING;
     }
@@ -92,6 +93,19 @@ uint8_t km_servo_status(const km_servo_t *s)
     }
     st |= (uint8_t)(s->live.protections & KM_ST_PROTECTION);
     return st;
+}
+
+/* "Status bits 5 and 6": what a ping (or a read of 0x01) reports: every
+ * outcome no status answer has carried yet, and the current command's. */
+uint8_t km_servo_status(const km_servo_t *s)
+{
+    return (uint8_t)(prv_state_bits(s) | s->unreported | s->flags);
+}
+
+/* What the answer to any other command reports: that command's own bits. */
+static uint8_t prv_own_status(const km_servo_t *s)
+{
+    return (uint8_t)(prv_state_bits(s) | s->flags);
 }
 
 /* "Super-ID answer slots": servo i starts response_delay + i * slot after
@@ -112,13 +126,20 @@ static uint32_t prv_delay_us(const km_servo_t *s, uint8_t frame_id, uint16_t max
     return base + km_servo_id(s) * prv_slot_us(s, max_answer_bytes);
 }
 
-static void prv_answer_status(km_servo_t *s, uint8_t answer_id, uint8_t frame_id, km_reply_t *reply)
+static void prv_answer_status(km_servo_t *s, uint8_t status, uint8_t frame_id, km_reply_t *reply)
 {
-    reply->len = km_encode_status(reply->bytes, answer_id, km_servo_status(s));
+    reply->len = km_encode_status(reply->bytes, km_servo_id(s), status);
     reply->delay_us = prv_delay_us(s, frame_id, 6u);
 }
 
 /* ---- init and accessors ----------------------------------------------- */
+
+/* "Limits that contradict each other": a minimum angle limit at or above
+ * the maximum would leave no target reachable. 0 = no limit (§5.1). */
+static bool prv_angle_limits_ok(int16_t lo, int16_t hi)
+{
+    return lo == 0 || hi == 0 || lo < hi;
+}
 
 /* A stored value passes the checks a write of it would: right bytes, in
  * range, cross-field rules. Anything else (a baud of 0 from a damaged or
@@ -157,6 +178,11 @@ void km_servo_init(km_servo_t *s, const km_product_t *product, const uint32_t *p
     prv_apply(s, KM_REG_MAX_TORQUE, s->value[KM_REG_MAX_TORQUE]);
     prv_apply(s, KM_REG_MAX_CURRENT, s->value[KM_REG_MAX_CURRENT]);
     prv_apply(s, KM_REG_MAX_SPEED, s->value[KM_REG_MAX_SPEED]);
+    /* "Limits that contradict each other" apply to stored values too. */
+    if (!prv_angle_limits_ok((int16_t)prv_reg(s, KM_REG_ANGLE_MIN), (int16_t)prv_reg(s, KM_REG_ANGLE_MAX))) {
+        s->value[KM_REG_ANGLE_MIN] = km_reg_default(KM_REG_ANGLE_MIN, product);
+        s->value[KM_REG_ANGLE_MAX] = km_reg_default(KM_REG_ANGLE_MAX, product);
+    }
     s->active_baud = prv_reg(s, KM_REG_BAUD) * 100u;
     s->prng = seed ? seed : 0x2545F491u;
 }
@@ -178,7 +204,7 @@ uint32_t km_servo_reg(const km_servo_t *s, km_reg_index_t reg)
 
 void km_servo_note_checksum_error(km_servo_t *s)
 {
-    s->checksum_pending = true;
+    s->unreported |= KM_ST_EXCEPTION;
 }
 
 void km_servo_set_live(km_servo_t *s, const km_live_t *live)
@@ -195,6 +221,16 @@ void km_servo_set_torque_switch(km_servo_t *s, uint8_t value)
 void km_servo_set_userdata_source(km_servo_t *s, uint8_t source)
 {
     s->userdata_source = source;
+}
+
+void km_servo_set_reset_cause(km_servo_t *s, uint8_t cause)
+{
+    s->reset_cause = cause;
+}
+
+void km_servo_set_active_baud(km_servo_t *s, uint32_t baud)
+{
+    s->active_baud = baud;
 }
 
 /* ---- read ------------------------------------------------------------- */
@@ -245,9 +281,6 @@ static uint8_t prv_encode_value(km_servo_t *s, km_reg_index_t r, uint8_t *out)
     case KM_REG_HW_FAULTS:
         out[0] = s->hw_latched;
         return 1;
-    case KM_REG_USERDATA_SOURCE:
-        out[0] = s->userdata_source;
-        return 1;
     case KM_REG_PROT_FLAGS:
         out[0] = (uint8_t)(s->live.protections & KM_ST_PROTECTION);
         return 1;
@@ -278,7 +311,7 @@ static void prv_read(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
     const int r = f->body_len == 1 ? km_reg_find(f->body[0]) : -1;
     if (r < 0 || !(km_reg_table[r].access & KM_R)) {
         prv_exception(s);
-        prv_answer_status(s, km_servo_id(s), f->id, reply);
+        prv_answer_status(s, prv_own_status(s), f->id, reply);
         return;
     }
     uint8_t body[1 + TEXT_MAX];
@@ -307,12 +340,14 @@ static void prv_userdata_reset(km_servo_t *s, uint8_t level)
     uint32_t values[KM_REG_COUNT];
     uint8_t n = 0;
     for (unsigned i = 0; i < KM_REG_COUNT; i++) {
-        if (!km_reg_table[i].persisted) {
+        /* "User-data reset": factory data (persisted, not writable from the
+         * bus: the level-1 zero offset 0x16) is per-unit calibration that
+         * no master could write back, so no level resets it. */
+        if (!km_reg_table[i].persisted || !(km_reg_table[i].access & KM_W)) {
             continue;
         }
         /* §5.1 0x03 level 1 keeps ID, baud and both zero offsets. */
-        if (level == 1 && (i == KM_REG_ID || i == KM_REG_BAUD || i == KM_REG_ZERO_OFFSET1 ||
-                           i == KM_REG_ZERO_OFFSET2)) {
+        if (level == 1 && (i == KM_REG_ID || i == KM_REG_BAUD || i == KM_REG_ZERO_OFFSET2)) {
             continue;
         }
         addrs[n] = km_reg_table[i].addr;
@@ -433,6 +468,41 @@ static void prv_motor_motion(km_servo_t *s, km_reg_index_t r, const uint8_t *d, 
     prv_request(s, &req);
 }
 
+/* "Zeroing": 0x46 written and 0x18 = 0 on encoder products both make the
+ * current position zero, and both are refused (bit 6) while a hardware
+ * fault is latched: the position sensor may be the fault, and a zero taken
+ * from it would survive the restart that clears the fault. */
+static void prv_zero_position(km_servo_t *s)
+{
+    if (s->hw_latched) {
+        prv_fail(s);
+        return;
+    }
+    const km_request_t req = {.kind = KM_REQ_ZERO_POSITION};
+    prv_request(s, &req);
+}
+
+/* "Limits that contradict each other": a runtime limit (0x5B..0x5D) above
+ * its maximum (0x13..0x15), or angle limits with min >= max, are refused
+ * with bit 6 so control can rely on min < max and runtime <= maximum. */
+static bool prv_consistent(const km_servo_t *s, km_reg_index_t r, uint32_t v)
+{
+    switch (r) {
+    case KM_REG_TORQUE_LIMIT:
+        return v <= prv_reg(s, KM_REG_MAX_TORQUE);
+    case KM_REG_CURRENT_LIMIT_NOW:
+        return v <= prv_reg(s, KM_REG_MAX_CURRENT);
+    case KM_REG_SPEED_LIMIT:
+        return v <= prv_reg(s, KM_REG_MAX_SPEED);
+    case KM_REG_ANGLE_MIN:
+        return prv_angle_limits_ok((int16_t)v, (int16_t)prv_reg(s, KM_REG_ANGLE_MAX));
+    case KM_REG_ANGLE_MAX:
+        return prv_angle_limits_ok((int16_t)prv_reg(s, KM_REG_ANGLE_MIN), (int16_t)v);
+    default:
+        return true;
+    }
+}
+
 /* Executes a write of `len` bytes to `addr` (0x03, 0x84, an 0x83 entry).
  * Returns false when no answer may follow (a restart). */
 static bool prv_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t len)
@@ -448,6 +518,8 @@ static bool prv_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t len
     switch (r) {
     case KM_REG_RESTART:
         if (len == 4 && memcmp(d, s_restart_magic, 4) == 0) {
+            /* "Restart": at once; nothing after this frame may run. */
+            s->restarting = true;
             if (s->ops && s->ops->restart) {
                 s->ops->restart(s->ops->ctx);
             }
@@ -469,8 +541,7 @@ static bool prv_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t len
         }
         const int8_t inc = (int8_t)v;
         if (inc == 0 && prv_is_encoder(s)) { /* §5.1 0x18: 0 zeroes an encoder */
-            req.kind = KM_REQ_ZERO_POSITION;
-            prv_request(s, &req);
+            prv_zero_position(s);
             return true;
         }
         const int32_t next = (int16_t)prv_reg(s, KM_REG_ZERO_OFFSET2) + inc;
@@ -483,12 +554,11 @@ static bool prv_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t len
     }
     case KM_REG_POSITION:
         /* §5.3 0x46: any value zeroes it, on motor (encoder) products. */
-        if ((len != 2 && len != 4) || !prv_is_encoder(s) || s->hw_latched) {
+        if ((len != 2 && len != 4) || !prv_is_encoder(s)) {
             prv_fail(s);
             return true;
         }
-        req.kind = KM_REQ_ZERO_POSITION;
-        prv_request(s, &req);
+        prv_zero_position(s);
         return true;
     case KM_REG_PROT_FLAGS:
         if (!km_reg_validate(r, s->product, d, len, &v)) {
@@ -530,7 +600,7 @@ static bool prv_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t len
         prv_motor_motion(s, r, d, len);
         return true;
     default:
-        if (!km_reg_validate(r, s->product, d, len, &v)) {
+        if (!km_reg_validate(r, s->product, d, len, &v) || !prv_consistent(s, r, v)) {
             prv_fail(s);
         } else if (km_reg_table[r].persisted) {
             prv_commit_one(s, r, v); /* ID and baud too: committed before they apply */
@@ -543,7 +613,13 @@ static bool prv_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t len
 
 /* ---- multi-ID write 0x83 ---------------------------------------------- */
 
-/* §3: only these addresses, each with the parameter sizes its write takes. */
+/* §3: only these addresses may be multi-written. */
+static bool prv_multi_addr_ok(uint8_t addr)
+{
+    return addr == 0x64 || addr == 0x65 || addr == 0x66 || addr == 0x68 || addr == 0x6E || addr == 0x6F;
+}
+
+/* The parameter sizes each allowed address takes. */
 static bool prv_multi_k_ok(uint8_t addr, uint8_t k)
 {
     switch (addr) {
@@ -552,99 +628,114 @@ static bool prv_multi_k_ok(uint8_t addr, uint8_t k)
     case 0x65:
     case 0x66:
         return k == 2 || k == 4;
-    case 0x68:
-    case 0x6E:
-    case 0x6F:
+    default: /* 0x68, 0x6E, 0x6F */
         return k == 2;
+    }
+}
+
+/* "Multi-ID write": every servo on the bus judges the frame. */
+static void prv_multi_write(km_servo_t *s, const km_frame_t *f)
+{
+    if (f->body_len < 2u || !prv_multi_addr_ok(f->body[0])) {
+        /* §4: an address the command does not support is bit 5, on every
+         * servo (each saw the broken command); nothing runs. */
+        prv_exception(s);
+        s->sync.full = false;
+        return;
+    }
+    const uint8_t n_params = (uint8_t)(f->body_len - 2u);
+    const uint8_t k = f->body[1];
+    if (!prv_multi_k_ok(f->body[0], k) || n_params == 0u || n_params % (k + 1u) != 0u) {
+        prv_fail(s); /* the right address with malformed entries: a bad value */
+        s->sync.full = false;
+        return;
+    }
+    for (uint8_t off = 2; off < f->body_len; off = (uint8_t)(off + k + 1u)) {
+        if (f->body[off] == km_servo_id(s)) {
+            s->sync.full = false;
+            (void)prv_write(s, f->body[0], &f->body[off + 1u], k);
+            return;
+        }
+    }
+    /* Not in the list: this servo does nothing at all. */
+}
+
+/* ---- extension command 0x7F --------------------------------------------- */
+
+/* "Extension command 0x7F": a read in this firmware's own address space.
+ * Returns false for an address it does not have (bit 5, like a read). */
+static bool prv_ext_value(const km_servo_t *s, uint8_t addr, uint8_t *out, uint8_t *n)
+{
+    switch (addr) {
+    case KM_EXT_USERDATA_SOURCE:
+        out[0] = s->userdata_source;
+        *n = 1;
+        return true;
+    case KM_EXT_RESET_CAUSE:
+        out[0] = s->reset_cause;
+        *n = 1;
+        return true;
+    case KM_EXT_ACTIVE_BAUD:
+        *n = km_put_le(out, s->active_baud / 100u, 2);
+        return true;
     default:
         return false;
     }
 }
 
-/* "Multi-ID write": returns true if the frame was a command to this servo. */
-static bool prv_multi_write(km_servo_t *s, const km_frame_t *f)
+#define EXT_VALUE_MAX 2u /* longest extension value: the super-ID slot's answer size */
+
+static void prv_ext_read(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
 {
-    const uint8_t n_params = f->body_len >= 2 ? (uint8_t)(f->body_len - 2u) : 0u;
-    const uint8_t k = f->body_len >= 2 ? f->body[1] : 0u;
-    const bool well_formed = f->body_len >= 2 && prv_multi_k_ok(f->body[0], k) &&
-                             n_params > 0 && n_params % (k + 1u) == 0;
-    if (!well_formed) {
-        /* Every servo saw a broken command: each flags it, nothing runs. */
-        s->flags = KM_ST_FAILED;
-        s->sync.full = false;
-        return true;
+    uint8_t body[1 + EXT_VALUE_MAX];
+    uint8_t n = 0;
+    if (f->body_len != 1 || !prv_ext_value(s, f->body[0], &body[1], &n)) {
+        prv_exception(s);
+        prv_answer_status(s, prv_own_status(s), f->id, reply);
+        return;
     }
-    for (uint8_t off = 2; off < f->body_len; off = (uint8_t)(off + k + 1u)) {
-        if (f->body[off] == km_servo_id(s)) {
-            s->flags = 0;
-            s->sync.full = false;
-            (void)prv_write(s, f->body[0], &f->body[off + 1u], k);
-            return true;
-        }
-    }
-    return false; /* not in the list: this servo does nothing at all */
+    body[0] = f->body[0];
+    reply->len = km_encode_response(reply->bytes, km_servo_id(s), KM_CMD_EXT, body, (uint8_t)(1u + n));
+    reply->delay_us = prv_delay_us(s, f->id, (uint16_t)(7u + EXT_VALUE_MAX));
 }
 
 /* ---- dispatch --------------------------------------------------------- */
 
-void km_servo_handle(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
-{
-    reply->len = 0;
-    reply->delay_us = 0;
-    const uint8_t own = km_servo_id(s);
-    const bool to_me = f->id == own;
-    const bool super = f->id == KM_ID_SUPER;
-    const bool broadcast = f->id == KM_ID_BROADCAST;
-    if (!to_me && !super && !broadcast) {
-        return; /* another servo's frame: it changes nothing here (§3 sync write) */
-    }
-    if (f->cmd == CMD_MULTI_WRITE) {
-        if (broadcast) {
-            (void)prv_multi_write(s, f);
-        } else if (to_me) {
-            s->flags = KM_ST_EXCEPTION; /* "Multi-ID write": broadcast only */
-            s->sync.full = false;
-        }
-        return;
-    }
-    /* "Super ID": a query address; commands other than ping and read sent
-     * to it are ignored by every servo. */
-    if (super && f->cmd != CMD_PING && f->cmd != CMD_READ) {
-        return;
-    }
-    /* "Status bits 5 and 6": a ping or read is how a master asks how the
-     * previous command went (writes answer nothing at response level 0), so
-     * its answer reports the bits that command left, plus its own, and
-     * then they clear. Any other command replaces them with its own result.
-     * A checksum error with our ID since the last answer adds bit 5. */
-    const bool query = f->cmd == CMD_PING || f->cmd == CMD_READ;
-    if (!query) {
-        s->flags = 0u;
-    }
-    if (s->checksum_pending) {
-        s->flags |= KM_ST_EXCEPTION;
-    }
-    s->checksum_pending = false;
-    if (f->cmd != CMD_SYNC_WRITE && f->cmd != CMD_SYNC_EXECUTE) {
-        s->sync.full = false; /* §3: any other command clears the 0x04 buffer */
-    }
+/* How an answer dealt with bits 5/6 ("Status bits 5 and 6"). */
+typedef enum {
+    PRV_UNANSWERED, /* no answer: this command's bits wait for a status answer */
+    PRV_OWN,        /* the answer carried this command's bits (or had no status byte) */
+    PRV_ALL,        /* the answer carried every unreported bit: they are cleared */
+} prv_report_t;
 
+/* Runs one command addressed to this servo; fills *reply. */
+static prv_report_t prv_dispatch(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
+{
+    const bool to_me = f->id == km_servo_id(s);
+    const bool broadcast = f->id == KM_ID_BROADCAST;
     switch (f->cmd) {
     case CMD_PING:
         if (f->body_len != 0) {
             prv_exception(s);
         }
-        if (!broadcast) {
-            prv_answer_status(s, own, f->id, reply);
+        if (broadcast) {
+            return PRV_UNANSWERED;
         }
-        s->flags = 0u; /* reported (or, broadcast, not askable): cleared */
-        return;
+        prv_answer_status(s, km_servo_status(s), f->id, reply);
+        return PRV_ALL;
     case CMD_READ:
-        if (!broadcast) {
-            prv_read(s, f, reply);
+        if (broadcast) {
+            return PRV_UNANSWERED;
         }
-        s->flags = 0u;
-        return;
+        prv_read(s, f, reply);
+        /* The status register's value is the ping's status byte. */
+        return f->body_len == 1 && f->body[0] == 0x01 && !s->flags ? PRV_ALL : PRV_OWN;
+    case KM_CMD_EXT:
+        if (broadcast) {
+            return PRV_UNANSWERED;
+        }
+        prv_ext_read(s, f, reply);
+        return PRV_OWN;
     case CMD_WRITE: {
         bool may_answer = true;
         if (f->body_len < 1) {
@@ -655,9 +746,12 @@ void km_servo_handle(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
         /* §3: writes answer only at response level 1 and to our own ID; the
          * answer uses the ID the frame was sent to (the old one, §3). */
         if (may_answer && to_me && (prv_reg(s, KM_REG_CONFIG) & CONFIG_RESPONSE_LEVEL)) {
-            prv_answer_status(s, own, f->id, reply);
+            const uint8_t old_id = f->id;
+            reply->len = km_encode_status(reply->bytes, old_id, prv_own_status(s));
+            reply->delay_us = prv_delay_us(s, f->id, 6u);
+            return PRV_OWN;
         }
-        return;
+        return PRV_UNANSWERED;
     }
     case CMD_SYNC_WRITE:
         /* "Sync write": target ID only; the address is checked now, the
@@ -665,39 +759,81 @@ void km_servo_handle(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
         s->sync.full = false;
         if (!to_me || f->body_len < 1) {
             prv_exception(s);
-            return;
+            return PRV_UNANSWERED;
         }
         {
             const int r = km_reg_find(f->body[0]);
             const uint8_t len = (uint8_t)(f->body_len - 1u);
             if (r < 0 || !(km_reg_table[r].access & KM_W)) {
                 prv_exception(s);
-                return;
-            }
-            if (len > sizeof s->sync.data) {
+            } else if (len > sizeof s->sync.data) {
                 prv_fail(s);
-                return;
+            } else {
+                s->sync.full = true;
+                s->sync.addr = f->body[0];
+                s->sync.len = len;
+                memcpy(s->sync.data, &f->body[1], len);
             }
-            s->sync.full = true;
-            s->sync.addr = f->body[0];
-            s->sync.len = len;
-            memcpy(s->sync.data, &f->body[1], len);
         }
-        return;
+        return PRV_UNANSWERED;
     case CMD_SYNC_EXECUTE:
         if (f->body_len != 0) {
             prv_exception(s);
             s->sync.full = false;
-            return;
-        }
-        if (s->sync.full) {
+        } else if (s->sync.full) {
             s->sync.full = false;
             (void)prv_write(s, s->sync.addr, s->sync.data, s->sync.len);
         }
-        return; /* no buffered write: nothing to do (not an error, §3) */
+        return PRV_UNANSWERED; /* an empty buffer is nothing to do, not an error (§3) */
     default:
-        /* 0x82, 0x78, 0x7E, 0x7F and unknown commands: not supported. */
+        /* 0x82, 0x78, 0x7E and unknown commands: not supported. */
         prv_exception(s);
+        return PRV_UNANSWERED;
+    }
+}
+
+void km_servo_handle(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
+{
+    reply->len = 0;
+    reply->delay_us = 0;
+    if (s->restarting) {
+        return; /* "Restart": the servo is going down; nothing more runs */
+    }
+    const uint8_t own = km_servo_id(s);
+    const bool super = f->id == KM_ID_SUPER;
+    const bool broadcast = f->id == KM_ID_BROADCAST;
+    if (f->id != own && !super && !broadcast) {
+        return; /* another servo's frame: it changes nothing here (§3 sync write) */
+    }
+    /* "Super ID": a query address; commands other than ping, read and the
+     * extension read sent to it are ignored by every servo. */
+    if (super && f->cmd != CMD_PING && f->cmd != CMD_READ && f->cmd != KM_CMD_EXT) {
         return;
     }
+    /* "Multi-ID write": broadcast only. To our own ID it is an exception;
+     * to the super ID, ignored (above). */
+    if (f->cmd == CMD_MULTI_WRITE && !broadcast) {
+        s->unreported |= KM_ST_EXCEPTION;
+        s->sync.full = false;
+        return;
+    }
+    if (f->cmd != CMD_SYNC_WRITE && f->cmd != CMD_SYNC_EXECUTE && f->cmd != CMD_MULTI_WRITE) {
+        s->sync.full = false; /* §3: any other command clears the 0x04 buffer */
+    }
+    s->flags = 0u;
+    prv_report_t report;
+    if (f->cmd == CMD_MULTI_WRITE) {
+        prv_multi_write(s, f);
+        report = PRV_UNANSWERED;
+    } else {
+        report = prv_dispatch(s, f, reply);
+    }
+    /* "Status bits 5 and 6": an outcome is kept until a status answer has
+     * carried it, then cleared, so it is never lost and never told twice. */
+    if (report == PRV_ALL) {
+        s->unreported = 0u;
+    } else if (report == PRV_UNANSWERED) {
+        s->unreported |= s->flags;
+    }
+    s->flags = 0u;
 }

@@ -93,10 +93,12 @@ typedef struct {
     uint32_t active_baud;         /* bps in force until restart (0x10 applies then) */
     uint32_t prng;                /* xorshift32 state for the 0x01 random byte */
     km_live_t live;
-    uint8_t flags;                /* KM_ST_FAILED | KM_ST_EXCEPTION of the last command */
-    bool checksum_pending;        /* a bad-checksum frame carried our ID */
+    uint8_t flags;                /* bits 5/6 of the command being handled */
+    uint8_t unreported;           /* bits 5/6 no status answer has carried yet */
+    bool restarting;              /* a restart was requested: nothing more runs */
     uint8_t hw_latched;           /* 0x35, latched until restart */
-    uint8_t userdata_source;      /* KM_USERDATA_*, read as register 0x0D */
+    uint8_t userdata_source;      /* KM_USERDATA_*, extension register 0x01 */
+    uint8_t reset_cause;          /* km_reset_cause_t of this boot, extension 0x02 */
     struct {
         bool full;
         uint8_t addr;
@@ -113,7 +115,8 @@ void km_servo_init(km_servo_t *s, const km_product_t *product, const uint32_t *p
 /* Processes one validated frame; fills *reply (len 0 = no answer). */
 void km_servo_handle(km_servo_t *s, const km_frame_t *frame, km_reply_t *reply);
 
-/* The parser saw a bad-checksum frame with our ID: bit 5 for the next answer. */
+/* The parser saw a bad-checksum frame with our ID: bit 5 until a status
+ * answer reports it ("Status bits 5 and 6"). */
 void km_servo_note_checksum_error(km_servo_t *s);
 
 void km_servo_set_live(km_servo_t *s, const km_live_t *live);
@@ -121,8 +124,17 @@ void km_servo_set_live(km_servo_t *s, const km_live_t *live);
 /* Control sets 0x64 to 5 after a protection (not writable from the bus). */
 void km_servo_set_torque_switch(km_servo_t *s, uint8_t value);
 
-/* Register 0x0D (this firmware's extension): where the user data in force
- * came from at boot. The values follow the store's mount results. */
+/* This firmware's extension registers, read with command 0x7F ("customer
+ * custom", PROTOCOL.md §7) so they stay out of the vendor's register map:
+ * `F9 FF id 03 7F addr cs` answers `F9 F5 id len 7F addr value cs`.
+ * docs/protocol-decisions.md "Extension command 0x7F" has the frames. */
+#define KM_CMD_EXT 0x7Fu
+#define KM_EXT_USERDATA_SOURCE 0x01u /* u8 KM_USERDATA_*: where the user data came from */
+#define KM_EXT_RESET_CAUSE 0x02u     /* u8 km_reset_cause_t (hal/km_hal_system.h) */
+#define KM_EXT_ACTIVE_BAUD 0x03u     /* u16 baud / 100 in force (0x10 may differ) */
+
+/* Extension 0x01: where the user data in force came from at boot. The
+ * values follow the store's mount results. */
 #define KM_USERDATA_LOADED 0u           /* from flash, as committed */
 #define KM_USERDATA_MIGRATED 1u         /* from flash; registers new to this firmware at defaults */
 #define KM_USERDATA_DEFAULTS_BLANK 2u   /* product defaults: flash erased (first boot) */
@@ -130,6 +142,13 @@ void km_servo_set_torque_switch(km_servo_t *s, uint8_t value);
 #define KM_USERDATA_DEFAULTS_SCHEMA 4u  /* product defaults: stored layout from another version */
 #define KM_USERDATA_UNAVAILABLE 5u      /* store unusable: defaults, commits fail (bit 6) */
 void km_servo_set_userdata_source(km_servo_t *s, uint8_t source);
+
+/* Extension 0x02: why the MCU last reset (the hal's km_reset_cause_t). */
+void km_servo_set_reset_cause(km_servo_t *s, uint8_t cause);
+
+/* The bus runs at another baud than 0x10 asks (the board cannot make it):
+ * the super-ID slots and extension 0x03 follow the baud in force. */
+void km_servo_set_active_baud(km_servo_t *s, uint32_t baud);
 
 uint8_t km_servo_id(const km_servo_t *s);
 uint32_t km_servo_active_baud(const km_servo_t *s);

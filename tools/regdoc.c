@@ -36,6 +36,7 @@ static const char *layout_name(uint8_t l)
 {
     switch ((km_layout_t)l) {
     case KM_L_U8: return "u8";
+    case KM_L_BITS8: return "u8 bits";
     case KM_L_I8: return "i8";
     case KM_L_U16: return "u16";
     case KM_L_I16: return "i16";
@@ -56,7 +57,7 @@ static const char *layout_name(uint8_t l)
 static int has_stored_default(const km_reg_t *r)
 {
     const km_layout_t l = (km_layout_t)r->layout;
-    const int value_layout = l == KM_L_U8 || l == KM_L_I8 || l == KM_L_U16 || l == KM_L_I16 ||
+    const int value_layout = l == KM_L_U8 || l == KM_L_BITS8 || l == KM_L_I8 || l == KM_L_U16 || l == KM_L_I16 ||
                              l == KM_L_U8U8 || l == KM_L_U16U8;
     return value_layout && (r->access == KM_RW || r->persisted);
 }
@@ -65,6 +66,7 @@ static void print_default(const km_reg_t *r, uint32_t v)
 {
     switch ((km_layout_t)r->layout) {
     case KM_L_U8: /* bit fields read best in hex (0x11, 0x32..0x34) */
+    case KM_L_BITS8:
         printf("0x%02X", (unsigned)v);
         break;
     case KM_L_I8:
