@@ -56,6 +56,7 @@
 #define RCC_AHBENR     G0_REG(RCC_BASE_R + 0x38u)
 #define RCC_APBENR1    G0_REG(RCC_BASE_R + 0x3Cu)
 #define RCC_APBENR2    G0_REG(RCC_BASE_R + 0x40u)
+#define RCC_CSR        G0_REG(RCC_BASE_R + 0x60u)
 #define RCC_CR_HSION           (1u << 8)     /* §5.4.1 */
 #define RCC_CR_HSIRDY          (1u << 10)
 #define RCC_CR_PLLON           (1u << 24)
@@ -75,6 +76,21 @@
 #define RCC_APBENR1_TIM3       (1u << 1)
 #define RCC_APBENR2_USART1     (1u << 14)    /* §5.4.16 */
 #define RCC_APBENR2_ADC        (1u << 20)
+/* RCC_CSR (§5.4, offset 0x60) reset flags: sticky across resets until RMVF
+ * is written, so several accumulate unless each boot clears them. Every
+ * internal reset also drives NRST low (§5.1.2 "System reset"), so PINRSTF
+ * comes with all of them. */
+#define RCC_CSR_RMVF           (1u << 23)    /* write 1: clear every flag below */
+#define RCC_CSR_OBLRSTF        (1u << 25)    /* option byte loader (OBL_LAUNCH) */
+#define RCC_CSR_PINRSTF        (1u << 26)    /* NRST low (and every internal reset) */
+#define RCC_CSR_PWRRSTF        (1u << 27)    /* BOR or POR/PDR: supply below threshold */
+#define RCC_CSR_SFTRSTF        (1u << 28)    /* AIRCR.SYSRESETREQ */
+#define RCC_CSR_IWDGRSTF       (1u << 29)    /* independent watchdog */
+#define RCC_CSR_WWDGRSTF       (1u << 30)    /* window watchdog */
+#define RCC_CSR_LPWRRSTF       (1u << 31)    /* Stop/Standby/Shutdown entry with nRST_* option */
+#define RCC_CSR_RESET_FLAGS    (RCC_CSR_OBLRSTF | RCC_CSR_PINRSTF | RCC_CSR_PWRRSTF | \
+                                RCC_CSR_SFTRSTF | RCC_CSR_IWDGRSTF | RCC_CSR_WWDGRSTF | \
+                                RCC_CSR_LPWRRSTF)
 
 /* ---- GPIO (RM0444 §7.4), IOPORT bus 0x5000 0000 ---- */
 #define GPIOA_BASE_R   0x50000000u

@@ -1,26 +1,35 @@
 /* Reset entry and vector table of the STM32G031 (RM0444 §12.3 table 61).
- * The reset handler copies .data from flash, zeroes .bss and calls main();
- * no C library start-up (no constructors are used, no heap exists). Unused
- * vectors fall into prv_default_handler, which parks the CPU so the
- * watchdog, once started, resets it. */
+ * The reset handler copies .data from flash, zeroes .bss, paints the stack
+ * and captures the reset cause (fault.c), then calls main(); no C library
+ * start-up (no constructors are used, no heap exists). HardFault and every
+ * vector nothing should raise end in fault.c's handler: bridge free, fault
+ * record, immediate reset. The stack sits at the bottom of SRAM
+ * (stm32g031.ld), below .data and .bss. */
 #include <stdint.h>
 
+#include "fault.h"
 #include "g0_vectors.h"
 
 extern uint32_t _sidata, _sdata, _edata, _sbss, _ebss, _estack;
 extern int main(void);
 
 
-static void prv_default_handler(void)
+/* A vector nothing should raise is handled like a HardFault (fault.c):
+ * parking here would leave the bridge driving until the watchdog bites, or
+ * for ever before it is started. A plain branch, no stack: IPSR still holds
+ * this vector's number, and the fault record keeps it. */
+__attribute__((naked)) static void prv_default_handler(void)
 {
-    for (;;) {
-    }
+    __asm volatile(
+        "ldr r0, =HardFault_Handler\n"
+        "bx  r0                    \n");
 }
 
-/* Handlers a board file may define; otherwise they park in the default. */
+/* Handlers a board file may define; otherwise they take the fault path.
+ * HardFault_Handler is not weak: fault.c always defines it, and the strong
+ * reference here is what pulls fault.o out of the archive. */
 #define KM_WEAK_ALIAS __attribute__((weak, alias("prv_default_handler")))
 void NMI_Handler(void) KM_WEAK_ALIAS;
-void HardFault_Handler(void) KM_WEAK_ALIAS;
 void SVC_Handler(void) KM_WEAK_ALIAS;
 void PendSV_Handler(void) KM_WEAK_ALIAS;
 void SysTick_Handler(void) KM_WEAK_ALIAS;
@@ -97,6 +106,8 @@ void Reset_Handler(void)
     for (uint32_t *dst = &_sbss; dst < &_ebss;) {
         *dst++ = 0u;
     }
+    g0_stack_paint();
+    g0_reset_capture();
     (void)main();
     for (;;) {
     }

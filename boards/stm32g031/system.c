@@ -1,12 +1,14 @@
 /* km_hal_system for the STM32G031: 64 MHz clock tree, reset, independent
  * watchdog, PRIMASK lock, unique-ID entropy and WFI idle bounded by a 1 kHz
- * SysTick wake-up. */
+ * SysTick wake-up, which also checks the stack guard. The reset cause and
+ * the fault path live in fault.c. */
 #include "km_cortex_m.h"
 #include "km_hal_system.h"
 
 #include "km_hal_time.h"
 
 #include "board_clock.h"
+#include "fault.h"
 #include "g0_regs.h"
 #include "g0_vectors.h"
 
@@ -53,7 +55,15 @@ void km_hal_system_init(void)
 
 void SysTick_Handler(void)
 {
-    /* Nothing to do: waking the CPU from WFI is the whole job. */
+    /* Waking the CPU from WFI is the main job. It also looks at the stack
+     * guard band once per millisecond (32 words, ~2 us at 64 MHz): a stack
+     * that has reached it is within KM_STACK_GUARD bytes of running off
+     * SRAM, where the overflow fault would come with no room left to stack
+     * the HardFault frame (a lockup, ended only by the IWDG with the bridge
+     * still driving). Stopping here frees the bridge and records a FAULT. */
+    if (!g0_stack_guard_intact()) {
+        g0_fault_stop(G0_FAULT_STACK_GUARD, 0u, 0u);
+    }
 }
 
 _Noreturn void km_hal_system_reset(void)
