@@ -1,6 +1,8 @@
 /* Startup for the nRF51822 (Cortex-M0): the vector table, the reset handler
- * that lays out RAM for C (.data copied from flash, .bss zeroed) and the
- * default handler every unused interrupt falls into. */
+ * that lays out RAM for C (.data copied from flash, .bss zeroed) and
+ * captures the reset cause (system.c), and the default handler every unused
+ * interrupt falls into, which takes the fault path (system.c's
+ * HardFault_Handler: record, reset at once). */
 #include <stdint.h>
 
 /* Linker script symbols: addresses only, never read as objects. */
@@ -14,11 +16,12 @@ extern uint32_t __stack_top[];
 int main(void);
 void Reset_Handler(void);
 void Default_Handler(void);
+void HardFault_Handler(void);      /* system.c; not weak: it pulls system.o in */
+void km_board_reset_capture(void); /* system.c */
 
 /* Weak so a driver defines the real one simply by naming it. */
 #define KM_WEAK_HANDLER(name) void name(void) __attribute__((weak, alias("Default_Handler")))
 KM_WEAK_HANDLER(NMI_Handler);
-KM_WEAK_HANDLER(HardFault_Handler);
 KM_WEAK_HANDLER(SVC_Handler);
 KM_WEAK_HANDLER(PendSV_Handler);
 KM_WEAK_HANDLER(SysTick_Handler);
@@ -100,16 +103,19 @@ void Reset_Handler(void)
     for (uint32_t *dst = __bss_start; dst < __bss_end; dst++) {
         *dst = 0u;
     }
+    km_board_reset_capture();
     (void)main();
     /* main never returns in firmware; a test image that does just parks. */
     for (;;) {
     }
 }
 
-/* An unexpected interrupt or fault: park here so a debugger (or the
- * watchdog on real hardware) finds the board in one known place. */
-void Default_Handler(void)
+/* An unexpected interrupt: handled as a fault (record, reset at once).
+ * Parking would hang for ever in QEMU, which does not model the watchdog.
+ * A plain branch that touches no stack; the stacked PC still says where. */
+__attribute__((naked)) void Default_Handler(void)
 {
-    for (;;) {
-    }
+    __asm__ volatile(
+        "ldr r0, =HardFault_Handler\n"
+        "bx  r0                    \n");
 }

@@ -1,5 +1,20 @@
 /* System services (km_hal_system.h) on the nRF51: clocks, reset, watchdog,
- * interrupt lock, entropy, idle. */
+ * interrupt lock, entropy, idle; the reset cause and the HardFault handler.
+ *
+ * Reset cause. The nRF51 keeps it in POWER->RESETREAS (0x40000400: RESETPIN,
+ * DOG, SREQ, LOCKUP, OFF, LPCOMP, DIF; no bit at all after power-on or
+ * brown-out; sticky until cleared by writing 1s). QEMU 7.2 does not model
+ * it: its CLOCK/POWER block is a stub that reads 1 at every address and
+ * ignores writes, so RESETREAS would always say "pin". What QEMU does keep
+ * is RAM across a SYSRESETREQ (README, measured by the board test). So the
+ * two resets this firmware causes itself, the 0x02 restart and the fault
+ * handler's, also leave a record in .noinit RAM before SYSRESETREQ, which
+ * the next boot reads first; RESETREAS is believed only if writing 1s
+ * actually clears it (silicon), not if it still reads the same (QEMU). In
+ * QEMU therefore: SOFTWARE and FAULT are reported, everything else (launch,
+ * a watchdog QEMU does not model) reads POWER_ON. */
+#include <stdbool.h>
+
 #include "km_cortex_m.h"
 #include "km_hal_system.h"
 #include "km_hal_time.h"
@@ -9,6 +24,126 @@
 #define PRV_RNG_BYTE_US 2000u      /* a real (and QEMU's) bias-corrected byte takes ~0.7 ms */
 #define PRV_RNG_SPINS 2000000u     /* last resort if TIMER0 is not running yet */
 #define PRV_SYSTICK_RELOAD (NRF_HFCLK_HZ / 1000u - 1u)
+
+/* POWER shares the peripheral slot (ID 0) with CLOCK (nRF51 RM §12). */
+#define PRV_POWER_RESETREAS 0x400u
+#define PRV_RESETREAS_RESETPIN (1u << 0)
+#define PRV_RESETREAS_DOG (1u << 1)
+#define PRV_RESETREAS_SREQ (1u << 2)
+#define PRV_RESETREAS_LOCKUP (1u << 3)
+#define PRV_RESETREAS_WAKE (7u << 16) /* OFF, LPCOMP, DIF: wake-up from System OFF */
+
+#define PRV_NOTE_MAGIC 0x5E7CA05Eu
+
+/* Written just before this firmware resets the MCU itself, read and cleared
+ * at the next boot. .noinit (nrf51822.ld): neither loaded nor zeroed.
+ * check = ~(magic ^ cause ^ pc): power-up garbage passes with odds 2^-64. */
+typedef struct {
+    uint32_t magic;
+    uint32_t cause; /* KM_RESET_SOFTWARE or KM_RESET_FAULT */
+    uint32_t pc;    /* the faulting instruction (stacked PC), 0 for a restart */
+    uint32_t check;
+} prv_reset_note_t;
+
+static volatile prv_reset_note_t s_note __attribute__((section(".noinit")));
+static km_reset_cause_t s_cause;
+
+/* The previous run's fault address, kept for a debugger (`print
+ * km_board_last_fault_pc`): 0 unless the last reset was a fault. */
+uint32_t km_board_last_fault_pc;
+
+void km_board_reset_capture(void);
+_Noreturn void km_board_fault_stop(uint32_t pc);
+
+static void prv_note(uint32_t cause, uint32_t pc)
+{
+    s_note.cause = cause;
+    s_note.pc = pc;
+    s_note.check = ~(PRV_NOTE_MAGIC ^ cause ^ pc);
+    s_note.magic = PRV_NOTE_MAGIC;
+}
+
+/* From Reset_Handler (startup.c), once, after .bss is zeroed and before
+ * main(): the record first (the most specific), then RESETREAS. */
+void km_board_reset_capture(void)
+{
+    uint32_t reas = NRF_REG(NRF_CLOCK, PRV_POWER_RESETREAS);
+    NRF_REG(NRF_CLOCK, PRV_POWER_RESETREAS) = reas; /* write 1s: clear what was read */
+    if (reas != 0u && NRF_REG(NRF_CLOCK, PRV_POWER_RESETREAS) == reas) {
+        reas = 0u; /* did not clear: QEMU's stub, not a real register */
+    }
+
+    bool noted = s_note.magic == PRV_NOTE_MAGIC &&
+                 s_note.check == ~(s_note.magic ^ s_note.cause ^ s_note.pc) &&
+                 (s_note.cause == KM_RESET_SOFTWARE || s_note.cause == KM_RESET_FAULT);
+    s_note.magic = 0u;
+
+    if (noted) {
+        s_cause = (km_reset_cause_t)s_note.cause;
+        km_board_last_fault_pc = s_cause == KM_RESET_FAULT ? s_note.pc : 0u;
+    } else if ((reas & PRV_RESETREAS_LOCKUP) != 0u) {
+        s_cause = KM_RESET_FAULT; /* a fault inside the fault handler: the core locked up */
+    } else if ((reas & PRV_RESETREAS_DOG) != 0u) {
+        s_cause = KM_RESET_WATCHDOG;
+    } else if ((reas & PRV_RESETREAS_SREQ) != 0u) {
+        s_cause = KM_RESET_SOFTWARE;
+    } else if ((reas & PRV_RESETREAS_RESETPIN) != 0u) {
+        s_cause = KM_RESET_PIN;
+    } else if ((reas & PRV_RESETREAS_WAKE) != 0u) {
+        s_cause = KM_RESET_OTHER;
+    } else {
+        s_cause = KM_RESET_POWER_ON; /* power-on and brown-out set no bit on the nRF51 */
+    }
+}
+
+km_reset_cause_t km_hal_reset_cause(void)
+{
+    return s_cause;
+}
+
+static _Noreturn void prv_sysresetreq(void)
+{
+    __asm__ volatile("dsb" ::: "memory");
+    NRF_REG(SCS_AIRCR, 0) = AIRCR_VECTKEY | AIRCR_SYSRESETREQ;
+    __asm__ volatile("dsb" ::: "memory");
+    for (;;) {
+    }
+}
+
+/* The fault path's C part, on the fresh stack HardFault_Handler set up.
+ * There is no bridge to free on this board: the "motor" is the plant's
+ * input (or plant_io.c's last command) in RAM, which the reset below, taken
+ * at once, puts back to coasting when .data/.bss are set up again. So:
+ * record, reset. Parking instead would hang for ever in QEMU, where the
+ * watchdog is not modelled. */
+_Noreturn void km_board_fault_stop(uint32_t pc)
+{
+    prv_note(KM_RESET_FAULT, pc);
+    prv_sysresetreq();
+}
+
+/* HardFault, and every unexpected vector (startup.c's Default_Handler
+ * branches here). The stacked PC is read from whichever stack EXC_RETURN
+ * bit 2 names, before SP moves to the top of RAM: the old stack may be what
+ * ran out, and no C may run on it. */
+__attribute__((naked)) void HardFault_Handler(void)
+{
+    __asm__ volatile(
+        "movs r0, #4                \n"
+        "mov  r1, lr                \n"
+        "tst  r0, r1                \n"
+        "bne  1f                    \n"
+        "mrs  r1, msp               \n"
+        "b    2f                    \n"
+        "1:                         \n"
+        "mrs  r1, psp               \n"
+        "2:                         \n"
+        "ldr  r0, [r1, #24]         \n"
+        "ldr  r1, =__stack_top      \n"
+        "mov  sp, r1                \n"
+        "ldr  r1, =km_board_fault_stop\n"
+        "bx   r1                    \n");
+}
 
 void km_hal_system_init(void)
 {
@@ -36,13 +171,12 @@ void SysTick_Handler(void)
 {
 }
 
+/* The note makes the next boot report SOFTWARE where RESETREAS is not
+ * modelled (QEMU); on silicon SREQ would say the same. */
 _Noreturn void km_hal_system_reset(void)
 {
-    __asm__ volatile("dsb" ::: "memory");
-    NRF_REG(SCS_AIRCR, 0) = AIRCR_VECTKEY | AIRCR_SYSRESETREQ;
-    __asm__ volatile("dsb" ::: "memory");
-    for (;;) {
-    }
+    prv_note(KM_RESET_SOFTWARE, 0u);
+    prv_sysresetreq();
 }
 
 /* Not modelled by QEMU 7.2 (the WDT range is an "unimplemented device": writes
