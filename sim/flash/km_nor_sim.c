@@ -9,8 +9,9 @@ enum {
     CELL_PROGRAMMED,  /* fully programmed (even if its value is all ones) */
     CELL_TORN_ONES,   /* program began, no bit moved: passes the erased check */
     CELL_TORN_MIXED,
-    CELL_UNSTABLE,
+    CELL_UNSTABLE,    /* data = a mix, alt = the target: reads one or the other */
     CELL_ECC,
+    CELL_WEAK,        /* data = high side, alt = low side: reads either or between */
 };
 
 static uint32_t prv_rand(km_nor_sim_t *sim)
@@ -94,6 +95,11 @@ static void prv_tear_cell(km_nor_sim_t *sim, uint32_t cell, const uint8_t *targe
     case KM_NOR_PROG_TORN_ONES:
         sim->state[cell] = CELL_TORN_ONES;
         break;
+    case KM_NOR_PROG_TORN_WEAK:
+        /* data stays all ones (the erased side), alt is the target. */
+        memcpy(&sim->alt[cell * c], target, c);
+        sim->state[cell] = CELL_WEAK;
+        break;
     case KM_NOR_PROG_TORN_MIXED:
     case KM_NOR_PROG_TORN_UNSTABLE:
     case KM_NOR_PROG_TORN_ECC:
@@ -110,6 +116,74 @@ static void prv_tear_cell(km_nor_sim_t *sim, uint32_t cell, const uint8_t *targe
             sim->state[cell] = CELL_ECC;
         }
         break;
+    }
+}
+
+/* One cell as a read sees it now; true unless it reports an ECC error.
+ * Weak cells draw their value here, so two reads may differ. */
+static bool prv_read_cell(km_nor_sim_t *sim, uint32_t cell, uint8_t *out)
+{
+    const uint32_t c = sim->cfg.prog_size;
+    const uint8_t *hi = &sim->data[cell * c];
+    const uint8_t *lo = &sim->alt[cell * c];
+    const uint8_t st = sim->state[cell];
+    if (st == CELL_UNSTABLE || st == CELL_WEAK) {
+        uint32_t pick = 1u; /* 0 high side, 1 low side, 2 a mix */
+        if (sim->weak_reads == KM_NOR_WEAK_HIGH) {
+            pick = 0u;
+        } else if (sim->weak_reads == KM_NOR_WEAK_RANDOM) {
+            pick = (prv_rand(sim) >> 7) & 3u;
+            /* An unstable cell reads the target or its mix, nothing else. */
+            pick = (st == CELL_UNSTABLE) ? (pick & 1u) : ((pick == 3u) ? 2u : pick);
+        }
+        for (uint32_t i = 0; i < c; i++) {
+            if (pick == 2u) {
+                /* Bits between the sides read 0 or 1 independently. */
+                const uint8_t between = (uint8_t)(hi[i] & ~lo[i]);
+                out[i] = (uint8_t)(hi[i] & ~(between & (uint8_t)prv_rand(sim)));
+            } else {
+                out[i] = (pick == 0u) ? hi[i] : lo[i];
+            }
+        }
+        return true;
+    }
+    memcpy(out, hi, c);
+    return st != CELL_ECC;
+}
+
+/* The controller's "is it erased" check before a program. */
+static bool prv_check_erased(km_nor_sim_t *sim, uint32_t cell)
+{
+    const uint8_t st = sim->state[cell];
+    if (sim->rules.content_check) {
+        uint8_t now[8];
+        return prv_read_cell(sim, cell, now) && prv_is_all_ones(now, sim->cfg.prog_size);
+    }
+    return st == CELL_ERASED || (st == CELL_TORN_ONES && !sim->rules.ecc_dword);
+}
+
+/* A program the check let through onto a cell that was not cleanly erased:
+ * bits only clear, so both sides of the cell are ANDed with the new value;
+ * on an ECC flash the stored ECC no longer matches anything. */
+static void prv_program_over(km_nor_sim_t *sim, uint32_t cell, const uint8_t *src)
+{
+    const uint32_t c = sim->cfg.prog_size;
+    uint8_t *hi = &sim->data[cell * c];
+    uint8_t *lo = &sim->alt[cell * c];
+    const uint8_t st = sim->state[cell];
+    const bool two_sided = (st == CELL_UNSTABLE || st == CELL_WEAK);
+    for (uint32_t i = 0; i < c; i++) {
+        lo[i] = (uint8_t)((two_sided ? lo[i] : hi[i]) & src[i]);
+        hi[i] = (uint8_t)(hi[i] & src[i]);
+    }
+    if (sim->rules.ecc_dword) {
+        memcpy(hi, lo, c);
+        sim->state[cell] = CELL_ECC;
+    } else if (two_sided && memcmp(hi, lo, c) != 0) {
+        sim->state[cell] = CELL_WEAK;
+    } else {
+        memcpy(hi, lo, c);
+        sim->state[cell] = CELL_PROGRAMMED;
     }
 }
 
@@ -133,8 +207,11 @@ static km_flash_result_t prv_program(void *ctx, uint32_t offset, const void *dat
     sim->count.programs++;
     for (uint32_t i = 0; i < n; i++) {
         const uint32_t cell = first + i;
-        const uint8_t st = sim->state[cell];
-        if (st != CELL_ERASED && st != CELL_TORN_ONES) {
+        const bool clean = (sim->state[cell] == CELL_ERASED);
+        if (!clean) {
+            sim->count.violations++;
+        }
+        if (!prv_check_erased(sim, cell)) {
             sim->count.illegal++;
             if (cut) {
                 sim->dead = true;
@@ -142,14 +219,19 @@ static km_flash_result_t prv_program(void *ctx, uint32_t offset, const void *dat
             }
             return KM_FLASH_ERR_PROGRAM;
         }
-        if (cut && i + 1u == n) {
+        if (!clean) {
+            prv_program_over(sim, cell, &src[i * c]);
+        } else if (cut && i + 1u == n) {
             prv_tear_cell(sim, cell, &src[i * c], sim->cut_prog);
+        } else {
+            memcpy(&sim->data[cell * c], &src[i * c], c);
+            sim->state[cell] = CELL_PROGRAMMED;
+        }
+        if (cut && i + 1u == n) {
             sim->dead = true;
             sim->cut_was_erase = false;
             return KM_FLASH_ERR_PROGRAM;
         }
-        memcpy(&sim->data[cell * c], &src[i * c], c);
-        sim->state[cell] = CELL_PROGRAMMED;
     }
     return KM_FLASH_OK;
 }
@@ -176,6 +258,22 @@ static void prv_garbage_cell(km_nor_sim_t *sim, uint32_t cell)
     } else {
         sim->state[cell] = CELL_TORN_MIXED;
     }
+}
+
+/* A cell the erase left weak: the high side all ones, the low side what it
+ * held; a cell that was erased stays erased. */
+static void prv_weak_erase_cell(km_nor_sim_t *sim, uint32_t cell)
+{
+    const uint32_t c = sim->cfg.prog_size;
+    const uint8_t st = sim->state[cell];
+    if (st == CELL_ERASED) {
+        return;
+    }
+    if (st != CELL_UNSTABLE && st != CELL_WEAK) {
+        memcpy(&sim->alt[cell * c], &sim->data[cell * c], c);
+    }
+    memset(&sim->data[cell * c], 0xFF, c);
+    sim->state[cell] = CELL_WEAK;
 }
 
 static km_flash_result_t prv_erase(void *ctx, uint32_t page)
@@ -215,6 +313,9 @@ static km_flash_result_t prv_erase(void *ctx, uint32_t page)
         case KM_NOR_ERASE_GARBAGE:
             prv_garbage_cell(sim, cell);
             break;
+        case KM_NOR_ERASE_WEAK:
+            prv_weak_erase_cell(sim, cell);
+            break;
         case KM_NOR_ERASE_MIXED:
         default: {
             const uint32_t r = prv_rand(sim) % 3u;
@@ -247,24 +348,18 @@ static km_flash_result_t prv_read(void *ctx, uint32_t offset, void *data, uint32
     }
     sim->count.reads++;
     km_flash_result_t r = KM_FLASH_OK;
-    uint32_t coin_cell = 0xFFFFFFFFu;
-    bool take_target = false;
-    for (uint32_t i = 0; i < len; i++) {
-        const uint32_t at = offset + i;
-        const uint8_t st = sim->state[at / c];
-        if (st == CELL_UNSTABLE) {
-            /* One coin per cell per read, so a read shows the whole target
-             * or the whole mix. */
-            if (coin_cell != at / c) {
-                coin_cell = at / c;
-                take_target = ((prv_rand(sim) >> 7) & 1u) != 0u;
-            }
-            dst[i] = take_target ? sim->alt[at] : sim->data[at];
-        } else {
-            dst[i] = sim->data[at];
-            if (st == CELL_ECC) {
-                r = KM_FLASH_ERR_ECC;
-            }
+    /* One draw per cell per read, so a read shows one consistent value of
+     * each weak cell; the next read draws again. */
+    uint32_t at = offset;
+    while (at < offset + len) {
+        const uint32_t cell = at / c;
+        uint8_t now[8];
+        if (!prv_read_cell(sim, cell, now)) {
+            r = KM_FLASH_ERR_ECC;
+        }
+        const uint32_t end = (cell + 1u) * c;
+        for (; at < end && at < offset + len; at++) {
+            dst[at - offset] = now[at - cell * c];
         }
     }
     return r;
@@ -323,6 +418,16 @@ void km_nor_sim_seed(km_nor_sim_t *sim, uint32_t seed)
     sim->rng = (seed == 0u) ? 0x2545F491u : seed;
 }
 
+void km_nor_sim_set_rules(km_nor_sim_t *sim, const km_nor_sim_rules_t *rules)
+{
+    sim->rules = *rules;
+}
+
+void km_nor_sim_set_weak_reads(km_nor_sim_t *sim, km_nor_weak_reads_t how)
+{
+    sim->weak_reads = how;
+}
+
 bool km_nor_sim_cut_fired(const km_nor_sim_t *sim)
 {
     return sim->dead;
@@ -336,12 +441,12 @@ uint32_t km_nor_sim_ops(const km_nor_sim_t *sim)
 const char *km_nor_prog_outcome_name(km_nor_prog_outcome_t o)
 {
     static const char *const names[] = {"not-done", "done", "torn-ones",
-                                        "torn-mixed", "torn-unstable", "torn-ecc"};
+                                        "torn-mixed", "torn-unstable", "torn-ecc", "torn-weak"};
     return (o < KM_NOR_PROG_OUTCOMES) ? names[o] : "?";
 }
 
 const char *km_nor_erase_outcome_name(km_nor_erase_outcome_t o)
 {
-    static const char *const names[] = {"not-done", "done", "half", "garbage", "mixed"};
+    static const char *const names[] = {"not-done", "done", "half", "garbage", "mixed", "weak"};
     return (o < KM_NOR_ERASE_OUTCOMES) ? names[o] : "?";
 }

@@ -1,5 +1,8 @@
 /* NOR simulator tests: the controller rules it must enforce, and each power
- * cut outcome leaving what it claims, for every supported geometry. */
+ * cut outcome leaving what it claims, for every supported geometry; weak
+ * cells (a cut program or erase that reads differently at each read), the
+ * STM32G0 ECC double-word rule and the controller's content-reading erased
+ * check, each counted as a violation when a program lands on such a cell. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -266,6 +269,174 @@ static void test_cut_erase_outcomes(void **state)
     }
 }
 
+static const uint8_t k_ones[8] = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF};
+
+/* (a) A program cut weak: each read shows the erased side, the target or
+ * bits in between, chosen by the seeded PRNG; a read policy pins it. */
+static void test_weak_program_reads_vary(void **state)
+{
+    (void)state;
+    const uint8_t t[8] = {0x53, 0x01, 0x00, 0x00, 0x12, 0x34, 0x00, 0x80};
+    uint8_t seen[8];
+    assert_int_equal(prv_cut_program(KM_NOR_PROG_TORN_WEAK, t, seen), KM_FLASH_OK);
+    unsigned erased = 0, target = 0, between = 0;
+    for (unsigned r = 0; r < 256; r++) {
+        assert_int_equal(s_flash.read(s_flash.ctx, 8, seen, 8), KM_FLASH_OK);
+        for (unsigned i = 0; i < 8; i++) {
+            assert_int_equal(seen[i] & t[i], t[i]); /* only bits the target clears */
+        }
+        if (memcmp(seen, k_ones, 8) == 0) {
+            erased++;
+        } else if (memcmp(seen, t, 8) == 0) {
+            target++;
+        } else {
+            between++;
+        }
+    }
+    assert_true(erased > 0 && target > 0 && between > 0);
+    /* The same seed gives the same reads. */
+    km_nor_sim_t copy = s_sim;
+    uint8_t a[8], b[8];
+    assert_int_equal(s_flash.read(s_flash.ctx, 8, a, 8), KM_FLASH_OK);
+    s_sim = copy;
+    assert_int_equal(s_flash.read(s_flash.ctx, 8, b, 8), KM_FLASH_OK);
+    assert_memory_equal(a, b, 8);
+    km_nor_sim_set_weak_reads(&s_sim, KM_NOR_WEAK_HIGH);
+    assert_int_equal(s_flash.read(s_flash.ctx, 8, seen, 8), KM_FLASH_OK);
+    assert_memory_equal(seen, k_ones, 8);
+    km_nor_sim_set_weak_reads(&s_sim, KM_NOR_WEAK_LOW);
+    assert_int_equal(s_flash.read(s_flash.ctx, 8, seen, 8), KM_FLASH_OK);
+    assert_memory_equal(seen, t, 8);
+    /* Not erased: the ideal check refuses a new program, and it counts. */
+    assert_int_equal(s_flash.program(s_flash.ctx, 8, t, 8), KM_FLASH_ERR_PROGRAM);
+    assert_int_equal(s_sim.count.illegal, 1);
+    assert_int_equal(s_sim.count.violations, 1);
+    assert_int_equal(s_flash.erase(s_flash.ctx, 0), KM_FLASH_OK);
+    km_nor_sim_set_weak_reads(&s_sim, KM_NOR_WEAK_LOW);
+    assert_int_equal(s_flash.read(s_flash.ctx, 8, seen, 8), KM_FLASH_OK);
+    assert_memory_equal(seen, k_ones, 8);
+    assert_int_equal(s_flash.program(s_flash.ctx, 8, t, 8), KM_FLASH_OK);
+    assert_int_equal(s_sim.count.violations, 1);
+}
+
+/* Content check: a weak cell that reads erased passes the controller's
+ * check, the program lands on it (a violation) and the cell stays weak
+ * where the old one was: it may read the new value now and not later. */
+static void test_content_check_lets_a_weak_cell_through(void **state)
+{
+    (void)state;
+    const uint8_t t[8] = {0x44, 0x01, 0x00, 0x00, 0x12, 0x34, 0x56, 0x78};
+    const uint8_t n[8] = {0x44, 0x02, 0x00, 0x00, 0x0F, 0x00, 0x00, 0x00};
+    uint8_t seen[8];
+    assert_int_equal(prv_cut_program(KM_NOR_PROG_TORN_WEAK, t, seen), KM_FLASH_OK);
+    const km_nor_sim_rules_t rules = {.ecc_dword = false, .content_check = true};
+    km_nor_sim_set_rules(&s_sim, &rules);
+    km_nor_sim_set_weak_reads(&s_sim, KM_NOR_WEAK_LOW);
+    assert_int_equal(s_flash.program(s_flash.ctx, 8, n, 8), KM_FLASH_ERR_PROGRAM);
+    assert_int_equal(s_sim.count.illegal, 1);
+    km_nor_sim_set_weak_reads(&s_sim, KM_NOR_WEAK_HIGH);
+    assert_int_equal(s_flash.program(s_flash.ctx, 8, n, 8), KM_FLASH_OK);
+    assert_int_equal(s_sim.count.illegal, 1);
+    assert_int_equal(s_sim.count.violations, 2);
+    assert_int_equal(s_flash.read(s_flash.ctx, 8, seen, 8), KM_FLASH_OK);
+    assert_memory_equal(seen, n, 8);
+    km_nor_sim_set_weak_reads(&s_sim, KM_NOR_WEAK_LOW);
+    assert_int_equal(s_flash.read(s_flash.ctx, 8, seen, 8), KM_FLASH_OK);
+    for (unsigned i = 0; i < 8; i++) {
+        assert_int_equal(seen[i], n[i] & t[i]);
+    }
+    /* A clean program is no violation; a programmed cell fails the check. */
+    assert_int_equal(s_flash.program(s_flash.ctx, 16, n, 8), KM_FLASH_OK);
+    assert_int_equal(s_flash.program(s_flash.ctx, 16, n, 8), KM_FLASH_ERR_PROGRAM);
+    assert_int_equal(s_sim.count.illegal, 2);
+    assert_int_equal(s_sim.count.violations, 3);
+}
+
+/* (c) STM32G0: a double word whose program was started has part of its ECC
+ * written; even reading all 0xFF it must not be programmed again. */
+static void test_ecc_dword_started_program_is_final(void **state)
+{
+    (void)state;
+    const uint8_t t[8] = {0x53, 0x01, 0x00, 0x00, 0x12, 0x34, 0x00, 0x80};
+    uint8_t seen[8];
+    /* Without the rule (F0, nRF51): the cell that no bit moved in takes the
+     * program, but it is still a violation of "never program a touched cell". */
+    assert_int_equal(prv_cut_program(KM_NOR_PROG_TORN_ONES, t, seen), KM_FLASH_OK);
+    assert_int_equal(s_flash.program(s_flash.ctx, 8, t, 8), KM_FLASH_OK);
+    assert_int_equal(s_sim.count.illegal, 0);
+    assert_int_equal(s_sim.count.violations, 1);
+    /* With it, the ideal check refuses... */
+    const km_nor_sim_rules_t ecc = {.ecc_dword = true, .content_check = false};
+    assert_int_equal(prv_cut_program(KM_NOR_PROG_TORN_ONES, t, seen), KM_FLASH_OK);
+    km_nor_sim_set_rules(&s_sim, &ecc);
+    assert_memory_equal(seen, k_ones, 8);
+    assert_int_equal(s_flash.program(s_flash.ctx, 8, t, 8), KM_FLASH_ERR_PROGRAM);
+    assert_int_equal(s_sim.count.illegal, 1);
+    assert_int_equal(s_sim.count.violations, 1);
+    /* ...and a check that reads content lets it through, after which the
+     * double word reads with an ECC error. */
+    const km_nor_sim_rules_t g0 = {.ecc_dword = true, .content_check = true};
+    assert_int_equal(prv_cut_program(KM_NOR_PROG_TORN_ONES, t, seen), KM_FLASH_OK);
+    km_nor_sim_set_rules(&s_sim, &g0);
+    assert_int_equal(s_flash.program(s_flash.ctx, 8, t, 8), KM_FLASH_OK);
+    assert_int_equal(s_sim.count.illegal, 0);
+    assert_int_equal(s_sim.count.violations, 1);
+    assert_int_equal(s_flash.read(s_flash.ctx, 8, seen, 8), KM_FLASH_ERR_ECC);
+    /* Same for a weak cell read as erased. */
+    assert_int_equal(prv_cut_program(KM_NOR_PROG_TORN_WEAK, t, seen), KM_FLASH_OK);
+    km_nor_sim_set_rules(&s_sim, &g0);
+    km_nor_sim_set_weak_reads(&s_sim, KM_NOR_WEAK_HIGH);
+    assert_int_equal(s_flash.program(s_flash.ctx, 8, t, 8), KM_FLASH_OK);
+    assert_int_equal(s_sim.count.violations, 1);
+    assert_int_equal(s_flash.read(s_flash.ctx, 8, seen, 8), KM_FLASH_ERR_ECC);
+    /* An erase makes it programmable again. */
+    assert_int_equal(s_flash.erase(s_flash.ctx, 0), KM_FLASH_OK);
+    assert_int_equal(s_flash.program(s_flash.ctx, 8, t, 8), KM_FLASH_OK);
+    assert_int_equal(s_flash.read(s_flash.ctx, 8, seen, 8), KM_FLASH_OK);
+    assert_memory_equal(seen, t, 8);
+    assert_int_equal(s_sim.count.violations, 1);
+}
+
+/* (b) An erase cut weak: every written cell reads its old content, erased,
+ * or between, differently from one read to the next; a whole page can read
+ * erased once and not the next time. Programming such a cell is a violation. */
+static void test_weak_erase_reads_vary(void **state)
+{
+    (void)state;
+    unsigned erased, old, other, ecc;
+    prv_cut_erase(KM_NOR_ERASE_WEAK, &erased, &old, &other, &ecc);
+    assert_true(erased > 0 && old > 0 && other > 0);
+    assert_int_equal(ecc, 0);
+    assert_int_equal(erased + old + other, 512);
+    uint8_t page[1024];
+    km_nor_sim_set_weak_reads(&s_sim, KM_NOR_WEAK_HIGH);
+    assert_int_equal(s_flash.read(s_flash.ctx, 0, page, sizeof page), KM_FLASH_OK);
+    for (unsigned i = 0; i < sizeof page; i++) {
+        assert_int_equal(page[i], 0xFF);
+    }
+    km_nor_sim_set_weak_reads(&s_sim, KM_NOR_WEAK_LOW);
+    assert_int_equal(s_flash.read(s_flash.ctx, 0, page, sizeof page), KM_FLASH_OK);
+    assert_int_equal(page[0], 0x0F);
+    assert_int_equal(page[1023], 0x30);
+    const uint8_t z[2] = {0x00, 0x00};
+    assert_int_equal(s_flash.program(s_flash.ctx, 0, z, 2), KM_FLASH_ERR_PROGRAM);
+    const km_nor_sim_rules_t content = {.ecc_dword = false, .content_check = true};
+    km_nor_sim_set_rules(&s_sim, &content);
+    km_nor_sim_set_weak_reads(&s_sim, KM_NOR_WEAK_HIGH);
+    assert_int_equal(s_flash.program(s_flash.ctx, 2, z, 2), KM_FLASH_OK);
+    assert_int_equal(s_sim.count.violations, 2);
+    /* Page 1 was never written: a weak erase of page 0 leaves it alone, and
+     * a complete erase heals page 0. */
+    assert_int_equal(s_flash.erase(s_flash.ctx, 0), KM_FLASH_OK);
+    km_nor_sim_set_weak_reads(&s_sim, KM_NOR_WEAK_LOW);
+    assert_int_equal(s_flash.read(s_flash.ctx, 0, page, sizeof page), KM_FLASH_OK);
+    for (unsigned i = 0; i < sizeof page; i++) {
+        assert_int_equal(page[i], 0xFF);
+    }
+    assert_int_equal(s_flash.program(s_flash.ctx, 0, z, 2), KM_FLASH_OK);
+    assert_int_equal(s_sim.count.violations, 2);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -277,6 +448,10 @@ int main(void)
         cmocka_unit_test(test_cut_program_outcomes),
         cmocka_unit_test(test_cut_counts_ops_across_program_and_erase),
         cmocka_unit_test(test_cut_erase_outcomes),
+        cmocka_unit_test(test_weak_program_reads_vary),
+        cmocka_unit_test(test_content_check_lets_a_weak_cell_through),
+        cmocka_unit_test(test_ecc_dword_started_program_is_final),
+        cmocka_unit_test(test_weak_erase_reads_vary),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
