@@ -1,3 +1,2 @@
-# host-sim: native build, no CPU flags. TCP delivers bytes when the host
-# schedules the program (see KM_APP_GAP_MIN_US in firmware/app/km_app.c).
-add_compile_definitions(KM_APP_GAP_MIN_US=20000u)
+# host-sim: native build, no CPU flags. The UART's gap floor is a run-time
+# option (--gap-floor-us, hs_main.c), not a build setting.

@@ -1,9 +1,20 @@
 /* host-sim: the firmware as a native Linux program (software in the loop).
  *   km-servo-host-sim --listen 127.0.0.1:7001 --flash servo1.flash
- *   km-servo-host-sim --pty --flash servo1.flash
- * The bus is a TCP socket (one client at a time) or a pseudo-terminal; the
- * user-data flash is a file with NOR rules; sensors read the simulated plant. */
+ *   km-servo-host-sim --pty --flash servo1.flash [--gap-floor-us 0]
+ * The bus is a TCP socket (one client at a time) or a pseudo-terminal, paced
+ * at the servo's baud rate (hs_uart.c); the user-data flash is a file with
+ * NOR rules; sensors read the simulated plant.
+ *
+ * --gap-floor-us N: the least silence inside a frame that drops it, in µs
+ * (km_hal_uart_gap_floor_us(); the app uses the larger of this and the
+ * parser's rule of max(10 byte times, 1 ms)). Default 20000: bytes are
+ * handed over only when the host runs this process, and a stall longer than
+ * the real gap would drop a frame that was whole on the wire. 0 gives the
+ * real rule, for tests on a quiet host. A restart re-executes with the same
+ * arguments, so the option survives it. */
+#include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "hs_flash.h"
@@ -15,8 +26,26 @@ void hs_board_set_flash(const km_flash_t *flash);
 
 static int prv_usage(const char *argv0)
 {
-    fprintf(stderr, "usage: %s (--listen HOST:PORT | --pty) --flash FILE [--baud N]\n", argv0);
+    fprintf(stderr,
+            "usage: %s (--listen HOST:PORT | --pty) --flash FILE [--baud N] [--gap-floor-us N]\n"
+            "  --gap-floor-us N  least silence inside a frame that drops it, in us, when it\n"
+            "                    exceeds the parser's max(10 byte times, 1 ms); default %u\n"
+            "                    (host scheduling stalls); 0 = the real rule\n"
+            "  --baud N          accepted, ignored: the line rate is the servo's register 0x10\n",
+            argv0, HS_GAP_FLOOR_DEFAULT_US);
     return 2;
+}
+
+static int prv_parse_u32(const char *text, uint32_t *out)
+{
+    char *end = NULL;
+    errno = 0;
+    const unsigned long v = strtoul(text, &end, 10);
+    if (errno != 0 || end == text || *end != '\0' || text[0] == '-' || v > UINT32_MAX) {
+        return 0;
+    }
+    *out = (uint32_t)v;
+    return 1;
 }
 
 int main(int argc, char **argv)
@@ -30,7 +59,13 @@ int main(int argc, char **argv)
         } else if (strcmp(argv[i], "--flash") == 0 && i + 1 < argc) {
             flash_path = argv[++i];
         } else if (strcmp(argv[i], "--baud") == 0 && i + 1 < argc) {
-            i++; /* bytes over TCP have no line rate; the stored 0x10 is what the servo reports */
+            i++; /* the line rate comes from the stored 0x10, as on a real servo */
+        } else if (strcmp(argv[i], "--gap-floor-us") == 0 && i + 1 < argc) {
+            uint32_t us;
+            if (!prv_parse_u32(argv[++i], &us)) {
+                return prv_usage(argv[0]);
+            }
+            hs_uart_set_gap_floor_us(us);
         } else if (strcmp(argv[i], "--pty") == 0) {
             use_pty = 1;
         } else {

@@ -1,5 +1,17 @@
-/* host-sim: time from CLOCK_MONOTONIC at 1 MHz, and the one-shot timer that
- * km_hal_idle() services. */
+/* host-sim: the emulated clock at 1 MHz, the one-shot timer, and the
+ * servicing of every simulated interrupt that km_hal_idle() does.
+ *
+ * The clock is CLOCK_MONOTONIC, except that it never runs past an event
+ * that is due but not yet serviced: the answer timer, or a received byte's
+ * wire time (hs_uart.c). A microcontroller's interrupts run the moment they
+ * are due; this single-threaded program services them only when the host
+ * runs it, so after a stall several are overdue at once. Holding the clock
+ * at the earliest one and servicing them in time order (a few bytes per
+ * idle, so the app parses between) makes the app see what a real MCU
+ * would: no silence inside a frame that was whole on the wire (the parser
+ * compares the clock with the last byte's stamp), and each answer timer
+ * fired before the next frame ends. Without a stall the hold is never in
+ * effect and the clock is the host's. */
 #define _POSIX_C_SOURCE 200809L
 #include <stdbool.h>
 #include <stddef.h>
@@ -10,8 +22,10 @@
 
 static km_timer_handler_t s_handler;
 static void *s_ctx;
-static uint32_t s_at;
+static uint64_t s_at_ns; /* the armed timer's due time */
 static bool s_armed;
+static uint64_t s_last_ns; /* keeps the clock monotonic across holds */
+static uint64_t s_firing_due_ns; /* inside the handler: the timer's due time */
 
 uint32_t km_hal_time_tick_hz(void)
 {
@@ -23,19 +37,45 @@ void km_hal_time_init(void)
     s_armed = false;
 }
 
-uint32_t km_hal_time_now(void)
+uint64_t hs_time_real_ns(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
-    const uint64_t us = (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
-    return (uint32_t)us; /* wraps like a 32-bit hardware counter */
+    return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+}
+
+uint64_t hs_time_now_ns(void)
+{
+    uint64_t t = hs_time_real_ns();
+    if (s_armed && s_at_ns < t) {
+        t = s_at_ns;
+    }
+    const uint64_t uart = hs_uart_hold_ns();
+    if (uart < t) {
+        t = uart;
+    }
+    if (t < s_last_ns) {
+        t = s_last_ns; /* an event armed in the past: it runs now, late */
+    }
+    s_last_ns = t;
+    return t;
+}
+
+uint32_t km_hal_time_now(void)
+{
+    return (uint32_t)(hs_time_now_ns() / 1000u); /* wraps like a 32-bit hardware counter */
 }
 
 void km_hal_timer_at(uint32_t at, km_timer_handler_t handler, void *ctx)
 {
+    const uint64_t now_ns = hs_time_now_ns();
+    const uint32_t now = (uint32_t)(now_ns / 1000u);
+    /* Unsigned tick difference as the contract has it; a due time in the
+     * past fires at once (and is kept: see hs_timer_firing_due_ns()). */
+    const int32_t ahead = (int32_t)(at - now);
+    s_at_ns = (now_ns / 1000u) * 1000u + (uint64_t)((int64_t)ahead * 1000);
     s_handler = handler;
     s_ctx = ctx;
-    s_at = at;
     s_armed = true;
 }
 
@@ -46,17 +86,52 @@ void km_hal_timer_cancel(void)
 
 int64_t hs_timer_due_in_us(void)
 {
-    if (!s_armed) {
-        return -1;
+    /* Wake-ups are in host time: the sleep must end when the host's clock
+     * reaches the event. */
+    const uint64_t real = hs_time_real_ns();
+    int64_t due = -1;
+    if (s_armed) {
+        due = s_at_ns > real ? (int64_t)((s_at_ns - real + 999u) / 1000u) : 0;
     }
-    const int32_t left = (int32_t)(s_at - km_hal_time_now());
-    return left > 0 ? left : 0;
+    /* A byte or TX done is an interrupt too: sleeping past it would deliver
+     * it late. */
+    const int64_t uart = hs_uart_due_in_us(real);
+    if (uart >= 0 && (due < 0 || uart < due)) {
+        due = uart;
+    }
+    return due;
+}
+
+static void prv_timer_fire_due(uint64_t now_ns)
+{
+    if (s_armed && s_at_ns <= now_ns) {
+        s_armed = false;
+        s_firing_due_ns = s_at_ns;
+        s_handler(s_ctx);
+        s_firing_due_ns = 0;
+    }
+}
+
+uint64_t hs_timer_firing_due_ns(void)
+{
+    return s_firing_due_ns;
+}
+
+void hs_timer_fire_due_now(void)
+{
+    prv_timer_fire_due(hs_time_real_ns());
 }
 
 void hs_timer_service(void)
 {
-    if (s_armed && (int32_t)(km_hal_time_now() - s_at) >= 0) {
-        s_armed = false;
-        s_handler(s_ctx);
+    hs_uart_rx_idle_begin(); /* before the timer may put an answer on the wire */
+    /* In time order: the timer before any byte due after it. At most
+     * HS_RX_BATCH bytes, so the app parses (and arms the answer to) one
+     * frame before the next frame's end reaches it. */
+    for (unsigned n = 0;; n++) {
+        prv_timer_fire_due(hs_time_now_ns());
+        if (n == HS_RX_BATCH || !hs_uart_rx_deliver_one()) {
+            break;
+        }
     }
 }

@@ -1,7 +1,34 @@
 /* host-sim: the servo bus over TCP (one client at a time; a new client may
- * connect after the old one leaves) or over a pseudo-terminal. Bytes the
- * client sends arrive as RX "interrupts"; answers are written back whole.
- * Like a real half-duplex transceiver, the servo does not hear its own TX. */
+ * connect after the old one leaves) or over a pseudo-terminal, behaving like
+ * a UART at the servo's baud rate (10 bits per byte, 8N1):
+ *
+ * RX: a socket delivers a burst of bytes at once, far faster than a wire and
+ * far more than the application's 128-byte RX queue holds between two main
+ * loop passes. So bytes read from the socket wait in a host-side buffer,
+ * each with the time it would have left the wire (the first at the time it
+ * was read, every next one a byte time later), and are handed to the RX
+ * handler, stamped with that time, when the time has come, from
+ * km_hal_idle() (the only place a single-threaded program can take its
+ * "interrupts"; it sleeps no longer than the next byte is due), at most
+ * HS_RX_BATCH per idle and in time order with the answer timer; the
+ * emulated clock waits for an overdue byte (hs_time.c). When the host
+ * buffer is full the socket is not read, and TCP flow control holds the
+ * sender, so nothing is dropped.
+ *
+ * The app's RX queue: km_app calls km_hal_idle() with the queue empty,
+ * except while RX is blocked behind an answer still on the wire (or a
+ * restart, which discards what follows anyway). So an idle entered with TX
+ * idle starts a fresh budget of KM_RX_QUEUE_SIZE bytes, and no more are
+ * handed over until the next such idle: a host stall that makes hundreds
+ * of bytes due at once cannot overrun the queue. While an answer is on the
+ * wire the budget is what is left; the wire carries at most a byte per
+ * byte time meanwhile, as a real servo would receive.
+ *
+ * TX: an answer is written to the socket whole, when the app starts it, but
+ * km_hal_uart_tx_busy() stays true until its last stop bit would have left
+ * the wire (counted from when the answer was due), so the app paces answers
+ * as a half-duplex servo must. Like a real half-duplex transceiver, the
+ * servo does not hear its own TX. */
 #define _GNU_SOURCE /* posix_openpt, ptsname */
 #include <errno.h>
 #include <fcntl.h>
@@ -17,12 +44,47 @@
 #include "hs_io.h"
 #include "km_hal_time.h"
 #include "km_hal_uart.h"
+#include "km_rx_queue.h" /* KM_RX_QUEUE_SIZE: what the app can take between idles */
+
+/* Host-side RX buffer: a power of two, one frame-sized burst many times over
+ * (a master's whole script may arrive in one TCP segment). */
+#define HS_RX_BUF 4096u
+#define HS_BITS_PER_BYTE 10u /* start + 8 data + stop */
 
 static int s_listen_fd = -1;
 static int s_conn_fd = -1;
 static int s_pty_fd = -1;
 static km_uart_rx_handler_t s_rx;
 static void *s_rx_ctx;
+
+static uint8_t s_rx_byte[HS_RX_BUF];
+static uint64_t s_rx_due_ns[HS_RX_BUF]; /* when each byte's stop bit ends */
+static uint32_t s_rx_head;              /* free-running; head - tail bytes waiting */
+static uint32_t s_rx_tail;
+static uint64_t s_wire_free_ns;         /* the wire is free after the last buffered byte */
+static uint32_t s_rx_budget = KM_RX_QUEUE_SIZE; /* bytes the app's queue surely takes */
+static uint64_t s_byte_ns = (HS_BITS_PER_BYTE * 1000000000ull) / 115200u;
+static uint64_t s_tx_end_ns;            /* the last answer's last stop bit */
+static bool s_tx_busy;                  /* what tx_busy() last told the app */
+static uint32_t s_gap_floor_us = HS_GAP_FLOOR_DEFAULT_US;
+
+void hs_uart_set_gap_floor_us(uint32_t us)
+{
+    s_gap_floor_us = us;
+}
+
+/* The run-time option (--gap-floor-us, default 20 ms). This UART paces bytes
+ * at line rate, stamps each with its wire time and holds the emulated clock
+ * at a byte that is due but not yet handed over (hs_time.c), so a frame that
+ * reached the socket whole is never cut by the gap rule, however late the
+ * host runs this process. What it cannot undo is a pause before the bytes
+ * reach it: a frame split over two TCP segments (or pty reads) with a host
+ * stall between them arrives with that stall inside. A floor well above
+ * scheduler stalls covers that; bus tests use 0, the real rule. */
+uint32_t km_hal_uart_gap_floor_us(void)
+{
+    return s_gap_floor_us;
+}
 
 /* A restart re-executes the program (hs_system.c); the bus must stay
  * connected across it, as a wire stays attached to a rebooting servo, so the
@@ -95,12 +157,18 @@ bool hs_uart_open_pty(void)
     return true;
 }
 
+static uint32_t prv_rx_waiting(void)
+{
+    return s_rx_head - s_rx_tail;
+}
+
 int hs_uart_poll_fd(void)
 {
-    if (s_pty_fd >= 0) {
-        return s_pty_fd;
+    const int bus = s_pty_fd >= 0 ? s_pty_fd : s_conn_fd;
+    if (bus < 0) {
+        return s_listen_fd;
     }
-    return s_conn_fd >= 0 ? s_conn_fd : s_listen_fd;
+    return prv_rx_waiting() < HS_RX_BUF ? bus : -1; /* full: leave it in the socket */
 }
 
 void hs_uart_on_readable(void)
@@ -113,9 +181,13 @@ void hs_uart_on_readable(void)
         }
         return;
     }
-    const int fd = hs_uart_poll_fd();
-    uint8_t buf[256];
-    const ssize_t n = read(fd, buf, sizeof buf);
+    const int fd = s_pty_fd >= 0 ? s_pty_fd : s_conn_fd;
+    const uint32_t room = HS_RX_BUF - prv_rx_waiting();
+    if (room == 0u) {
+        return;
+    }
+    uint8_t buf[HS_RX_BUF];
+    const ssize_t n = read(fd, buf, room);
     if (n <= 0) {
         if (s_conn_fd >= 0) { /* client left: wait for the next one */
             close(s_conn_fd);
@@ -123,17 +195,104 @@ void hs_uart_on_readable(void)
         }
         return;
     }
-    const uint32_t now = km_hal_time_now();
+    /* The first byte reaches the end of the wire now, unless earlier bytes
+     * still occupy it; each next one a byte time later. */
+    const uint64_t now = hs_time_real_ns();
+    uint64_t due = s_wire_free_ns > now ? s_wire_free_ns : now;
     for (ssize_t i = 0; i < n; i++) {
-        if (s_rx) {
-            s_rx(s_rx_ctx, buf[i], now, false);
+        const uint32_t slot = s_rx_head & (HS_RX_BUF - 1u);
+        s_rx_byte[slot] = buf[i];
+        s_rx_due_ns[slot] = due;
+        s_rx_head++;
+        due += s_byte_ns;
+    }
+    s_wire_free_ns = due;
+}
+
+/* The TX-done "interrupt". The busy flag changes only here, so the app and
+ * hs_uart_rx_idle_begin() see the same TX state: an idle entered after the
+ * app saw TX busy (RX blocked behind the answer) must not count the queue
+ * as drained just because the answer finished in between. */
+static void prv_tx_done_if_due(void)
+{
+    /* By the host's clock: the emulated one may be held at a byte nobody
+     * delivers while the app spins on tx_busy(). */
+    if (s_tx_busy && hs_time_real_ns() >= s_tx_end_ns) {
+        s_tx_busy = false;
+    }
+}
+
+void hs_uart_rx_idle_begin(void)
+{
+    if (!s_tx_busy) {
+        s_rx_budget = KM_RX_QUEUE_SIZE; /* the app drained its queue: see the top */
+    }
+    prv_tx_done_if_due();
+}
+
+static bool prv_rx_deliverable(void)
+{
+    return s_rx != NULL && s_rx_budget > 0u && prv_rx_waiting() > 0u;
+}
+
+bool hs_uart_rx_deliver_one(void)
+{
+    if (!prv_rx_deliverable()) {
+        return false;
+    }
+    const uint32_t slot = s_rx_tail & (HS_RX_BUF - 1u);
+    if (s_rx_due_ns[slot] > hs_time_now_ns()) {
+        return false;
+    }
+    s_rx_tail++;
+    s_rx_budget--;
+    /* Stamped with its wire time, not now: a late hand-over (host
+     * scheduling) must not look like a gap inside the frame. */
+    s_rx(s_rx_ctx, s_rx_byte[slot], (uint32_t)(s_rx_due_ns[slot] / 1000u), false);
+    return true;
+}
+
+uint64_t hs_uart_hold_ns(void)
+{
+    /* A byte the budget cannot take yet holds nothing: the clock must run
+     * on to the TX end that frees the app's queue. */
+    if (!prv_rx_deliverable()) {
+        return UINT64_MAX;
+    }
+    return s_rx_due_ns[s_rx_tail & (HS_RX_BUF - 1u)];
+}
+
+static int64_t prv_us_until(uint64_t at_ns, uint64_t now_ns)
+{
+    return at_ns > now_ns ? (int64_t)((at_ns - now_ns + 999u) / 1000u) : 0;
+}
+
+int64_t hs_uart_due_in_us(uint64_t real_ns)
+{
+    int64_t due = -1;
+    if (s_tx_busy) {
+        /* TX done is an interrupt too: the app may wait for it to hand over
+         * its next answer. */
+        due = prv_us_until(s_tx_end_ns, real_ns);
+    }
+    /* With the budget spent, the next byte waits for an idle after TX. */
+    if (prv_rx_waiting() > 0u && (s_rx_budget > 0u || !s_tx_busy)) {
+        const int64_t rx = prv_us_until(s_rx_due_ns[s_rx_tail & (HS_RX_BUF - 1u)], real_ns);
+        if (due < 0 || rx < due) {
+            due = rx;
         }
     }
+    return due;
 }
 
 bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx)
 {
-    (void)baud; /* bytes over TCP have no line rate */
+    if (baud == 0u) {
+        return false;
+    }
+    /* The line rate is the servo's own baud register (0x10), as on a real
+     * servo; rounding a byte time to the nanosecond is 2 µs over 4 KiB. */
+    s_byte_ns = (HS_BITS_PER_BYTE * 1000000000ull + baud / 2u) / baud;
     s_rx = handler;
     s_rx_ctx = ctx;
     return true;
@@ -141,10 +300,35 @@ bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx)
 
 bool km_hal_uart_send(const uint8_t *data, uint16_t len)
 {
+    if (len == 0u) {
+        return true;
+    }
+    prv_tx_done_if_due();
+    if (s_tx_busy) {
+        return false; /* the contract: one send at a time */
+    }
+    /* The wire is busy from the answer's start to its last stop bit,
+     * whether or not anyone listens. Started by the answer timer, the start
+     * is the timer's due time, not when the host got round to it, nor when
+     * the app, which arms an answer only with TX idle, woke to see the last
+     * one end: counting from those late wakes would push every answer of a
+     * stream later, until the frames overtake their answers. Never before
+     * the previous answer's end: one wire. */
+    uint64_t start = hs_timer_firing_due_ns();
+    if (start == 0u) {
+        start = hs_time_now_ns();
+    }
+    if (start < s_tx_end_ns) {
+        start = s_tx_end_ns;
+    }
+    s_tx_end_ns = start + (uint64_t)len * s_byte_ns;
+    s_tx_busy = true;
     const int fd = s_pty_fd >= 0 ? s_pty_fd : s_conn_fd;
     if (fd < 0) {
         return true; /* nobody listening: the bytes go nowhere, as on an open wire */
     }
+    /* Written whole at once, so the client sees the answer start on time and
+     * complete; the line rate is modelled by tx_busy, not by trickling. */
     size_t off = 0;
     while (off < len) {
         const ssize_t n = write(fd, data + off, len - off);
@@ -161,5 +345,9 @@ bool km_hal_uart_send(const uint8_t *data, uint16_t len)
 
 bool km_hal_uart_tx_busy(void)
 {
-    return false; /* send() writes the whole buffer before returning */
+    /* An app may spin on this; a real MCU's answer timer still fires
+     * meanwhile (and the TX-done flag falls), so they happen here too. */
+    hs_timer_fire_due_now();
+    prv_tx_done_if_due();
+    return s_tx_busy;
 }
