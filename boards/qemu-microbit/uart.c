@@ -21,6 +21,24 @@
 #define PRV_BAUD_MIN 1200u
 #define PRV_BAUD_MAX 1000000u
 
+/* Run-time options (README.md, "Run-time options"). The guest has no command
+ * line, so tools/servo-bus writes these words before the CPU starts with
+ *   -device loader,addr=0x20000000,data=0x4B4D4746,data-len=4
+ *   -device loader,addr=0x20000004,data=<floor us>,data-len=4
+ * QEMU re-applies loader data at every system reset, so the values hold
+ * across a 0x02 restart too. On a real part, or with no loader, the magic
+ * does not match (RAM is zero in QEMU, garbage on silicon) and the default
+ * holds. Volatile: written behind the compiler's back. */
+#define PRV_CONFIG_MAGIC 0x4B4D4746u /* "KMGF" */
+#define PRV_GAP_FLOOR_DEFAULT_US 20000u
+
+typedef struct {
+    uint32_t magic;
+    uint32_t gap_floor_us;
+} prv_config_t;
+
+__attribute__((section(".km_config"), used)) static volatile prv_config_t s_config;
+
 static km_uart_rx_handler_t s_rx_handler;
 static void *s_rx_ctx;
 static const uint8_t *volatile s_tx_data;
@@ -102,6 +120,18 @@ bool km_hal_uart_send(const uint8_t *data, uint16_t len)
 bool km_hal_uart_tx_busy(void)
 {
     return s_tx_busy;
+}
+
+/* QEMU hands UART bytes to the guest when the host schedules the emulator,
+ * which can pause for milliseconds between two bytes of one frame; 20 ms
+ * by default, so a frame is not cut by a host stall. 0 (set by the loader
+ * word) gives the parser's real rule. */
+uint32_t km_hal_uart_gap_floor_us(void)
+{
+    if (s_config.magic != PRV_CONFIG_MAGIC) {
+        return PRV_GAP_FLOOR_DEFAULT_US;
+    }
+    return s_config.gap_floor_us;
 }
 
 /* TXDRDY means the byte has left the shift register, so after the last one
