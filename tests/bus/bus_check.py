@@ -4,9 +4,19 @@
   bus_check.py smoke --backend qemu      one servo: PROTOCOL.md §3 basics
   bus_check.py bus   --backend qemu      three servos: super ID, broadcast,
                                          other servos' responses on the wire
+  [--gap-floor-us N]  passed to tools/servo-bus (tests/bus.cmake: 0 for host-sim)
+  [--build-dir DIR]   the backend's build tree (default: servo-bus's, which
+                      also reads KM_BUILD_QEMU / KM_BUILD_HOST_SIM)
 
 Starts tools/servo-bus (which runs the built images), waits for its `ready`
 line, then acts as the bus master. Exits non-zero on the first mismatch.
+
+host-sim only (its UART runs at the servo's baud and stamps each byte with
+its wire time, so both are faithful there): a burst far over the servo's
+128-byte RX queue in one TCP write, every frame answered; and a frame whose
+bytes stop for longer than the gap, dropped, the next frame answered. QEMU's
+UART moves bytes at host speed, so a burst overtakes the answers and a
+pause inside a frame is not guaranteed to reach the guest as a pause.
 
 Why the QEMU bus runs at 9600 baud: QEMU's UART sends instantly whenever the
 host schedules that QEMU process, so three emulators on two cores jitter by
@@ -27,12 +37,18 @@ sys.path.insert(0, os.path.join(ROOT, "tools"))
 import kmbus  # noqa: E402
 
 
+GAP_FLOOR_DEFAULT_US = 20000  # the emulated boards' own default
+
+
 class Bus:
-    def __init__(self, backend, ids):
-        self.proc = subprocess.Popen(
-            [sys.executable, os.path.join(ROOT, "tools", "servo-bus"), "--ids",
-             ",".join(map(str, ids)), "--port", "0", "--backend", backend, "--timeout", "30"],
-            stdout=subprocess.PIPE, text=True)
+    def __init__(self, backend, ids, opts):
+        argv = [sys.executable, os.path.join(ROOT, "tools", "servo-bus"), "--ids",
+                ",".join(map(str, ids)), "--port", "0", "--backend", backend, "--timeout", "30"]
+        if opts.gap_floor_us is not None:
+            argv += ["--gap-floor-us", str(opts.gap_floor_us)]
+        if opts.build_dir:
+            argv += ["--build-dir", opts.build_dir]
+        self.proc = subprocess.Popen(argv, stdout=subprocess.PIPE, text=True)
         line = self.proc.stdout.readline().strip()
         if not line.startswith("ready "):
             self.proc.wait(5)
@@ -46,10 +62,13 @@ class Bus:
         self.proc.terminate()
         self.proc.wait(10)
 
-    def exchange(self, frame, expect, timeout=2.0):
+    def exchange(self, frame, expect, timeout=2.0, quiet=False):
         """Sends frame, collects up to `expect` response frames (all that come
         within timeout when expect is 0: then returns as soon as it is quiet)."""
         self.sock.sendall(frame)
+        return self.collect(frame, expect, timeout, quiet)
+
+    def collect(self, frame, expect, timeout=2.0, quiet=False):
         got = []
         deadline = time.monotonic() + timeout
         self.sock.settimeout(0.05)
@@ -61,8 +80,18 @@ class Bus:
             if not data:
                 raise SystemExit("bus closed")
             got += self.parser.feed(data)
-        print("  > %s\n  < %s" % (frame.hex(" "), " | ".join(f.to_bytes().hex(" ") for f in got)))
+        if quiet:
+            print("  > %d bytes\n  < %d frames" % (len(frame), len(got)))
+        else:
+            print("  > %s\n  < %s" % (frame.hex(" "), " | ".join(f.to_bytes().hex(" ") for f in got)))
         return got
+
+    def split_frame(self, frame, at, pause, expect, timeout=0.5):
+        """Sends frame[:at], pauses `pause` seconds, sends the rest."""
+        self.sock.sendall(frame[:at])
+        time.sleep(pause)
+        self.sock.sendall(frame[at:])
+        return self.collect(frame, expect, timeout)
 
 
 def check(cond, what):
@@ -79,8 +108,32 @@ def wait_ping(bus, dev_id, seconds=10):
     return False
 
 
-def smoke(backend):
-    bus = Bus(backend, [1])
+def check_burst(bus, dev_id, count):
+    """`count` pings to one servo, back to back in one TCP write: far more than
+    the servo's 128-byte RX queue. A ping's answer is as long as the ping,
+    so a servo at line rate answers each before the next one ends."""
+    burst = kmbus.ping(dev_id) * count
+    r = bus.exchange(burst, count, timeout=5.0 + count * 0.002, quiet=True)
+    check(len(r) == count and all(f.id == dev_id and f.is_status for f in r),
+          "host-sim line rate: a %d-byte burst of %d pings in one write, all %d answered (got %d)"
+          % (len(burst), count, count, len(r)))
+
+
+def check_gap(bus, dev_id, opts):
+    """A ping whose bytes stop for longer than the gap in force, then go on:
+    dropped (§7); the next whole ping is answered."""
+    floor = GAP_FLOOR_DEFAULT_US if opts.gap_floor_us is None else opts.gap_floor_us
+    gap_us = max(floor, 1000)  # parser: max(10 byte times, 1 ms) = 1 ms at 115200
+    pause = (gap_us + 7000) / 1e6
+    r = bus.split_frame(kmbus.ping(dev_id), 3, pause, 0)
+    check(r == [], "§7 a ping paused %.0f ms after 3 bytes (gap %.0f ms): dropped"
+          % (pause * 1000, gap_us / 1000))
+    r = bus.exchange(kmbus.ping(dev_id), 1)
+    check(len(r) == 1 and r[0].id == dev_id, "§7 the next whole ping is answered")
+
+
+def smoke(backend, opts):
+    bus = Bus(backend, [1], opts)
     try:
         r = bus.exchange(kmbus.ping(1), 1)
         check(len(r) == 1 and r[0].to_bytes() == kmbus.encode_status(1, 0), "§3 ping answered F9 F5 01 02 00 FC")
@@ -100,15 +153,20 @@ def smoke(backend):
         check(wait_ping(bus, 1), "answers again after the restart")
         r = bus.exchange(kmbus.read(1, 0x12), 1)
         check(len(r) == 1 and r[0].params == (350).to_bytes(2, "little"), "§5 user data 0x12 survived the restart")
-        r = bus.exchange(kmbus.read(1, 0x0D), 1)
-        check(len(r) == 1 and r[0].params == b"\x00", "0x0D (extension): user data loaded from flash at boot")
+        r = bus.exchange(kmbus.encode_command(1, 0x7F, 0x01), 1)
+        check(len(r) == 1 and r[0].cmd == 0x7F and r[0].params == b"\x00",
+              "extension read 0x7F 0x01: user data loaded from flash at boot")
+        if backend == "host-sim":
+            check_burst(bus, 1, 40)
+            check_burst(bus, 1, 4096 // len(kmbus.ping(1)))
+            check_gap(bus, 1, opts)
     finally:
         bus.close()
 
 
-def bus_test(backend):
+def bus_test(backend, opts):
     ids = [1, 2, 3]
-    bus = Bus(backend, ids)
+    bus = Bus(backend, ids, opts)
     try:
         if backend == "qemu":
             bus.exchange(kmbus.write(kmbus.ID_BROADCAST, 0x10, (96).to_bytes(2, "little")), 0, timeout=0.3)
@@ -126,6 +184,10 @@ def bus_test(backend):
         check(bus.exchange(fake, 0, timeout=0.8) == [], "§2 a response frame with F9 FF inside is skipped whole")
         r = bus.exchange(kmbus.ping(1), 1)
         check(len(r) == 1 and r[0].id == 1 and r[0].status == 0, "servo 1 still answers, status clean")
+        if backend == "host-sim":
+            # the other two servos hear the burst and all 40 answers too
+            check_burst(bus, 2, 40)
+            check_gap(bus, 3, opts)
     finally:
         bus.close()
 
@@ -134,8 +196,10 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("which", choices=["smoke", "bus"])
     ap.add_argument("--backend", choices=["qemu", "host-sim"], required=True)
+    ap.add_argument("--gap-floor-us", type=int, help="passed to tools/servo-bus")
+    ap.add_argument("--build-dir", help="passed to tools/servo-bus")
     a = ap.parse_args()
-    (smoke if a.which == "smoke" else bus_test)(a.backend)
+    (smoke if a.which == "smoke" else bus_test)(a.backend, a)
     print("%s %s: all checks passed" % (a.backend, a.which))
 
 

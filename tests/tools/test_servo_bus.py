@@ -1,6 +1,9 @@
 """tools/servo-bus against tests/tools/fake_servo.py (a stand-in for the
 host-sim program, speaking its command-line contract): provisioning of IDs,
-the shared-bus relay, missing images, child death and stopping. No QEMU."""
+the shared-bus relay, missing images, child death and stopping, and the
+per-servo options (--gap-floor-us, --build-dir). No QEMU."""
+import importlib.machinery
+import importlib.util
 import os
 import signal
 import socket
@@ -31,14 +34,36 @@ def pid_alive(pid):
         return False
 
 
+def load_launcher_module():
+    loader = importlib.machinery.SourceFileLoader("servo_bus", LAUNCHER)
+    spec = importlib.util.spec_from_loader("servo_bus", loader)
+    mod = importlib.util.module_from_spec(spec)
+    loader.exec_module(mod)
+    return mod
+
+
+# A host-sim stand-in that also takes --gap-floor-us: logs its argv (one file
+# per process) and runs fake_servo.py without the option.
+ARGV_LOGGER = """#!%s
+import os, subprocess, sys
+argv = sys.argv[1:]
+with open(os.path.join(os.environ["FAKE_SERVO_LOG_DIR"], "argv-%%d.txt" %% os.getpid()), "w") as f:
+    f.write("\\n".join(argv))
+if "--gap-floor-us" in argv:
+    i = argv.index("--gap-floor-us")
+    del argv[i:i + 2]
+os.execv(sys.executable, [sys.executable, %r] + argv)
+"""
+
+
 class Launcher:
-    def __init__(self, ids, env=None, extra=()):
+    def __init__(self, ids, env=None, extra=(), image=FAKE):
         self.logdir = tempfile.mkdtemp(prefix="fake-servo-")
         e = dict(os.environ, FAKE_SERVO_LOG_DIR=self.logdir)
         e.update(env or {})
         self.proc = subprocess.Popen(
             [sys.executable, LAUNCHER, "--ids", ",".join(map(str, ids)), "--port", "0",
-             "--backend", "host-sim", "--image", FAKE, *extra],
+             "--backend", "host-sim", "--image", image, *extra],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=e)
 
     def wait_ready(self):
@@ -192,6 +217,83 @@ class ServoBus(unittest.TestCase):
         self.assertEqual(rc, 1)
         self.assertEqual(out, "")
         self.assertRegex(err, r"servo id 6 \(pid \d+\) exited with code 3")
+
+
+class GapFloorOption(unittest.TestCase):
+    def test_help_says_what_and_the_default(self):
+        r = subprocess.run([sys.executable, LAUNCHER, "--help"], capture_output=True, text=True,
+                           timeout=10)
+        self.assertEqual(r.returncode, 0)
+        self.assertIn("--gap-floor-us N", r.stdout)
+        self.assertIn("20000", r.stdout)
+        self.assertIn("0 = that real rule", " ".join(r.stdout.split()))
+
+    def test_bad_values_are_usage_errors(self):
+        for bad in ("-1", "abc", "4294967296"):
+            r = subprocess.run([sys.executable, LAUNCHER, "--ids", "1", "--port", "0",
+                                "--backend", "host-sim", "--image", FAKE, "--gap-floor-us", bad],
+                               capture_output=True, text=True, timeout=10)
+            self.assertEqual(r.returncode, 2, bad)
+
+    def test_argv_per_backend(self):
+        sb = load_launcher_module()
+        host = sb.servo_argv("host-sim", "/img", 7001, "/f", None, 0)
+        self.assertEqual(host[-2:], ["--gap-floor-us", "0"])
+        self.assertNotIn("--gap-floor-us", sb.servo_argv("host-sim", "/img", 7001, "/f", None))
+        qemu = sb.servo_argv("qemu", "/img.elf", 7001, "/f", None, 1500)
+        loaders = [qemu[i + 1] for i, a in enumerate(qemu) if a == "-device"]
+        # magic, then the value, at the linker-placed words (nrf51822.ld .km_config)
+        self.assertEqual(loaders, ["loader,addr=0x20000000,data=0x4b4d4746,data-len=4",
+                                   "loader,addr=0x20000004,data=0x000005dc,data-len=4"])
+        self.assertNotIn("-device", sb.servo_argv("qemu", "/img.elf", 7001, "/f", None))
+
+    def test_build_dir_option_and_environment(self):
+        sb = load_launcher_module()
+        self.assertEqual(sb.default_image("host-sim", "build/x"),
+                         os.path.join(REPO, "build/x/boards/host-sim/km-servo-host-sim"))
+        old = os.environ.get("KM_BUILD_QEMU")
+        os.environ["KM_BUILD_QEMU"] = "build/q2"
+        try:
+            self.assertEqual(sb.default_image("qemu"), os.path.join(
+                REPO, "build/q2/boards/qemu-microbit/km-servo-qemu-microbit.elf"))
+        finally:
+            if old is None:
+                del os.environ["KM_BUILD_QEMU"]
+            else:
+                os.environ["KM_BUILD_QEMU"] = old
+        r = subprocess.run([sys.executable, LAUNCHER, "--ids", "1", "--port", "0",
+                            "--backend", "host-sim", "--build-dir", "/nonexistent-build"],
+                           capture_output=True, text=True, timeout=10)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("/nonexistent-build/boards/host-sim/km-servo-host-sim", r.stderr)
+
+    def test_every_servo_gets_the_floor(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            image = os.path.join(tmp, "servo")
+            with open(image, "w") as f:
+                f.write(ARGV_LOGGER % (sys.executable, FAKE))
+            os.chmod(image, 0o755)
+            ln = Launcher([1, 2], image=image, extra=("--gap-floor-us", "0"))
+            try:
+                _, addr = ln.wait_ready()
+                with socket.create_connection(addr) as s:
+                    self.assertEqual([f.id for f in exchange(s, kmbus.ping(2))], [2])
+            finally:
+                rc, _, err = ln.stop()
+            self.assertEqual(rc, 0, err)
+            logs = [n for n in os.listdir(ln.logdir) if n.startswith("argv-")]
+            self.assertEqual(len(logs), 2)
+            for name in logs:
+                with open(os.path.join(ln.logdir, name)) as f:
+                    argv = f.read().split("\n")
+                self.assertEqual(argv[argv.index("--gap-floor-us") + 1], "0")
+            # without the option nothing extra is passed (fake_servo.py would refuse it)
+            ln = Launcher([3])
+            try:
+                ln.wait_ready()
+            finally:
+                rc, _, err = ln.stop()
+            self.assertEqual(rc, 0, err)
 
 
 if __name__ == "__main__":
