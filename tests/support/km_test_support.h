@@ -10,7 +10,8 @@
  *    here from the §2 rule, independently of protocol/), so every worked
  *    frame used by a test is itself verified;
  *  - a fixture (servo + fake + last reply), senders and a snapshot of
- *    everything a bad input must leave alone.
+ *    everything a bad input must leave alone (the unreported status bits
+ *    included: docs/protocol-decisions.md "One life cycle for bits 5 and 6").
  *
  * Include after <setjmp.h> <stdarg.h> <stddef.h> <cmocka.h>. */
 #ifndef KM_TEST_SUPPORT_H
@@ -320,6 +321,36 @@ static inline void kt_ping(kt_fx_t *fx, uint8_t id)
     kt_send(fx, id, 0x01, NULL, 0);
 }
 
+/* Extension read 0x7F of `addr` (docs/protocol-decisions.md "Extension
+ * command 0x7F"). */
+static inline void kt_ext_read(kt_fx_t *fx, uint8_t id, uint8_t addr)
+{
+    kt_send(fx, id, 0x7F, &addr, 1);
+}
+
+/* Sets the stored value of persisted register `addr` in fx->persisted (what
+ * the store hands over at the next kt_reinit). */
+static inline void kt_persisted_set(kt_fx_t *fx, uint8_t addr, uint32_t v)
+{
+    unsigned k = 0;
+    for (unsigned j = 0; j < KM_REG_COUNT; j++) {
+        if (!km_reg_table[j].persisted) continue;
+        if (km_reg_table[j].addr == addr) {
+            fx->persisted[k] = v;
+            return;
+        }
+        k++;
+    }
+    fail_msg("0x%02X is not persisted", addr);
+}
+
+/* Re-initialises the servo from fx->persisted (a restart or power-on); the
+ * fake's records are kept. */
+static inline void kt_reinit(kt_fx_t *fx, const km_product_t *p)
+{
+    km_servo_init(&fx->s, p, fx->persisted, 12345u, &fx->ops);
+}
+
 /* The last reply equals these hex bytes. */
 static inline void kt_reply_is_hex(const kt_fx_t *fx, const char *hex)
 {
@@ -361,6 +392,14 @@ static inline void kt_no_reply(const kt_fx_t *fx)
     assert_int_equal(fx->reply.len, 0);
 }
 
+/* Pings `id` and checks the short response carries `status` (a ping reports
+ * and clears the unreported bits 5/6). */
+static inline void kt_ping_is(kt_fx_t *fx, uint8_t id, uint8_t status)
+{
+    kt_ping(fx, id);
+    kt_reply_is_status(fx, id, status);
+}
+
 /* Value bytes of the last read answer (asserts it is one for `addr`). */
 static inline unsigned kt_read_value(const kt_fx_t *fx, uint8_t addr, uint8_t *out)
 {
@@ -393,6 +432,9 @@ typedef struct {
     bool sync_full;
     uint8_t sync_addr, sync_len;
     uint8_t sync_data[8];
+    uint8_t unreported;       /* bits 5/6 no status answer has carried yet */
+    bool restarting;
+    uint8_t userdata_source, reset_cause;
     unsigned n_commits, restarts, n_requests;
 } kt_snap_t;
 
@@ -406,6 +448,10 @@ static inline void kt_snap(const kt_fx_t *fx, kt_snap_t *sn)
     sn->sync_addr = fx->s.sync.addr;
     sn->sync_len = fx->s.sync.len;
     memcpy(sn->sync_data, fx->s.sync.data, sizeof sn->sync_data);
+    sn->unreported = fx->s.unreported;
+    sn->restarting = fx->s.restarting;
+    sn->userdata_source = fx->s.userdata_source;
+    sn->reset_cause = fx->s.reset_cause;
     sn->n_commits = fx->fake.n_commits;
     sn->restarts = fx->fake.restarts;
     sn->n_requests = fx->fake.n_requests;
@@ -429,6 +475,15 @@ static inline void kt_assert_unchanged(const kt_fx_t *fx, const kt_snap_t *befor
         assert_int_equal(now.sync_len, before->sync_len);
         assert_memory_equal(now.sync_data, before->sync_data, sizeof now.sync_data);
     }
+    /* "Status bits 5 and 6": an input whose outcome waits for the next ping
+     * changes the unreported bits; such a test adds them to the snapshot
+     * (sn.unreported |= ...) before comparing. */
+    if (now.unreported != before->unreported) {
+        fail_msg("unreported bits changed: 0x%02X -> 0x%02X", before->unreported, now.unreported);
+    }
+    assert_int_equal(now.restarting, before->restarting);
+    assert_int_equal(now.userdata_source, before->userdata_source);
+    assert_int_equal(now.reset_cause, before->reset_cause);
     assert_int_equal(now.n_commits, before->n_commits);
     assert_int_equal(now.restarts, before->restarts);
     assert_int_equal(now.n_requests, before->n_requests);
