@@ -29,8 +29,6 @@ static const spec_reg_t spec_regs[] = {
     {0x0A, 1, 0, 0, {0}},
     {0x0B, 1, 0, 0, {0}},
     {0x0C, 1, 0, 0, {0}},
-    /* not in §5: this firmware's read-only extension (docs/protocol-decisions.md) */
-    {0x0D, 1, 0, 0, {0}},
     {0x0F, 3, 1, 1, {5}},
     {0x10, 3, 2, 2, {0x80, 0x04}},
     {0x11, 3, 1, 1, {0x0A}},
@@ -376,37 +374,67 @@ static void test_s3_sync_write_bad_address(void **state)
         kt_no_reply(&fx);
         assert_int_equal(km_servo_status(&fx.s), KM_ST_EXCEPTION);
         kt_send_hex(&fx, "F9 FF FE 02 84 7B");
+        sn.unreported |= KM_ST_EXCEPTION; /* 0x04 has no answer: the next ping reports it */
         kt_assert_unchanged(&fx, &sn);
     }
 }
 
-/* "Multi-ID write": malformed frames (k wrong for the address, parameter
- * count not a multiple of k+1, no entries, an address not allowed): every
- * servo flags bit 6, none executes anything. */
-static void test_s3_multi_id_malformed(void **state)
+/* "Multi-ID write" and §4: malformed entries (k wrong for the address,
+ * parameter count not a multiple of k+1, no entries) are a bad value: every
+ * servo sets bit 6; an address 0x83 does not allow is an unsupported
+ * address: every servo sets bit 5. Nothing runs either way; the bit waits
+ * for the next ping (no answer), which reports it once. */
+static void test_s3_multi_id_malformed_and_unsupported_address(void **state)
 {
     (void)state;
     static const struct {
         uint8_t n, body[12];
+        uint8_t bit;
     } bad[] = {
-        {6, {0x64, 0x02, ID, 0x02, 0x00, 0x00}},         /* k 2 for 0x64 */
-        {5, {0x64, 0x01, ID, 0x02, 0x03}},               /* 3 params, k+1 = 2 */
-        {2, {0x64, 0x01}},                               /* no entries */
-        {1, {0x64}},                                     /* no k */
-        {4, {0x13, 0x01, ID, 0x05}},                     /* 0x13 not allowed */
-        {4, {0x67, 0x01, ID, 0x05}},                     /* 0x67 not allowed */
-        {5, {0x65, 0x03, ID, 0x84, 0x03}},               /* k 3 for 0x65 */
-        {7, {0x65, 0x02, ID, 0x84, 0x03, ID + 1, 0x00}}, /* truncated */
+        {6, {0x64, 0x02, ID, 0x02, 0x00, 0x00}, KM_ST_FAILED},         /* k 2 for 0x64 */
+        {5, {0x64, 0x01, ID, 0x02, 0x03}, KM_ST_FAILED},               /* 3 params, k+1 = 2 */
+        {2, {0x64, 0x01}, KM_ST_FAILED},                               /* no entries */
+        {5, {0x65, 0x03, ID, 0x84, 0x03}, KM_ST_FAILED},               /* k 3 for 0x65 */
+        {7, {0x65, 0x02, ID, 0x84, 0x03, ID + 1, 0x00}, KM_ST_FAILED}, /* truncated */
+        {4, {0x68, 0x04, ID, 0x05}, KM_ST_FAILED},                     /* k 4 for 0x68 */
+        {4, {0x13, 0x01, ID, 0x05}, KM_ST_EXCEPTION},                  /* 0x13 not allowed */
+        {4, {0x67, 0x01, ID, 0x05}, KM_ST_EXCEPTION},                  /* 0x67 not allowed */
+        {4, {0x20, 0x01, ID, 0x05}, KM_ST_EXCEPTION},                  /* reserved address */
+        {6, {0x70, 0x01, ID, 0x05, ID + 1, 0x05}, KM_ST_EXCEPTION},    /* 0x70 not allowed */
     };
     for (unsigned i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         kt_init(&fx, kt_product_pot(), ID);
+        static const uint8_t sync_body[] = {0x13, 0xF4, 0x01};
+        kt_send(&fx, ID, 0x04, sync_body, sizeof sync_body); /* every servo drops its buffer */
         kt_snap_t sn;
         kt_snap(&fx, &sn);
         kt_send(&fx, KM_ID_BROADCAST, 0x83, bad[i].body, bad[i].n);
         kt_no_reply(&fx);
+        sn.sync_full = false;
+        sn.unreported |= bad[i].bit;
         kt_assert_unchanged(&fx, &sn);
-        assert_int_equal(km_servo_status(&fx.s), KM_ST_FAILED);
+        if (km_servo_status(&fx.s) != bad[i].bit) {
+            fail_msg("case %u: status 0x%02X, want 0x%02X", i, km_servo_status(&fx.s), bad[i].bit);
+        }
+        kt_ping_is(&fx, ID, bad[i].bit);
+        kt_ping_is(&fx, ID, 0);
     }
+}
+
+/* "Multi-ID write": an allowed address without its `k` byte is malformed
+ * (`k` not allowed for the address): bit 6, like the other malformed
+ * frames -- the address itself is one 0x83 supports. */
+static void test_s3_multi_id_missing_k_is_malformed(void **state)
+{
+    (void)state;
+    kt_init(&fx, kt_product_pot(), ID);
+    kt_snap_t sn;
+    kt_snap(&fx, &sn);
+    kt_send_hex(&fx, "F9 FF FE 03 83 64 17");
+    kt_no_reply(&fx);
+    sn.unreported |= KM_ST_FAILED;
+    kt_assert_unchanged(&fx, &sn);
+    kt_ping_is(&fx, ID, KM_ST_FAILED);
 }
 
 /* "Multi-ID write" sent to the servo's own ID (not broadcast): bit 5, nothing runs. */
@@ -419,8 +447,11 @@ static void test_s3_multi_id_to_own_id(void **state)
     kt_snap(&fx, &sn);
     kt_send(&fx, ID, 0x83, body, sizeof body);
     kt_no_reply(&fx);
+    sn.unreported |= KM_ST_EXCEPTION; /* no answer: the next ping reports it */
     kt_assert_unchanged(&fx, &sn);
     assert_int_equal(km_servo_status(&fx.s), KM_ST_EXCEPTION);
+    kt_ping_is(&fx, ID, KM_ST_EXCEPTION);
+    kt_ping_is(&fx, ID, 0);
 }
 
 /* §3 restart: wrong magic or wrong length: no restart, bit 6. */
@@ -446,11 +477,14 @@ static void test_s3_restart_wrong_magic_or_length(void **state)
     }
 }
 
-/* §3: read with the broadcast ID: nobody answers, nothing changes. */
+/* §3: read with the broadcast ID: nobody answers, nothing changes (the
+ * unreported bits included: a read of a readable register has no bad
+ * outcome; the read of an address the servo does not have is in
+ * test_dispatch_status.c, rule 5). */
 static void test_s3_read_broadcast_no_answer(void **state)
 {
     (void)state;
-    static const uint8_t addrs[] = {0x01, 0x0B, 0x13, 0x46, 0x20, 0x65};
+    static const uint8_t addrs[] = {0x01, 0x0B, 0x13, 0x46, 0x0A, 0x35};
     for (unsigned i = 0; i < sizeof addrs; i++) {
         kt_init(&fx, kt_product_pot(), ID);
         kt_snap_t sn;
@@ -461,11 +495,13 @@ static void test_s3_read_broadcast_no_answer(void **state)
     }
 }
 
-/* §3/§7: 0x82, 0x78, 0x7E, 0x7F and unknown commands: bit 5, no answer. */
+/* §3/§7 and "Malformed frames": 0x82, 0x78, 0x7E and unknown commands: bit
+ * 5, no answer, nothing else changes; the next ping reports it once. (0x7F
+ * is the extension read: test_dispatch_commands.c.) */
 static void test_s3_unsupported_commands(void **state)
 {
     (void)state;
-    static const uint8_t cmds[] = {0x82, 0x78, 0x7E, 0x7F, 0x00, 0x05, 0xFF};
+    static const uint8_t cmds[] = {0x82, 0x78, 0x7E, 0x00, 0x05, 0x7D, 0x80, 0xFF};
     for (unsigned i = 0; i < sizeof cmds; i++) {
         init_answering(kt_product_pot());
         kt_snap_t sn;
@@ -473,6 +509,7 @@ static void test_s3_unsupported_commands(void **state)
         const uint8_t body[] = {0x13, 0x01};
         kt_send(&fx, ID, cmds[i], body, sizeof body);
         kt_no_reply(&fx);
+        sn.unreported |= KM_ST_EXCEPTION;
         kt_assert_unchanged(&fx, &sn);
         assert_int_equal(km_servo_status(&fx.s), KM_ST_EXCEPTION);
         kt_ping(&fx, ID); /* the next ping reports it, then it clears */
@@ -480,6 +517,26 @@ static void test_s3_unsupported_commands(void **state)
         kt_ping(&fx, ID);
         kt_reply_is_status(&fx, ID, 0);
     }
+}
+
+/* "Extension command 0x7F": 0x0D, once this firmware's extension register,
+ * is a reserved address again: read and write are bit 5 with the short
+ * response (level 1), nothing changes. */
+static void test_s4_0x0D_reserved_again(void **state)
+{
+    (void)state;
+    kt_init(&fx, kt_product_pot(), 1);
+    kt_snap_t sn;
+    kt_snap(&fx, &sn);
+    kt_send_hex(&fx, "F9 FF 01 03 02 0D EC");
+    kt_reply_is_hex(&fx, "F9 F5 01 02 20 DC");
+    kt_assert_unchanged(&fx, &sn);
+    kt_send_hex(&fx, "F9 FF 01 04 03 11 0A DC"); /* level 1 */
+    kt_reply_is_hex(&fx, "F9 F5 01 02 00 FC");
+    kt_snap(&fx, &sn);
+    kt_send_hex(&fx, "F9 FF 01 04 03 0D 00 EA");
+    kt_reply_is_hex(&fx, "F9 F5 01 02 20 DC");
+    kt_assert_unchanged(&fx, &sn);
 }
 
 /* §3 ping takes no parameters: extra bytes answer with bit 5. */
@@ -529,11 +586,13 @@ int main(void)
         cmocka_unit_test(test_s3_sync_write_other_id_keeps_ours),
         cmocka_unit_test(test_s3_sync_write_second_overwrites),
         cmocka_unit_test(test_s3_sync_write_bad_address),
-        cmocka_unit_test(test_s3_multi_id_malformed),
+        cmocka_unit_test(test_s3_multi_id_malformed_and_unsupported_address),
+        cmocka_unit_test(test_s3_multi_id_missing_k_is_malformed),
         cmocka_unit_test(test_s3_multi_id_to_own_id),
         cmocka_unit_test(test_s3_restart_wrong_magic_or_length),
         cmocka_unit_test(test_s3_read_broadcast_no_answer),
         cmocka_unit_test(test_s3_unsupported_commands),
+        cmocka_unit_test(test_s4_0x0D_reserved_again),
         cmocka_unit_test(test_s3_ping_with_extra_bytes),
         cmocka_unit_test(test_s3_read_extra_bytes_and_write_without_address),
     };
