@@ -59,19 +59,27 @@ static bool spec_range(uint8_t addr, const km_product_t *p, range_t *r)
     switch (addr) {
     case 0x0F: *r = (range_t){1, false, 0, 250}; return true;
     case 0x10: *r = (range_t){2, false, p->baud_min_100, p->baud_max_100}; return true;
-    case 0x11: *r = (range_t){1, false, 0, 0x0F}; return true;
     case 0x12: *r = (range_t){2, false, 0, 65535}; return true;
     case 0x13: *r = (range_t){2, false, 0, 1000}; return true;
     case 0x14: *r = (range_t){2, false, 0, p->current_max_ma}; return true;
     case 0x15: *r = (range_t){2, false, 0, p->speed_max_dps}; return true;
     case 0x17: *r = (range_t){2, true, -p->zero_offset2_max, p->zero_offset2_max}; return true;
     case 0x19: case 0x1A: *r = (range_t){2, true, p->travel_min, p->travel_max}; return true;
-    case 0x32: case 0x33: *r = (range_t){1, false, 0, 0x0F}; return true;
     case 0x5A: *r = (range_t){1, false, 0, 2}; return true;
     case 0x5B: *r = (range_t){2, false, 0, 1000}; return true;
     case 0x5C: *r = (range_t){2, false, 0, p->current_max_ma}; return true;
     case 0x5D: *r = (range_t){2, false, 0, p->speed_max_dps}; return true;
     case 0x64: *r = (range_t){1, false, 0, 3}; return true;
+    default: return false;
+    }
+}
+
+/* "Reserved bits": the bit-field registers and the mask of their defined
+ * bits (§5.1 0x11 bits 0..3, §5.2 0x32/0x33/0x36 bits 0..3). */
+static bool spec_bits(uint8_t addr, uint8_t *mask)
+{
+    switch (addr) {
+    case 0x11: case 0x32: case 0x33: case 0x36: *mask = 0x0F; return true;
     default: return false;
     }
 }
@@ -121,8 +129,9 @@ static void test_s5_every_rw_register_covered(void **state)
         if (!spec_default(r->addr, kt_product_pot(), &d)) {
             fail_msg("no spec default for RW 0x%02X", r->addr);
         }
-        const bool multi = r->addr == 0x34 || r->addr == 0x36 || (r->addr >= 0x3C && r->addr <= 0x3F);
-        if (!multi && !spec_range(r->addr, kt_product_pot(), &rg)) {
+        const bool multi = r->addr == 0x34 || (r->addr >= 0x3C && r->addr <= 0x3F);
+        uint8_t mask;
+        if (!multi && !spec_range(r->addr, kt_product_pot(), &rg) && !spec_bits(r->addr, &mask)) {
             fail_msg("no spec range for RW 0x%02X", r->addr);
         }
     }
@@ -139,6 +148,23 @@ static int32_t as_value(uint32_t raw, const range_t *r)
 {
     if (!r->is_signed) return (int32_t)raw;
     return r->size == 1 ? (int8_t)raw : (int16_t)raw;
+}
+
+/* "Limits that contradict each other": a range edge of one limit is tested
+ * with its counterpart out of the way (0x14/0x15 at their top for 0x5C/0x5D,
+ * the other angle limit 0 = no limit); the cross rules have their own tests
+ * in test_dispatch_commands.c. */
+static void init_for(const km_product_t *p, uint8_t a)
+{
+    kt_init(&fx, p, ID);
+    switch (a) {
+    case 0x19: kt_persisted_set(&fx, 0x1A, 0); break;
+    case 0x1A: kt_persisted_set(&fx, 0x19, 0); break;
+    case 0x5C: kt_persisted_set(&fx, 0x14, p->current_max_ma); break;
+    case 0x5D: kt_persisted_set(&fx, 0x15, p->speed_max_dps); break;
+    default: return;
+    }
+    kt_reinit(&fx, p);
 }
 
 /* RW write and read-back at both range edges; the values just outside (if
@@ -158,7 +184,7 @@ static void test_s5_rw_range_edges(void **state)
             const int32_t wire_hi = r.is_signed ? (1 << (8 * r.size - 1)) - 1 : (1 << (8 * r.size)) - 1;
             const int32_t edges[2] = {r.lo, r.hi};
             for (unsigned e = 0; e < 2; e++) {
-                kt_init(&fx, p, ID);
+                init_for(p, a);
                 uint8_t b[2];
                 put(b, edges[e], r.size);
                 kt_write(&fx, ID, a, b, r.size);
@@ -174,7 +200,7 @@ static void test_s5_rw_range_edges(void **state)
                 if (outside[e] < wire_lo || outside[e] > wire_hi) {
                     continue;
                 }
-                kt_init(&fx, p, ID);
+                init_for(p, a);
                 kt_snap_t sn;
                 kt_snap(&fx, &sn);
                 uint8_t b[2];
@@ -183,6 +209,7 @@ static void test_s5_rw_range_edges(void **state)
                 if (km_servo_status(&fx.s) != KM_ST_FAILED) {
                     fail_msg("0x%02X = %d accepted", a, (int)outside[e]);
                 }
+                sn.unreported |= KM_ST_FAILED; /* level 0: the next ping reports it */
                 kt_assert_unchanged(&fx, &sn);
             }
         }
@@ -200,10 +227,11 @@ static void test_s5_persisted_writes_committed(void **state)
         if (km_reg_table[i].access != KM_RW || !spec_range(a, kt_product_pot(), &r)) {
             continue;
         }
-        kt_init(&fx, kt_product_pot(), ID);
+        init_for(kt_product_pot(), a);
         uint8_t b[2];
         put(b, r.hi, r.size);
         kt_write(&fx, ID, a, b, r.size);
+        assert_int_equal(km_servo_status(&fx.s), 0);
         const bool p = a < 0x5A; /* §5: P column */
         assert_int_equal(fx.fake.n_commits, p ? 1u : 0u);
         if (p) {
@@ -232,6 +260,7 @@ static void write_expect(uint8_t a, const uint8_t *b, unsigned n, bool ok)
         if (km_servo_status(&fx.s) != KM_ST_FAILED) {
             fail_msg("0x%02X accepted %02X %02X %02X", a, b[0], n > 1 ? b[1] : 0, n > 2 ? b[2] : 0);
         }
+        sn.unreported |= KM_ST_FAILED; /* level 0: the next ping reports it */
         kt_assert_unchanged(&fx, &sn);
     }
 }
@@ -293,6 +322,63 @@ static void test_s5_2_0x3E_0x3F_thresholds_and_detection_time(void **state)
     }
 }
 
+/* "Reserved bits": 0x11, 0x32 and 0x33 define bits 0..3; a write with any
+ * of bits 4..7 set is accepted, the defined bits apply, the reserved ones
+ * are stored (and committed) as 0 and read back as 0. */
+static void test_s5_reserved_bits_accepted_stored_zero(void **state)
+{
+    (void)state;
+    static const uint8_t addrs[] = {0x11, 0x32, 0x33};
+    for (unsigned i = 0; i < sizeof addrs; i++) {
+        const uint8_t a = addrs[i];
+        for (unsigned v = 0; v < 256; v++) {
+            kt_init(&fx, kt_product_pot(), ID);
+            kt_write_u8(&fx, ID, a, (uint8_t)v);
+            const uint8_t want = (uint8_t)(v & 0x0Fu);
+            /* 0x11 bit 3 = response level 1 takes effect for this write's answer */
+            if (a == 0x11 && (want & 0x08u)) {
+                kt_reply_is_status(&fx, ID, 0);
+            } else {
+                kt_no_reply(&fx);
+            }
+            if (km_servo_status(&fx.s) != 0) {
+                fail_msg("0x%02X = 0x%02X refused", a, v);
+            }
+            assert_int_equal(fx.fake.n_commits, 1);
+            assert_int_equal(fx.fake.commits[0].n, 1);
+            assert_int_equal(fx.fake.commits[0].addrs[0], a);
+            assert_int_equal(fx.fake.commits[0].values[0], want);
+            kt_read(&fx, ID, a);
+            kt_reply_is_read(&fx, ID, a, &want, 1);
+        }
+    }
+}
+
+/* "Reserved bits" and 0x36: a write with bits 4..7 set is accepted as the
+ * clear request of its bits 0..3 (bits 4..7 dropped); nothing is stored or
+ * committed, and a read returns the live protections. */
+static void test_s5_2_0x36_reserved_bits_masked_request(void **state)
+{
+    (void)state;
+    for (unsigned v = 0; v < 256; v++) {
+        kt_init(&fx, kt_product_pot(), ID);
+        km_live_t live = {0};
+        live.protections = 0x06;
+        km_servo_set_live(&fx.s, &live);
+        kt_write_u8(&fx, ID, 0x36, (uint8_t)v);
+        if (km_servo_status(&fx.s) != 0x06) { /* bits 1, 2 live; no 5/6 */
+            fail_msg("0x36 = 0x%02X: status 0x%02X", v, km_servo_status(&fx.s));
+        }
+        assert_int_equal(fx.fake.n_requests, 1);
+        assert_int_equal(fx.fake.requests[0].kind, KM_REQ_PROTECTION_CLEAR);
+        assert_int_equal(fx.fake.requests[0].u.u8, v & 0x0Fu);
+        assert_int_equal(fx.fake.n_commits, 0);
+        kt_read(&fx, ID, 0x36);
+        const uint8_t p = 0x06;
+        kt_reply_is_read(&fx, ID, 0x36, &p, 1);
+    }
+}
+
 /* User data handed over at power-on passes the same checks as a write: a
  * stored value out of range (a baud of 0, a torque of 5000, an ID of 251)
  * falls back to its default instead of running with it (a baud of 0 made the
@@ -330,6 +416,8 @@ int main(void)
         cmocka_unit_test(test_s5_every_rw_register_covered),
         cmocka_unit_test(test_s5_rw_range_edges),
         cmocka_unit_test(test_s5_persisted_writes_committed),
+        cmocka_unit_test(test_s5_reserved_bits_accepted_stored_zero),
+        cmocka_unit_test(test_s5_2_0x36_reserved_bits_masked_request),
         cmocka_unit_test(test_s5_persisted_values_checked_at_init),
         cmocka_unit_test(test_s5_2_0x34_field_rules),
         cmocka_unit_test(test_s5_2_0x3C_voltage_thresholds),
