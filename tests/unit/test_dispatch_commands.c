@@ -108,7 +108,9 @@ static void test_s5_1_0x0F_id_change(void **state)
     kt_reply_is_read(&fx, 42, 0x0F, &v, 1);
 }
 
-/* ID change whose commit fails: bit 6, the old ID stays. */
+/* ID change whose commit fails: bit 6, the old ID stays. At response
+ * level 1 the write's own answer carried the bit 6 ("One life cycle for
+ * bits 5 and 6", rule 4), so the next ping has nothing left to report. */
 static void test_s5_1_0x0F_id_change_commit_fails(void **state)
 {
     (void)state;
@@ -117,12 +119,20 @@ static void test_s5_1_0x0F_id_change_commit_fails(void **state)
     fx.fake.fail_next_commit = true;
     kt_write_u8(&fx, ID, 0x0F, 42);
     kt_reply_is_status(&fx, ID, KM_ST_FAILED);
+    assert_int_equal(fx.fake.n_commits, 2); /* 0x11, then the refused 0x0F */
+    assert_false(fx.fake.commits[1].accepted);
     kt_ping(&fx, 42);
     kt_no_reply(&fx);
-    kt_ping(&fx, ID); /* the previous command failed: reported once more, then cleared */
-    kt_reply_is_status(&fx, ID, KM_ST_FAILED);
-    kt_ping(&fx, ID);
-    kt_reply_is_status(&fx, ID, 0);
+    kt_ping_is(&fx, ID, 0);
+    /* at level 0 the same failure waits for the next ping */
+    kt_write_u8(&fx, ID, 0x11, 0x02);
+    kt_no_reply(&fx); /* §3: the level after the write decides (test_s3_response_level) */
+    fx.fake.fail_next_commit = true;
+    kt_write_u8(&fx, ID, 0x0F, 42);
+    kt_no_reply(&fx);
+    assert_int_equal(km_servo_id(&fx.s), ID);
+    kt_ping_is(&fx, ID, KM_ST_FAILED);
+    kt_ping_is(&fx, ID, 0);
 }
 
 /* §3 baud change: stored and committed; the active baud is unchanged until
@@ -139,6 +149,15 @@ static void test_s5_1_0x10_baud_change(void **state)
     assert_int_equal(km_servo_active_baud(&fx.s), 115200);
     kt_ping(&fx, KM_ID_SUPER);
     assert_int_equal(fx.reply.delay_us, 200 + ID * kt_slot_us(6, 115200));
+    /* The restart: re-initialise from what was committed. */
+    kt_persisted_set(&fx, 0x10, fx.fake.commits[0].values[0]);
+    kt_reinit(&fx, kt_product_pot());
+    assert_int_equal(km_servo_active_baud(&fx.s), 500000);
+    kt_read(&fx, ID, 0x10);
+    assert_int_equal(kt_read_le(&fx, 0x10), 5000);
+    kt_ping(&fx, KM_ID_SUPER);
+    assert_int_equal(fx.reply.delay_us, 200 + ID * kt_slot_us(6, 500000));
+    assert_int_equal(kt_slot_us(6, 500000), 160); /* 80 bits at 500000 baud */
 }
 
 /* §3 restart via broadcast: restarts, no answer. */
@@ -240,29 +259,39 @@ static void test_s5_1_0x03_userdata_reset_level1(void **state)
     assert_int_equal(km_servo_status(&fx.s), 0);
 }
 
-/* Level 2: everything, ID, baud, 0x16 (back to the product's factory value)
- * and 0x17 included. */
+/* "User-data reset" level 2: everything, ID, baud and 0x17 included, except
+ * the factory data: 0x16 keeps this unit's stored calibration (99 here, not
+ * the product's 37) and is not in the commit. */
 static void test_s5_1_0x03_userdata_reset_level2(void **state)
 {
     (void)state;
     init_changed();
+    assert_int_equal(reg_by_addr(0x16), 99);
     kt_write_u8(&fx, ID, 0x03, 2);
     kt_no_reply(&fx); /* 0x11 back to level 0 */
     assert_int_equal(fx.fake.n_commits, 1);
     const kt_commit_t *c = &fx.fake.commits[0];
-    assert_int_equal(c->n, sizeof persisted_addrs);
+    assert_true(c->accepted);
+    assert_int_equal(c->n, sizeof persisted_addrs - 1u);
     for (unsigned i = 0; i < sizeof persisted_addrs; i++) {
         const uint8_t a = persisted_addrs[i];
+        if (a == 0x16) {
+            assert_false(kt_commit_has(c, a));
+            continue;
+        }
         assert_int_equal(kt_commit_value(c, a), spec_default(a, kt_product_pot()));
         assert_int_equal(reg_by_addr(a), spec_default(a, kt_product_pot()));
     }
     assert_int_equal(km_servo_id(&fx.s), 0);
-    assert_int_equal(reg_by_addr(0x16), 37);
+    assert_int_equal(reg_by_addr(0x16), 99);
     assert_int_equal(reg_by_addr(0x5B), 1000);
     assert_int_equal(km_servo_active_baud(&fx.s), 1000000); /* baud applies at restart */
+    assert_int_equal(km_servo_status(&fx.s), 0);
 }
 
-/* A reset whose commit fails changes nothing, bit 6. */
+/* A reset whose commit fails changes nothing, bit 6. The servo of
+ * init_changed() is at response level 1 (0x11 = 0x0B) and stays there, so
+ * the write answers its own bit 6 and leaves nothing for the next ping. */
 static void test_s5_1_0x03_userdata_reset_commit_fails(void **state)
 {
     (void)state;
@@ -271,10 +300,23 @@ static void test_s5_1_0x03_userdata_reset_commit_fails(void **state)
     kt_snap_t sn;
     kt_snap(&fx, &sn);
     kt_write_u8(&fx, ID, 0x03, 2);
+    kt_reply_is_status(&fx, ID, KM_ST_FAILED);
     sn.n_commits++; /* the refused attempt */
     kt_assert_unchanged(&fx, &sn);
     assert_false(fx.fake.commits[0].accepted);
-    assert_int_equal(km_servo_status(&fx.s), KM_ST_FAILED);
+    kt_ping_is(&fx, ID, 0);
+    /* the same at response level 0: the bit waits for the next ping */
+    kt_write_u8(&fx, ID, 0x11, 0x03);
+    kt_no_reply(&fx);
+    fx.fake.fail_next_commit = true;
+    kt_snap(&fx, &sn);
+    kt_write_u8(&fx, ID, 0x03, 1);
+    kt_no_reply(&fx);
+    sn.n_commits++;
+    sn.unreported |= KM_ST_FAILED;
+    kt_assert_unchanged(&fx, &sn);
+    kt_ping_is(&fx, ID, KM_ST_FAILED);
+    kt_ping_is(&fx, ID, 0);
 }
 
 /* Commit failure of a plain persisted write: bit 6, the old value (and its
@@ -329,13 +371,14 @@ static void test_s5_4_0x64_torque_switch(void **state)
         const unsigned n = fx.fake.n_requests;
         assert_int_equal(fx.fake.requests[n - 1].kind, KM_REQ_TORQUE_SWITCH);
         assert_int_equal(fx.fake.requests[n - 1].u.u8, v);
+        kt_ping_is(&fx, ID, 0); /* the write of v was good */
         move_time(ID);
         assert_int_equal(fx.fake.n_requests, n);
-        assert_int_equal(km_servo_status(&fx.s), KM_ST_FAILED);
+        kt_ping_is(&fx, ID, KM_ST_FAILED); /* the refused move */
         assert_int_equal(reg_by_addr(0x64), v);
     }
     kt_write_u8(&fx, ID, 0x64, 5);
-    assert_int_equal(km_servo_status(&fx.s), KM_ST_FAILED);
+    kt_ping_is(&fx, ID, KM_ST_FAILED);
     assert_int_equal(reg_by_addr(0x64), 1);
     km_servo_set_torque_switch(&fx.s, 5); /* control, after a protection */
     kt_read(&fx, ID, 0x64);
@@ -343,45 +386,53 @@ static void test_s5_4_0x64_torque_switch(void **state)
     const unsigned n = fx.fake.n_requests;
     move_time(ID);
     assert_int_equal(fx.fake.n_requests, n);
+    kt_ping_is(&fx, ID, KM_ST_FAILED);
     kt_write_u8(&fx, ID, 0x64, 2);
     move_time(ID);
+    kt_ping_is(&fx, ID, 0);
     assert_int_equal(fx.fake.n_requests, n + 2);
     assert_int_equal(fx.fake.requests[n + 1].kind, KM_REQ_MOVE_TIME);
     assert_int_equal(reg_by_addr(0x64), 2);
 }
 
 /* §5.4 0x5A: 1 servo only refuses motor commands, 2 motor only refuses servo
- * commands; switching to 2 is refused while running with torque on. */
+ * commands; switching to 2 is refused while running with torque on. Each
+ * outcome is read with a ping (level 0: nothing else reports it). */
 static void test_s5_4_0x5A_control_mode(void **state)
 {
     (void)state;
     kt_init(&fx, kt_product_pot(), ID);
     kt_write_u8(&fx, ID, 0x5A, 1);
+    kt_ping_is(&fx, ID, 0);
     motor_torque(ID, 300);
     assert_int_equal(fx.fake.n_requests, 0);
-    assert_int_equal(km_servo_status(&fx.s), KM_ST_FAILED);
+    kt_ping_is(&fx, ID, KM_ST_FAILED);
     move_time(ID);
     assert_int_equal(fx.fake.n_requests, 1);
+    kt_ping_is(&fx, ID, 0);
     kt_write_u8(&fx, ID, 0x5A, 2); /* idle: allowed */
     assert_int_equal(reg_by_addr(0x5A), 2);
+    kt_ping_is(&fx, ID, 0);
     move_time(ID);
     assert_int_equal(fx.fake.n_requests, 1);
-    assert_int_equal(km_servo_status(&fx.s), KM_ST_FAILED);
+    kt_ping_is(&fx, ID, KM_ST_FAILED);
     motor_torque(ID, -300);
     assert_int_equal(fx.fake.n_requests, 2);
     assert_int_equal(fx.fake.requests[1].kind, KM_REQ_MOTOR_TORQUE);
     assert_int_equal(fx.fake.requests[1].u.i16, -300);
+    kt_ping_is(&fx, ID, 0);
     kt_write_u8(&fx, ID, 0x5A, 0);
     km_live_t live = {0};
     live.running = true;
     km_servo_set_live(&fx.s, &live);
     kt_write_u8(&fx, ID, 0x64, 2);
+    kt_ping_is(&fx, ID, KM_ST_RUNNING);
     kt_write_u8(&fx, ID, 0x5A, 2); /* running with torque on: refused */
-    assert_int_equal(km_servo_status(&fx.s) & KM_ST_FAILED, KM_ST_FAILED);
+    kt_ping_is(&fx, ID, KM_ST_RUNNING | KM_ST_FAILED);
     assert_int_equal(reg_by_addr(0x5A), 0);
     kt_write_u8(&fx, ID, 0x64, 0);
     kt_write_u8(&fx, ID, 0x5A, 2); /* torque off: allowed */
-    assert_int_equal(km_servo_status(&fx.s) & KM_ST_FAILED, 0);
+    kt_ping_is(&fx, ID, KM_ST_RUNNING);
     assert_int_equal(reg_by_addr(0x5A), 2);
 }
 
@@ -402,13 +453,15 @@ static void test_s5_1_0x18_increments_0x17(void **state)
     kt_snap_t sn;
     kt_snap(&fx, &sn);
     kt_write_u8(&fx, ID, 0x18, 1); /* max + 1 */
+    sn.unreported |= KM_ST_FAILED; /* level 0: the next ping reports it */
     kt_assert_unchanged(&fx, &sn);
-    assert_int_equal(km_servo_status(&fx.s), KM_ST_FAILED);
+    kt_ping_is(&fx, ID, KM_ST_FAILED);
     kt_write_u16(&fx, ID, 0x17, (uint16_t)(int16_t)-max);
     kt_snap(&fx, &sn);
     kt_write_u8(&fx, ID, 0x18, (uint8_t)-1);
+    sn.unreported |= KM_ST_FAILED;
     kt_assert_unchanged(&fx, &sn);
-    assert_int_equal(km_servo_status(&fx.s), KM_ST_FAILED);
+    kt_ping_is(&fx, ID, KM_ST_FAILED);
     kt_write_u8(&fx, ID, 0x18, 0); /* pot: adds 0, no zeroing request */
     assert_int_equal((int16_t)reg_by_addr(0x17), -max);
     for (unsigned i = 0; i < fx.fake.n_requests; i++) {
@@ -428,7 +481,9 @@ static void test_s5_1_0x18_zero_on_encoder(void **state)
     assert_int_equal(fx.fake.n_commits, 0);
 }
 
-/* §5.2 0x36: write 1 to a bit to clear that protection: a request, nothing stored. */
+/* §5.2 0x36: write 1 to a bit to clear that protection: a request, nothing
+ * stored. "Reserved bits": bits 4..7 are accepted and dropped, so 0x10 is a
+ * request to clear nothing and 0xF9 clears 0x09. */
 static void test_s5_2_0x36_write_one_to_clear(void **state)
 {
     (void)state;
@@ -439,8 +494,17 @@ static void test_s5_2_0x36_write_one_to_clear(void **state)
     assert_int_equal(fx.fake.requests[0].u.u8, 0x09);
     assert_int_equal(fx.fake.n_commits, 0);
     kt_write_u8(&fx, ID, 0x36, 0x10);
-    assert_int_equal(fx.fake.n_requests, 1);
-    assert_int_equal(km_servo_status(&fx.s), KM_ST_FAILED);
+    assert_int_equal(fx.fake.n_requests, 2);
+    assert_int_equal(fx.fake.requests[1].kind, KM_REQ_PROTECTION_CLEAR);
+    assert_int_equal(fx.fake.requests[1].u.u8, 0x00);
+    kt_write_u8(&fx, ID, 0x36, 0xF9);
+    assert_int_equal(fx.fake.n_requests, 3);
+    assert_int_equal(fx.fake.requests[2].u.u8, 0x09);
+    assert_int_equal(fx.fake.n_commits, 0);
+    kt_ping_is(&fx, ID, 0);
+    kt_read(&fx, ID, 0x36);
+    const uint8_t none = 0;
+    kt_reply_is_read(&fx, ID, 0x36, &none, 1); /* the live protections, not the write */
 }
 
 static void read_pos(uint8_t addr, int32_t v)
@@ -513,6 +577,7 @@ static void test_s6_encoder_only_commands_refused_on_pot(void **state)
         kt_snap_t sn;
         kt_snap(&fx, &sn);
         kt_write(&fx, ID, cmds[i].addr, cmds[i].v, cmds[i].n);
+        sn.unreported |= KM_ST_FAILED; /* level 0: the next ping reports it */
         kt_assert_unchanged(&fx, &sn);
         assert_int_equal(km_servo_status(&fx.s), KM_ST_FAILED);
         /* the same on an encoder product is accepted */
@@ -573,29 +638,483 @@ static void test_s5_4_servo_commands_requests(void **state)
     assert_int_equal(km_servo_status(&fx.s), KM_ST_FAILED);
 }
 
-/* 0x0D (this firmware's extension, docs/protocol-decisions.md): where the
- * user data came from at boot; read-only. */
-static void test_s7_0x0D_userdata_source(void **state)
+/* ---- "Extension command 0x7F" ------------------------------------------ */
+
+/* Each extension address, own ID, as whole frames:
+ * F9 FF id 03 7F addr cs -> F9 F5 id len 7F addr value cs. */
+static void test_ext_0x7F_each_address(void **state)
+{
+    (void)state;
+    kt_init(&fx, kt_product_pot(), 1);
+    /* 0x01 user-data source: loaded from flash (0) */
+    kt_send_hex(&fx, "F9 FF 01 03 7F 01 7B");
+    kt_reply_is_hex(&fx, "F9 F5 01 04 7F 01 00 7A");
+    assert_int_equal(fx.reply.delay_us, 200);
+    km_servo_set_userdata_source(&fx.s, KM_USERDATA_DEFAULTS_INVALID);
+    kt_send_hex(&fx, "F9 FF 01 03 7F 01 7B");
+    kt_reply_is_hex(&fx, "F9 F5 01 04 7F 01 03 77");
+    /* 0x02 reset cause: power-on (0), then software (2) */
+    kt_send_hex(&fx, "F9 FF 01 03 7F 02 7A");
+    kt_reply_is_hex(&fx, "F9 F5 01 04 7F 02 00 79");
+    km_servo_set_reset_cause(&fx.s, 2);
+    kt_send_hex(&fx, "F9 FF 01 03 7F 02 7A");
+    kt_reply_is_hex(&fx, "F9 F5 01 04 7F 02 02 77");
+    /* 0x03 active baud / 100, u16: 1152 = 80 04 */
+    kt_send_hex(&fx, "F9 FF 01 03 7F 03 79");
+    kt_reply_is_hex(&fx, "F9 F5 01 05 7F 03 80 04 F3");
+    kt_write_u16(&fx, 1, 0x10, 5000); /* stored; in force only after restart */
+    kt_send_hex(&fx, "F9 FF 01 03 7F 03 79");
+    kt_reply_is_hex(&fx, "F9 F5 01 05 7F 03 80 04 F3");
+    km_servo_set_active_baud(&fx.s, 9600); /* the board fell back */
+    kt_send_hex(&fx, "F9 FF 01 03 7F 03 79");
+    kt_reply_is_hex(&fx, "F9 F5 01 05 7F 03 60 00 17");
+    kt_ping_is(&fx, 1, 0);
+}
+
+/* An address 0x7F does not have, or a missing or extra address byte: bit 5
+ * and the short response with the command's own status, nothing changes. */
+static void test_ext_0x7F_bad_address_or_length(void **state)
+{
+    (void)state;
+    static const char *frames[] = {
+        "F9 FF 01 03 7F 00 7C",    /* address 0 */
+        "F9 FF 01 03 7F 09 73",    /* address 9 */
+        "F9 FF 01 03 7F 04 78",    /* the first address after the last one */
+        "F9 FF 01 03 7F FF 7D",    /* address 0xFF */
+        "F9 FF 01 02 7F 7D",       /* no address byte */
+        "F9 FF 01 04 7F 01 00 7A", /* an extra byte after a good address */
+    };
+    for (unsigned i = 0; i < sizeof frames / sizeof frames[0]; i++) {
+        kt_init(&fx, kt_product_pot(), 1);
+        kt_snap_t sn;
+        kt_snap(&fx, &sn);
+        kt_send_hex(&fx, frames[i]);
+        kt_reply_is_hex(&fx, "F9 F5 01 02 20 DC");
+        assert_int_equal(fx.reply.delay_us, 200);
+        kt_assert_unchanged(&fx, &sn); /* its own answer carried the bit 5 */
+        kt_ping_is(&fx, 1, 0);
+    }
+}
+
+/* "Super ID": 0x7F is a query like 0x02: every servo answers with its own
+ * ID in its slot, slot = the longest extension answer, 7 + 2 bytes, at the
+ * active baud; an error answer is a short response (6 bytes). */
+static void test_ext_0x7F_super_id_slots(void **state)
+{
+    (void)state;
+    static const uint8_t ids[] = {0, 1, 3, 250};
+    assert_int_equal(kt_slot_us(9, 115200), 955); /* 110 bits: 954.9 us */
+    for (unsigned i = 0; i < sizeof ids; i++) {
+        kt_init(&fx, kt_product_pot(), ids[i]);
+        uint8_t want[16];
+        static const uint8_t src[] = {0x01, 0x00};
+        kt_ext_read(&fx, KM_ID_SUPER, 0x01);
+        const unsigned n = kt_response(want, ids[i], 0x7F, src, 2);
+        assert_int_equal(fx.reply.len, n);
+        assert_memory_equal(fx.reply.bytes, want, n);
+        assert_int_equal(fx.reply.delay_us, 200u + ids[i] * kt_slot_us(9, 115200));
+        kt_ext_read(&fx, KM_ID_SUPER, 0x03); /* the longest answer: same slot */
+        static const uint8_t baud[] = {0x03, 0x80, 0x04};
+        const unsigned n3 = kt_response(want, ids[i], 0x7F, baud, 3);
+        assert_int_equal(fx.reply.len, n3);
+        assert_memory_equal(fx.reply.bytes, want, n3);
+        assert_int_equal(fx.reply.delay_us, 200u + ids[i] * kt_slot_us(9, 115200));
+        kt_ext_read(&fx, KM_ID_SUPER, 0x09);
+        kt_reply_is_status(&fx, ids[i], KM_ST_EXCEPTION);
+        assert_int_equal(fx.reply.delay_us, 200u + ids[i] * kt_slot_us(6, 115200));
+        /* at 9600 baud from the store, and at a board's fallback baud */
+        kt_persisted_set(&fx, 0x10, 96);
+        kt_reinit(&fx, kt_product_pot());
+        kt_ext_read(&fx, KM_ID_SUPER, 0x01);
+        assert_int_equal(fx.reply.delay_us, 200u + ids[i] * kt_slot_us(9, 9600));
+        km_servo_set_active_baud(&fx.s, 57600);
+        kt_ext_read(&fx, KM_ID_SUPER, 0x02);
+        assert_int_equal(fx.reply.delay_us, 200u + ids[i] * kt_slot_us(9, 57600));
+    }
+}
+
+/* Broadcast 0x7F: executed, never answered, nothing changes. */
+static void test_ext_0x7F_broadcast_no_answer(void **state)
+{
+    (void)state;
+    kt_init(&fx, kt_product_pot(), 1);
+    kt_snap_t sn;
+    kt_snap(&fx, &sn);
+    kt_send_hex(&fx, "F9 FF FE 03 7F 01 7E");
+    kt_no_reply(&fx);
+    kt_assert_unchanged(&fx, &sn);
+    kt_ping_is(&fx, 1, 0);
+}
+
+/* "One life cycle for bits 5 and 6" rule 4: an extension read reports its
+ * own outcome only; unreported bits (a checksum error, a failed level-0
+ * write) stay for the next ping. */
+static void test_ext_0x7F_keeps_unreported_bits(void **state)
+{
+    (void)state;
+    kt_init(&fx, kt_product_pot(), 1);
+    km_servo_note_checksum_error(&fx.s);
+    kt_send_hex(&fx, "F9 FF 01 05 03 13 E9 03 F7"); /* 1001: fails, level 0 */
+    kt_no_reply(&fx);
+    kt_send_hex(&fx, "F9 FF 01 03 7F 01 7B");
+    kt_reply_is_hex(&fx, "F9 F5 01 04 7F 01 00 7A");
+    kt_send_hex(&fx, "F9 FF 01 03 7F 09 73");
+    kt_reply_is_hex(&fx, "F9 F5 01 02 20 DC"); /* own bit 5 only, not 0x60 */
+    kt_send_hex(&fx, "F9 FF FD 03 7F 01 7F");
+    kt_reply_is_hex(&fx, "F9 F5 01 04 7F 01 00 7A");
+    assert_int_equal(km_servo_status(&fx.s), KM_ST_EXCEPTION | KM_ST_FAILED);
+    kt_send_hex(&fx, "F9 FF 01 02 01 FB");
+    kt_reply_is_hex(&fx, "F9 F5 01 02 60 9C");
+    kt_send_hex(&fx, "F9 FF 01 02 01 FB");
+    kt_reply_is_hex(&fx, "F9 F5 01 02 00 FC");
+}
+
+/* ---- init without a store ------------------------------------------------ */
+
+/* km_servo_init(persisted = NULL): every register at its §5 / product
+ * default, 0x5B..0x5D equal to 0x13..0x15 (§5.4), the active baud the
+ * default 115200, ID 0. */
+static void test_s5_init_without_store_all_defaults(void **state)
+{
+    (void)state;
+    const km_product_t *ps[2] = {kt_product_pot(), kt_product_enc()};
+    for (unsigned pi = 0; pi < 2; pi++) {
+        const km_product_t *p = ps[pi];
+        kt_init(&fx, p, 5);
+        memset(&fx.s, 0xA5, sizeof fx.s); /* nothing may survive from before */
+        km_servo_init(&fx.s, p, NULL, 1, &fx.ops);
+        for (unsigned i = 0; i < sizeof persisted_addrs; i++) {
+            const uint8_t a = persisted_addrs[i];
+            if (reg_by_addr(a) != spec_default(a, p)) {
+                fail_msg("0x%02X = 0x%X, want 0x%X", a, (unsigned)reg_by_addr(a), (unsigned)spec_default(a, p));
+            }
+        }
+        assert_int_equal(reg_by_addr(0x5B), 1000);
+        assert_int_equal(reg_by_addr(0x5C), p->max_current_ma);
+        assert_int_equal(reg_by_addr(0x5D), p->max_speed_dps);
+        assert_int_equal(reg_by_addr(0x5B), reg_by_addr(0x13));
+        assert_int_equal(reg_by_addr(0x5C), reg_by_addr(0x14));
+        assert_int_equal(reg_by_addr(0x5D), reg_by_addr(0x15));
+        assert_int_equal(reg_by_addr(0x5A), 0);
+        assert_int_equal(reg_by_addr(0x64), 3);
+        assert_int_equal(km_servo_active_baud(&fx.s), 115200);
+        assert_int_equal(km_servo_id(&fx.s), 0);
+        assert_int_equal(km_servo_status(&fx.s), 0);
+        assert_false(fx.s.sync.full);
+        kt_ping_is(&fx, 0, 0);
+        kt_ext_read(&fx, 0, 0x03);
+        uint8_t want[16];
+        static const uint8_t baud[] = {0x03, 0x80, 0x04};
+        const unsigned n = kt_response(want, 0, 0x7F, baud, 3);
+        assert_int_equal(fx.reply.len, n);
+        assert_memory_equal(fx.reply.bytes, want, n);
+        assert_int_equal(fx.fake.n_commits, 0);
+    }
+}
+
+/* ---- "Limits that contradict each other" --------------------------------- */
+
+/* 0x5B <= 0x13, 0x5C <= 0x14, 0x5D <= 0x15: at the maximum accepted, one
+ * above refused with bit 6 and nothing changes; a write of the maximum
+ * register moves the runtime limit with it, down and up (§5.4 "follows"). */
+static void test_limits_runtime_not_above_maximum(void **state)
+{
+    (void)state;
+    static const struct { uint8_t max_addr, lim_addr; uint16_t m; } c[] = {
+        {0x13, 0x5B, 500}, {0x14, 0x5C, 1500}, {0x15, 0x5D, 500},
+    };
+    for (unsigned i = 0; i < 3; i++) {
+        kt_init(&fx, kt_product_pot(), ID);
+        kt_write_u16(&fx, ID, c[i].max_addr, c[i].m);
+        assert_int_equal(reg_by_addr(c[i].lim_addr), c[i].m);
+        kt_write_u16(&fx, ID, c[i].lim_addr, (uint16_t)(c[i].m - 1));
+        kt_ping_is(&fx, ID, 0);
+        kt_write_u16(&fx, ID, c[i].lim_addr, c[i].m); /* at the edge */
+        kt_ping_is(&fx, ID, 0);
+        assert_int_equal(reg_by_addr(c[i].lim_addr), c[i].m);
+        kt_write_u16(&fx, ID, c[i].lim_addr, (uint16_t)(c[i].m - 1));
+        kt_snap_t sn;
+        kt_snap(&fx, &sn);
+        kt_write_u16(&fx, ID, c[i].lim_addr, (uint16_t)(c[i].m + 1)); /* past it */
+        sn.unreported |= KM_ST_FAILED;
+        kt_assert_unchanged(&fx, &sn);
+        kt_ping_is(&fx, ID, KM_ST_FAILED);
+        kt_write_u16(&fx, ID, c[i].lim_addr, 0);
+        kt_ping_is(&fx, ID, 0);
+        assert_int_equal(reg_by_addr(c[i].lim_addr), 0);
+        kt_write_u16(&fx, ID, c[i].max_addr, (uint16_t)(c[i].m + 100)); /* follows up */
+        assert_int_equal(reg_by_addr(c[i].lim_addr), c[i].m + 100);
+        kt_write_u16(&fx, ID, c[i].max_addr, 200); /* and down */
+        assert_int_equal(reg_by_addr(c[i].lim_addr), 200);
+        kt_ping_is(&fx, ID, 0);
+    }
+}
+
+static void write_i16(uint8_t addr, int16_t v)
+{
+    kt_write_u16(&fx, ID, addr, (uint16_t)v);
+}
+
+static void angles_are(int16_t lo, int16_t hi)
+{
+    assert_int_equal((int16_t)reg_by_addr(0x19), lo);
+    assert_int_equal((int16_t)reg_by_addr(0x1A), hi);
+}
+
+/* A write that must be refused: bit 6 at the next ping, nothing changes,
+ * nothing committed. */
+static void refused_i16(uint8_t addr, int16_t v)
+{
+    kt_snap_t sn;
+    kt_snap(&fx, &sn);
+    write_i16(addr, v);
+    sn.unreported |= KM_ST_FAILED;
+    kt_assert_unchanged(&fx, &sn);
+    kt_ping_is(&fx, ID, KM_ST_FAILED);
+}
+
+static void accepted_i16(uint8_t addr, int16_t v)
+{
+    const unsigned c0 = fx.fake.n_commits;
+    write_i16(addr, v);
+    kt_ping_is(&fx, ID, 0);
+    assert_int_equal(fx.fake.n_commits, c0 + 1u);
+    assert_int_equal((int16_t)reg_by_addr(addr), v);
+}
+
+/* 0x19 < 0x1A when both are set: at the edge (min = max) and past it
+ * refused; one below accepted; 0 = no limit on either side is always
+ * consistent. */
+static void test_limits_angle_min_below_max(void **state)
+{
+    (void)state;
+    kt_init(&fx, kt_product_pot(), ID); /* -1350 .. 1350 */
+    accepted_i16(0x19, 1349);
+    refused_i16(0x19, 1350); /* min = max */
+    angles_are(1349, 1350);
+    kt_init(&fx, kt_product_pot(), ID);
+    accepted_i16(0x1A, -1349);
+    refused_i16(0x1A, -1350); /* max = min */
+    angles_are(-1350, -1349);
+    kt_init(&fx, kt_product_pot(), ID);
+    accepted_i16(0x1A, 500);
+    refused_i16(0x19, 1000); /* min > max */
+    angles_are(-1350, 500);
+    /* 0 = no limit */
+    accepted_i16(0x1A, 0);
+    accepted_i16(0x19, 1350); /* no maximum: any minimum */
+    refused_i16(0x1A, 1350);  /* both set again: min = max */
+    refused_i16(0x1A, 100);
+    accepted_i16(0x19, 0);
+    accepted_i16(0x1A, -1350); /* no minimum: any maximum */
+    refused_i16(0x19, -1350);
+    accepted_i16(0x1A, 0);
+    angles_are(0, 0);
+}
+
+/* Moving the window past itself: the order that keeps min < max works, the
+ * other is refused at its first write (nothing changes). */
+static void test_limits_angle_window_both_write_orders(void **state)
 {
     (void)state;
     kt_init(&fx, kt_product_pot(), ID);
-    const uint8_t loaded[1] = {KM_USERDATA_LOADED};
-    kt_read(&fx, ID, 0x0D);
-    kt_reply_is_read(&fx, ID, 0x0D, loaded, 1);
-    km_servo_set_userdata_source(&fx.s, KM_USERDATA_DEFAULTS_INVALID);
-    const uint8_t invalid[1] = {3};
-    kt_read(&fx, ID, 0x0D);
-    kt_reply_is_read(&fx, ID, 0x0D, invalid, 1);
-    kt_write_u8(&fx, ID, 0x0D, 0);
-    assert_int_equal(km_servo_status(&fx.s), KM_ST_EXCEPTION); /* read-only: bit 5 */
-    kt_read(&fx, ID, 0x0D);
-    kt_reply_is_read(&fx, ID, 0x0D, invalid, 1);
+    accepted_i16(0x19, -1000);
+    accepted_i16(0x1A, -500);
+    /* to 500 .. 1000: minimum first is refused (500 >= -500) */
+    refused_i16(0x19, 500);
+    angles_are(-1000, -500);
+    accepted_i16(0x1A, 1000); /* maximum first */
+    accepted_i16(0x19, 500);
+    angles_are(500, 1000);
+    /* back to -1000 .. -500: maximum first is refused (-500 <= 500) */
+    refused_i16(0x1A, -500);
+    angles_are(500, 1000);
+    accepted_i16(0x19, -1000); /* minimum first */
+    accepted_i16(0x1A, -500);
+    angles_are(-1000, -500);
+}
+
+/* Stored angle limits that contradict each other (a damaged store) both
+ * start at the product defaults; consistent ones, 0 = no limit included,
+ * are kept; nothing else is touched. */
+static void test_limits_angle_stored_contradicting_at_init(void **state)
+{
+    (void)state;
+    static const struct { int16_t lo, hi; bool kept; } c[] = {
+        {1000, 500, false}, {500, 500, false}, {-1, -2, false},
+        {0, -500, true}, {-500, 0, true}, {0, 0, true}, {-1000, 1000, true}, {1349, 1350, true},
+    };
+    const km_product_t *p = kt_product_pot();
+    for (unsigned i = 0; i < sizeof c / sizeof c[0]; i++) {
+        kt_init(&fx, p, ID);
+        kt_persisted_set(&fx, 0x19, (uint16_t)c[i].lo);
+        kt_persisted_set(&fx, 0x1A, (uint16_t)c[i].hi);
+        kt_persisted_set(&fx, 0x13, 700);
+        kt_reinit(&fx, p);
+        if (c[i].kept) {
+            angles_are(c[i].lo, c[i].hi);
+        } else {
+            angles_are(p->angle_min, p->angle_max);
+        }
+        assert_int_equal(reg_by_addr(0x13), 700);
+        assert_int_equal(km_servo_id(&fx.s), ID);
+        assert_int_equal(km_servo_status(&fx.s), 0);
+    }
+    /* the encoder product's defaults are 0, 0 (no limits) */
+    kt_init(&fx, kt_product_enc(), ID);
+    kt_persisted_set(&fx, 0x19, 100);
+    kt_persisted_set(&fx, 0x1A, (uint16_t)-100);
+    kt_reinit(&fx, kt_product_enc());
+    angles_are(0, 0);
+}
+
+/* ---- "Zeroing" ------------------------------------------------------------ */
+
+/* With a hardware fault latched, both zeroing paths (a write of 0x46, 0x18
+ * = 0 on an encoder) are refused with bit 6 and send no request; an
+ * ordinary 0x18 increment still works; after the restart (re-init) that
+ * clears the fault, zeroing works again. */
+static void test_zeroing_refused_while_fault_latched(void **state)
+{
+    (void)state;
+    kt_init(&fx, kt_product_enc(), ID);
+    km_live_t live = {0};
+    live.hw_faults = 0x20; /* position sensor */
+    km_servo_set_live(&fx.s, &live);
+    live.hw_faults = 0;
+    km_servo_set_live(&fx.s, &live); /* gone from the sensors, still latched */
+    static const uint8_t v2[] = {0x00, 0x00}, v4[] = {0x01, 0x02, 0x03, 0x04};
+    kt_snap_t sn;
+    kt_snap(&fx, &sn);
+    kt_write(&fx, ID, 0x46, v2, 2);
+    sn.unreported |= KM_ST_FAILED;
+    kt_assert_unchanged(&fx, &sn);
+    kt_ping_is(&fx, ID, KM_ST_HW_FAULT | KM_ST_FAILED);
+    kt_snap(&fx, &sn);
+    kt_write(&fx, ID, 0x46, v4, 4);
+    sn.unreported |= KM_ST_FAILED;
+    kt_assert_unchanged(&fx, &sn);
+    kt_ping_is(&fx, ID, KM_ST_HW_FAULT | KM_ST_FAILED);
+    kt_snap(&fx, &sn);
+    kt_write_u8(&fx, ID, 0x18, 0);
+    sn.unreported |= KM_ST_FAILED;
+    kt_assert_unchanged(&fx, &sn); /* 0x17 unchanged, nothing committed */
+    kt_ping_is(&fx, ID, KM_ST_HW_FAULT | KM_ST_FAILED);
+    /* at response level 1 the write's own answer says so */
+    kt_write_u8(&fx, ID, 0x11, 0x0A);
+    kt_reply_is_status(&fx, ID, KM_ST_HW_FAULT);
+    kt_write(&fx, ID, 0x46, v2, 2);
+    kt_reply_is_status(&fx, ID, KM_ST_HW_FAULT | KM_ST_FAILED);
+    kt_write_u8(&fx, ID, 0x18, 0);
+    kt_reply_is_status(&fx, ID, KM_ST_HW_FAULT | KM_ST_FAILED);
+    /* an ordinary increment only changes 0x17 */
+    const unsigned c0 = fx.fake.n_commits;
+    kt_write_u8(&fx, ID, 0x18, 5);
+    kt_reply_is_status(&fx, ID, KM_ST_HW_FAULT);
+    assert_int_equal((int16_t)reg_by_addr(0x17), 5);
+    assert_int_equal(fx.fake.n_commits, c0 + 1u);
+    assert_int_equal(kt_commit_value(&fx.fake.commits[c0], 0x17), 5);
+    assert_int_equal(fx.fake.n_requests, 0);
+    kt_ping_is(&fx, ID, KM_ST_HW_FAULT);
+    /* restart = re-init: the latch is gone, both paths zero again */
+    kt_reinit(&fx, kt_product_enc());
+    kt_write(&fx, ID, 0x46, v2, 2);
+    kt_write_u8(&fx, ID, 0x18, 0);
+    assert_int_equal(fx.fake.n_requests, 2);
+    assert_int_equal(fx.fake.requests[0].kind, KM_REQ_ZERO_POSITION);
+    assert_int_equal(fx.fake.requests[1].kind, KM_REQ_ZERO_POSITION);
+    kt_ping_is(&fx, ID, 0);
+}
+
+/* On a potentiometer product 0x18 = 0 is an ordinary increment of 0, so a
+ * latched fault does not refuse it (§6, "Zeroing"). */
+static void test_zeroing_pot_0x18_zero_is_an_increment_with_fault(void **state)
+{
+    (void)state;
+    kt_init(&fx, kt_product_pot(), ID);
+    km_live_t live = {0};
+    live.hw_faults = 0x02;
+    km_servo_set_live(&fx.s, &live);
+    kt_write_u8(&fx, ID, 0x18, 0);
+    kt_ping_is(&fx, ID, KM_ST_HW_FAULT);
+    assert_int_equal(fx.fake.n_requests, 0);
+    assert_int_equal(reg_by_addr(0x17), 0);
+}
+
+/* ---- "Restart" -------------------------------------------------------------- */
+
+/* After a valid restart nothing more runs until re-init: every later frame
+ * (a write, pings own and super, a read, 0x04, 0x84, 0x83 listing us, 0x7F,
+ * another restart) is not answered and changes not one byte. */
+static void check_dead_after_restart(void)
+{
+    static const char *later[] = {
+        "F9 FF 01 05 03 13 F4 01 EE",     /* write 0x13 = 500 */
+        "F9 FF 01 02 01 FB",              /* ping */
+        "F9 FF FD 02 01 FF",              /* super ping */
+        "F9 FF 01 03 02 01 F8",           /* read 0x01 */
+        "F9 FF 01 03 02 20 D9",           /* read of a reserved address */
+        "F9 FF 01 04 04 64 02 90",        /* 0x04 torque on */
+        "F9 FF FE 02 84 7B",              /* 0x84 */
+        "F9 FF 01 02 84 78",              /* 0x84, own ID */
+        "F9 FF FE 06 83 64 01 01 02 10",  /* 0x83 listing us */
+        "F9 FF 01 03 7F 01 7B",           /* extension read */
+        "F9 FF 01 03 82 13 66",           /* unknown command */
+        "F9 FF 01 07 03 02 E1 E2 E3 E4 68", /* another restart */
+    };
+    assert_true(fx.s.restarting);
+    assert_int_equal(fx.fake.restarts, 1);
+    for (unsigned i = 0; i < sizeof later / sizeof later[0]; i++) {
+        const km_servo_t before = fx.s;
+        const kt_fake_t fake_before = fx.fake;
+        kt_send_hex(&fx, later[i]);
+        if (fx.reply.len != 0) {
+            fail_msg("%s answered after a restart", later[i]);
+        }
+        assert_memory_equal(&before, &fx.s, sizeof before);
+        assert_memory_equal(&fake_before, &fx.fake, sizeof fake_before);
+    }
+    kt_reinit(&fx, kt_product_pot()); /* the restart itself */
+    assert_false(fx.s.restarting);
+    kt_send_hex(&fx, "F9 FF 01 02 01 FB");
+    kt_reply_is_hex(&fx, "F9 F5 01 02 00 FC");
+}
+
+static void test_restart_nothing_runs_after_it(void **state)
+{
+    (void)state;
+    /* to the own ID at response level 1 (still no answer) */
+    kt_init(&fx, kt_product_pot(), 1);
+    kt_send_hex(&fx, "F9 FF 01 04 03 11 0A DC");
+    kt_reply_is_hex(&fx, "F9 F5 01 02 00 FC");
+    kt_send_hex(&fx, "F9 FF 01 07 03 02 E1 E2 E3 E4 68");
+    kt_no_reply(&fx);
+    check_dead_after_restart();
+    /* broadcast */
+    kt_init(&fx, kt_product_pot(), 1);
+    const uint8_t magic[] = {0xE1, 0xE2, 0xE3, 0xE4};
+    kt_write(&fx, KM_ID_BROADCAST, 0x02, magic, 4);
+    kt_no_reply(&fx);
+    check_dead_after_restart();
+    /* buffered by 0x04, run by 0x84 */
+    kt_init(&fx, kt_product_pot(), 1);
+    kt_send_hex(&fx, "F9 FF 01 07 04 02 E1 E2 E3 E4 67");
+    assert_int_equal(fx.fake.restarts, 0);
+    kt_send_hex(&fx, "F9 FF FE 02 84 7B");
+    kt_no_reply(&fx);
+    check_dead_after_restart();
+    /* a wrong magic is no restart: the servo keeps answering */
+    kt_init(&fx, kt_product_pot(), 1);
+    const uint8_t wrong[] = {0xE1, 0xE2, 0xE3, 0xE5};
+    kt_write(&fx, 1, 0x02, wrong, 4);
+    assert_false(fx.s.restarting);
+    kt_send_hex(&fx, "F9 FF 01 02 01 FB");
+    kt_reply_is_hex(&fx, "F9 F5 01 02 40 BC");
 }
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_s7_0x0D_userdata_source),
         cmocka_unit_test(test_s5_1_0x01_status_read),
         cmocka_unit_test(test_s5_1_0x0A_model_text),
         cmocka_unit_test(test_s5_1_0x0B_protocol_version),
@@ -619,6 +1138,19 @@ int main(void)
         cmocka_unit_test(test_s6_encoder_only_commands_refused_on_pot),
         cmocka_unit_test(test_s5_3_0x46_zeroing_on_encoder),
         cmocka_unit_test(test_s5_4_servo_commands_requests),
+        cmocka_unit_test(test_ext_0x7F_each_address),
+        cmocka_unit_test(test_ext_0x7F_bad_address_or_length),
+        cmocka_unit_test(test_ext_0x7F_super_id_slots),
+        cmocka_unit_test(test_ext_0x7F_broadcast_no_answer),
+        cmocka_unit_test(test_ext_0x7F_keeps_unreported_bits),
+        cmocka_unit_test(test_s5_init_without_store_all_defaults),
+        cmocka_unit_test(test_limits_runtime_not_above_maximum),
+        cmocka_unit_test(test_limits_angle_min_below_max),
+        cmocka_unit_test(test_limits_angle_window_both_write_orders),
+        cmocka_unit_test(test_limits_angle_stored_contradicting_at_init),
+        cmocka_unit_test(test_zeroing_refused_while_fault_latched),
+        cmocka_unit_test(test_zeroing_pot_0x18_zero_is_an_increment_with_fault),
+        cmocka_unit_test(test_restart_nothing_runs_after_it),
     };
     return cmocka_run_group_tests_name("dispatch_commands", tests, NULL, NULL);
 }
