@@ -1,0 +1,272 @@
+/* control/km_control.c as it is today (the sensing half and the request
+ * interface; the motion half is not written yet, see km_control.h):
+ * PROTOCOL.md §5.1 zero offsets 0x16 + 0x17 and direction (0x11 bit 2),
+ * §5.1 0x11 bits 0/1 power-on and idle output, §5.4 0x64 torque switch to
+ * bridge mode, §5.3 live registers (speed over a 20 ms window, current,
+ * voltage, temperature, 0x35 hardware faults). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <string.h>
+
+#include "km_control.h"
+
+static km_control_t c;
+
+static km_control_config_t cfg_of(int16_t zo1, int16_t zo2, uint8_t config, uint8_t torque_switch)
+{
+    km_control_config_t cfg = {
+        .zero_offset1 = zo1,
+        .zero_offset2 = zo2,
+        .config = config,
+        .torque_switch = torque_switch,
+    };
+    return cfg;
+}
+
+static km_sensors_t sensors_at(int32_t position)
+{
+    km_sensors_t in;
+    memset(&in, 0, sizeof in);
+    in.position = position;
+    return in;
+}
+
+/* One tick; returns the live state and checks the bridge output equals the
+ * control's own bridge command. */
+static km_live_t step(const km_sensors_t *in, const km_control_config_t *cfg, uint32_t dt_us)
+{
+    km_live_t live;
+    memset(&live, 0x5A, sizeof live); /* every field must be written */
+    km_bridge_t bridge = {(km_bridge_mode_t)99, 1234};
+    km_control_step(&c, in, cfg, dt_us, &live, &bridge);
+    assert_int_equal(bridge.mode, c.bridge.mode);
+    assert_int_equal(bridge.pwm, c.bridge.pwm);
+    return live;
+}
+
+static void torque_switch(uint8_t v, const km_control_config_t *cfg)
+{
+    km_request_t req;
+    memset(&req, 0, sizeof req);
+    req.kind = KM_REQ_TORQUE_SWITCH;
+    req.u.u8 = v;
+    km_control_request(&c, &req, cfg);
+}
+
+/* §5.1: reported position = sensor + level-1 zero offset (0x16) + level-2
+ * zero offset (0x17), in 0.1 deg. */
+static void test_s5_1_position_is_sensor_plus_both_zero_offsets(void **state)
+{
+    (void)state;
+    static const struct { int32_t sensor; int16_t zo1, zo2; int32_t want; } t[] = {
+        {100, 37, -20, 117}, {0, 0, 0, 0}, {-900, -12, 0, -912},
+        {1350, 0, 300, 1650}, {-32768, -32768, -32768, -98304}, /* no 16-bit wrap */
+        {123456, 5, 5, 123466},
+    };
+    for (unsigned i = 0; i < sizeof t / sizeof t[0]; i++) {
+        const km_control_config_t cfg = cfg_of(t[i].zo1, t[i].zo2, 0x02, 3);
+        km_control_init(&c, &cfg);
+        const km_sensors_t in = sensors_at(t[i].sensor);
+        const km_live_t live = step(&in, &cfg, 1000);
+        assert_int_equal(live.position, t[i].want);
+    }
+}
+
+/* §5.1 0x11 bit 2 direction: set, the reported position (offsets applied)
+ * changes sign; clear, it does not. */
+static void test_s5_1_direction_bit_flips_position(void **state)
+{
+    (void)state;
+    const km_control_config_t fwd = cfg_of(37, -20, 0x02, 3);
+    const km_control_config_t rev = cfg_of(37, -20, 0x02 | 0x04, 3);
+    km_control_init(&c, &fwd);
+    const km_sensors_t in = sensors_at(100);
+    assert_int_equal(step(&in, &fwd, 1000).position, 117);
+    km_control_init(&c, &rev);
+    assert_int_equal(step(&in, &rev, 1000).position, -117);
+    /* other bits (response level, output bits) do not flip it */
+    const km_control_config_t other = cfg_of(37, -20, 0x0B, 3);
+    km_control_init(&c, &other);
+    assert_int_equal(step(&in, &other, 1000).position, 117);
+}
+
+/* §5.1 0x11 bit 0 power-on output: 0 free, 1 brake damping, from init on. */
+static void test_s5_1_power_on_output_bit0(void **state)
+{
+    (void)state;
+    for (uint8_t config = 0; config < 16; config++) {
+        const km_control_config_t cfg = cfg_of(0, 0, config, 3);
+        memset(&c, 0xA5, sizeof c);
+        km_control_init(&c, &cfg);
+        const km_bridge_mode_t want = (config & 0x01) ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE;
+        assert_int_equal(c.bridge.mode, want);
+        assert_int_equal(c.bridge.pwm, 0);
+        assert_int_equal(c.requests, 0);
+        const km_sensors_t in = sensors_at(0);
+        (void)step(&in, &cfg, 1000); /* the first tick outputs it */
+        assert_int_equal(c.bridge.mode, want);
+    }
+}
+
+/* §5.4 0x64 as the bridge sees it today: 0 free, 1 brake damping whatever
+ * 0x11 says; 2 and 3 (hold / armed: the position loop is not written yet)
+ * the idle output of 0x11 bit 1: 0 free, 1 brake. */
+static void test_s5_4_torque_switch_bridge_mode(void **state)
+{
+    (void)state;
+    for (uint8_t config = 0; config < 16; config++) {
+        const km_control_config_t cfg = cfg_of(0, 0, config, 3);
+        const km_bridge_mode_t idle = (config & 0x02) ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE;
+        static const uint8_t order[] = {0, 1, 2, 0, 3, 1, 2, 3};
+        km_control_init(&c, &cfg);
+        for (unsigned i = 0; i < sizeof order; i++) {
+            torque_switch(order[i], &cfg);
+            km_bridge_mode_t want = idle;
+            if (order[i] == 0) want = KM_BRIDGE_FREE;
+            if (order[i] == 1) want = KM_BRIDGE_BRAKE;
+            if (c.bridge.mode != want) {
+                fail_msg("0x11 = 0x%02X, 0x64 = %u: bridge %d, want %d", config, order[i], c.bridge.mode, want);
+            }
+            const km_sensors_t in = sensors_at(0);
+            const km_live_t live = step(&in, &cfg, 1000);
+            assert_int_equal(live.pwm, 0); /* never PWM today */
+        }
+        assert_int_equal(c.requests, sizeof order);
+        assert_int_equal(c.last_request.kind, KM_REQ_TORQUE_SWITCH);
+        assert_int_equal(c.last_request.u.u8, 3);
+    }
+}
+
+/* Motion requests are received and counted but leave the bridge as it is
+ * (km_control.h: the motion half is a later issue). */
+static void test_motion_requests_counted_bridge_unchanged(void **state)
+{
+    (void)state;
+    const km_control_config_t cfg = cfg_of(0, 0, 0x02, 3);
+    km_control_init(&c, &cfg);
+    torque_switch(1, &cfg);
+    km_request_t req;
+    memset(&req, 0, sizeof req);
+    req.kind = KM_REQ_MOVE_TIME;
+    req.u.move.target = 900;
+    req.u.move.param = 1000;
+    km_control_request(&c, &req, &cfg);
+    assert_int_equal(c.requests, 2);
+    assert_int_equal(c.last_request.kind, KM_REQ_MOVE_TIME);
+    assert_int_equal(c.last_request.u.move.target, 900);
+    assert_int_equal(c.last_request.u.move.param, 1000);
+    assert_int_equal(c.bridge.mode, KM_BRIDGE_BRAKE);
+    req.kind = KM_REQ_MOTOR_TORQUE;
+    req.u.i16 = -500;
+    km_control_request(&c, &req, &cfg);
+    assert_int_equal(c.requests, 3);
+    assert_int_equal(c.bridge.mode, KM_BRIDGE_BRAKE);
+}
+
+/* Runs `ticks` ticks of `dt_us`, the sensor moving `per_tick` 0.1 deg each;
+ * returns the last live state. */
+static km_live_t ramp(int32_t *pos, int32_t per_tick, unsigned ticks, uint32_t dt_us,
+                      const km_control_config_t *cfg)
+{
+    km_live_t live = {0};
+    for (unsigned i = 0; i < ticks; i++) {
+        *pos += per_tick;
+        const km_sensors_t in = sensors_at(*pos);
+        live = step(&in, cfg, dt_us);
+    }
+    return live;
+}
+
+/* §5.3 0x47 speed: position change over a 20 ms window, deg/s. A ramp of
+ * 0.1 deg per 1 ms is 100 deg/s; the value holds until the next window
+ * completes; no speed before the first window. */
+static void test_s5_3_speed_over_20ms_window(void **state)
+{
+    (void)state;
+    const km_control_config_t cfg = cfg_of(0, 0, 0x02, 3);
+    km_control_init(&c, &cfg);
+    int32_t pos = 500;
+    const km_sensors_t first = sensors_at(pos);
+    assert_int_equal(step(&first, &cfg, 1000).speed, 0); /* the first sample only sets the origin */
+    assert_int_equal(ramp(&pos, 1, 19, 1000, &cfg).speed, 0); /* 19 ms: window not full */
+    assert_int_equal(ramp(&pos, 1, 1, 1000, &cfg).speed, 100); /* 2 deg in 20 ms */
+    /* the next window: -0.5 deg per ms = -500 deg/s; held until it completes */
+    assert_int_equal(ramp(&pos, -5, 19, 1000, &cfg).speed, 100);
+    assert_int_equal(ramp(&pos, -5, 1, 1000, &cfg).speed, -500);
+    /* standing still */
+    assert_int_equal(ramp(&pos, 0, 20, 1000, &cfg).speed, 0);
+    /* 5 ms ticks: four make a window; 3 x 0.1 deg per 5 ms = 60 deg/s */
+    assert_int_equal(ramp(&pos, 3, 3, 5000, &cfg).speed, 0);
+    assert_int_equal(ramp(&pos, 3, 1, 5000, &cfg).speed, 60);
+    /* a window that overshoots 20 ms divides by the time it really took:
+     * 7 ms ticks, 3 ticks = 21 ms, 21 x 0.1 deg -> 100 deg/s */
+    assert_int_equal(ramp(&pos, 7, 2, 7000, &cfg).speed, 60);
+    assert_int_equal(ramp(&pos, 7, 1, 7000, &cfg).speed, 100);
+}
+
+/* Speed follows the reported position: with the direction bit set a
+ * rising sensor is a negative speed; zero offsets do not add speed. */
+static void test_s5_3_speed_follows_direction(void **state)
+{
+    (void)state;
+    const km_control_config_t rev = cfg_of(37, 100, 0x06, 3);
+    km_control_init(&c, &rev);
+    int32_t pos = 0;
+    const km_sensors_t first = sensors_at(pos);
+    (void)step(&first, &rev, 1000);
+    const km_live_t live = ramp(&pos, 2, 20, 1000, &rev);
+    assert_int_equal(live.speed, -200);
+    assert_int_equal(live.position, -(40 + 37 + 100));
+}
+
+/* §5.3 live fields copied from the sensors: current mA, voltage mV,
+ * temperature 0.1 degC -> degC (integer division), 0x35 fault bits; the
+ * rest of km_live_t (running, protections, deviation, rotation time, PWM)
+ * is 0 today. */
+static void test_s5_3_live_fields_from_sensors(void **state)
+{
+    (void)state;
+    const km_control_config_t cfg = cfg_of(0, 0, 0x02, 3);
+    km_control_init(&c, &cfg);
+    static const struct { int32_t cur, mv, c10; uint8_t faults; int32_t want_c; } t[] = {
+        {1500, 12100, 415, 0x00, 41}, {-800, 7400, 419, 0x20, 41}, {0, 0, 0, 0xFF, 0},
+        {3000, 25000, 1000, 0x81, 100}, {12, 5000, -15, 0x04, -1},
+    };
+    for (unsigned i = 0; i < sizeof t / sizeof t[0]; i++) {
+        km_sensors_t in = sensors_at(10);
+        in.current_ma = t[i].cur;
+        in.voltage_mv = t[i].mv;
+        in.temperature_c10 = t[i].c10;
+        in.faults = t[i].faults;
+        const km_live_t live = step(&in, &cfg, 1000);
+        assert_int_equal(live.current, t[i].cur);
+        assert_int_equal(live.voltage, t[i].mv);
+        assert_int_equal(live.temperature, t[i].want_c);
+        assert_int_equal(live.hw_faults, t[i].faults);
+        assert_int_equal(live.position, 10);
+        assert_int_equal(live.pwm, 0);
+        assert_int_equal(live.deviation, 0);
+        assert_int_equal(live.rotation_ms, 0);
+        assert_false(live.running);
+        assert_int_equal(live.protections, 0);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_s5_1_position_is_sensor_plus_both_zero_offsets),
+        cmocka_unit_test(test_s5_1_direction_bit_flips_position),
+        cmocka_unit_test(test_s5_1_power_on_output_bit0),
+        cmocka_unit_test(test_s5_4_torque_switch_bridge_mode),
+        cmocka_unit_test(test_motion_requests_counted_bridge_unchanged),
+        cmocka_unit_test(test_s5_3_speed_over_20ms_window),
+        cmocka_unit_test(test_s5_3_speed_follows_direction),
+        cmocka_unit_test(test_s5_3_live_fields_from_sensors),
+    };
+    return cmocka_run_group_tests_name("control", tests, NULL, NULL);
+}
