@@ -57,14 +57,14 @@ typedef struct {
     uint32_t values[KM_STORE_MAX_KEYS]; /* committed values, schema order */
     uint32_t hash;          /* of the schema's key list */
     uint32_t gen;           /* generation of the active page's snapshot */
-    uint32_t tail;          /* next free byte offset in the active page */
+    uint32_t tail;          /* next byte offset to program in the active page */
     uint32_t last_keys;     /* keys of the newest record (restated, see .c) */
     uint32_t suspect;       /* pages to erase before the next acknowledgement */
     uint32_t erased;        /* pages erased and blank-checked in this session */
     uint8_t active;         /* page of the newest valid snapshot, or KM_STORE_NO_PAGE */
     bool mounted;
     bool wrote;             /* a commit was attempted in this session */
-    bool dirty;             /* unreadable cells after the last record: compact first */
+    bool dirty;             /* torn record after the last one, or next page in doubt: compact first */
     bool need_snapshot;     /* schema changed since the snapshot: compact first */
     bool restate;           /* newest record is from a past session: restate it */
     bool restate_snapshot;  /* ... and it is a snapshot */

@@ -151,8 +151,9 @@ km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash,
                 best = pi;
                 memcpy(s->values, cand, schema->count * sizeof cand[0]);
             }
-        } else if (!pi.erased) {
-            /* May hold a torn snapshot that a later read finds valid:
+        } else {
+            /* May hold a torn snapshot that a later read finds valid, even
+             * if it reads erased now (a cut erase leaves weak cells):
              * erased before the session acknowledges anything. */
             s->suspect |= 1u << p;
         }
@@ -164,8 +165,20 @@ km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash,
         result = all_erased ? KM_STORE_MOUNT_DEFAULTS_BLANK : KM_STORE_MOUNT_DEFAULTS_INVALID;
     } else {
         pi = best;
-        s->tail = pi.valid_end;
-        s->dirty = pi.used_end > pi.valid_end;
+        /* The cell after the last valid record may be the first cell of a
+         * record a cut tore: weak, it can read erased now and not later, and
+         * on the G0 its ECC may be partly written. Never program it: the
+         * session starts one cell further. */
+        s->tail = pi.valid_end + flash->prog_size;
+        if (s->tail > flash->page_size) {
+            s->tail = flash->page_size;
+        }
+        /* Compact first if a torn record follows the last valid one, or if
+         * the next page of the ring (the only one a compaction from this
+         * page writes a higher generation into) is in doubt: it then gets
+         * the new snapshot, which also ends the doubt for later sessions. */
+        const uint32_t next = ((uint32_t)s->active + 1u) % flash->page_count;
+        s->dirty = pi.used_end > pi.valid_end || (s->suspect & (1u << next)) != 0u;
         s->restate = true;
         s->restate_snapshot = (pi.last_type == KM_REC_SNAPSHOT);
         s->last_keys = pi.last_keys;

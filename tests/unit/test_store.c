@@ -61,10 +61,19 @@ static void test_blank_mount_loads_defaults_with_no_flash_op(void **state)
             assert_false(km_store_maintain(&s_store));
         }
         assert_int_equal(prv_flash_ops(), 0);
-        /* Committing a default changes nothing: still no flash op. */
+        /* Committing a default: a page that reads erased may be a half
+         * erased one that reads otherwise later, so the session's first
+         * commit settles it with a write (erase every page, write the
+         * snapshot); after that, unchanged commits are free. */
         prv_commit1(0x10, 1152u);
-        assert_int_equal(prv_flash_ops(), 0);
-        assert_int_equal(prv_remount(), KM_STORE_MOUNT_DEFAULTS_BLANK);
+        const uint32_t ops = prv_flash_ops();
+        assert_true(ops > 0u);
+        assert_int_equal(s_sim.count.erases, s_flash.page_count);
+        prv_commit1(0x10, 1152u);
+        assert_int_equal(prv_flash_ops(), ops);
+        assert_int_equal(prv_remount(), KM_STORE_MOUNT_LOADED);
+        assert_int_equal(prv_get(0x10), 1152u);
+        assert_int_equal(s_sim.count.violations, 0);
     }
 }
 
@@ -324,9 +333,12 @@ static void test_torn_unstable_snapshot_cannot_win_later(void **state)
         for (uint32_t v = 1; s_flash.page_size - s_store.tail >= 120u; v++) {
             prv_commit1(0x19, v);
         }
-        /* maintain: first call erases the next page, second writes the
-         * snapshot; cut its last cell. */
-        assert_true(km_store_maintain(&s_store));
+        /* maintain erases the next page (unless the session's first commit
+         * on blank flash already did), then writes the snapshot: cut its
+         * last cell. */
+        if ((s_store.erased & 2u) == 0u) {
+            assert_true(km_store_maintain(&s_store));
+        }
         const uint32_t snap_cells = 120u / 8u;
         km_nor_sim_seed(&s_sim, seed);
         km_nor_sim_arm_cut(&s_sim, km_nor_sim_ops(&s_sim) + snap_cells - 1u,
