@@ -7,7 +7,12 @@
  * The answer starts exactly `delay_us` after the frame's last byte because
  * the timer is armed at end_tick + delay, end_tick being stamped by the RX
  * interrupt, not by when the main loop got to the frame. The main loop runs
- * the control tick every KM_APP_TICK_US and compacts the store when idle. */
+ * the control tick every KM_APP_TICK_US and compacts the store when idle.
+ *
+ * The loop never waits on the bus: an answer that cannot be handed to the
+ * TX path yet (the previous one is still on the wire) and a restart that
+ * must let an earlier answer finish are states the loop checks on each
+ * pass, sleeping in between, so the control tick and the watchdog go on. */
 #include <stdbool.h>
 #include <stdint.h>
 #include <string.h>
@@ -28,15 +33,6 @@
 #define KM_APP_RX_BUDGET 64u      /* bytes parsed per loop pass: bounds tick jitter */
 #define KM_APP_WATCHDOG_MS 500u
 
-/* Lowest inter-byte gap that drops a frame. A real UART delivers a frame's
- * bytes at line rate, so the parser's default (10 byte times, >= 1 ms)
- * holds. An emulated UART (QEMU, host-sim) delivers them when the host
- * schedules the emulator, which can pause for milliseconds between two
- * bytes of one frame: simulated boards raise this floor at build time. */
-#ifndef KM_APP_GAP_MIN_US
-#define KM_APP_GAP_MIN_US 1000u /* the parser default's own floor */
-#endif
-
 static km_rx_queue_t s_rxq;
 static km_parser_t s_parser;
 static km_frame_t s_frame;
@@ -44,6 +40,8 @@ static km_servo_t s_servo;
 static km_reply_t s_reply;
 static km_control_t s_control;
 static uint32_t s_last_control_tick;
+static uint32_t s_next_tick;
+static uint32_t s_tick_period;
 
 /* The answer being sent: owned by the TX path from arming until tx_busy ends. */
 static uint8_t s_tx[KM_FRAME_MAX];
@@ -53,6 +51,12 @@ static uint32_t s_answer_frame_end;      /* tick of the answered frame's last by
 static uint32_t s_answer_delay_us;       /* the delay it asked for */
 static volatile uint32_t s_answer_start; /* tick the answer's first byte was handed to the UART */
 static volatile bool s_answer_started;
+static volatile uint32_t s_tx_refused;   /* answers the UART would not take (diagnostic) */
+
+/* An answer in s_reply waiting for the TX buffer (frame end in s_reply_end):
+ * while it waits, no further frame is parsed, so s_reply stays intact. */
+static bool s_reply_waiting;
+static uint32_t s_reply_end;
 static bool s_restart_pending;
 
 static void ISR_rx_byte(void *ctx, uint8_t byte, uint32_t tick, bool lost)
@@ -64,10 +68,15 @@ static void ISR_rx_byte(void *ctx, uint8_t byte, uint32_t tick, bool lost)
 static void ISR_answer_due(void *ctx)
 {
     (void)ctx;
-    s_answer_start = km_hal_time_now();
-    s_answer_started = true;
-    (void)km_hal_uart_send(s_tx, s_tx_len);
     s_tx_armed = false;
+    if (km_hal_uart_send(s_tx, s_tx_len)) {
+        s_answer_start = km_hal_time_now();
+        s_answer_started = true;
+    } else {
+        /* Cannot happen while the loop arms only with TX idle; counted so
+         * a board whose send refuses is seen in tests, not silently. */
+        s_tx_refused++;
+    }
 }
 
 /* Ticks per microsecond, fixed at init: the hal tick is a whole number of
@@ -80,20 +89,27 @@ static uint32_t prv_us_to_ticks(uint32_t us)
     return us * s_ticks_per_us;
 }
 
-static void prv_schedule_answer(const km_reply_t *reply, uint32_t frame_end)
+/* Hands s_reply to the TX path; false if the UART is still sending the
+ * previous answer (try again on a later pass). */
+static bool prv_try_schedule_answer(void)
 {
-    /* A master waits for an answer before the next question, so a previous
-     * answer is always gone by now; if not (a master that does not wait), the
-     * new answer replaces the old one rather than colliding with it. */
-    while (km_hal_uart_tx_busy()) {
-    }
+    /* Cancel first: once cancel returns, the timer handler cannot run, so
+     * s_tx is either armed-and-unsent (a master that did not wait for it:
+     * the new answer replaces it rather than colliding with it) or handed
+     * to the UART. Checking TX before cancelling would leave a window in
+     * which the timer fires and the copy below overwrites a frame being
+     * sent. */
     km_hal_timer_cancel();
-    memcpy(s_tx, reply->bytes, reply->len);
-    s_tx_len = reply->len;
+    if (!s_tx_armed && km_hal_uart_tx_busy()) {
+        return false;
+    }
+    memcpy(s_tx, s_reply.bytes, s_reply.len);
+    s_tx_len = s_reply.len;
     s_tx_armed = true;
-    s_answer_frame_end = frame_end;
-    s_answer_delay_us = reply->delay_us;
-    km_hal_timer_at(frame_end + prv_us_to_ticks(reply->delay_us), ISR_answer_due, NULL);
+    s_answer_frame_end = s_reply_end;
+    s_answer_delay_us = s_reply.delay_us;
+    km_hal_timer_at(s_reply_end + prv_us_to_ticks(s_reply.delay_us), ISR_answer_due, NULL);
+    return true;
 }
 
 /* Measurement hook, called from the main loop after each answer started:
@@ -123,13 +139,16 @@ static void prv_on_frame(void)
 {
     km_servo_handle(&s_servo, &s_frame, &s_reply);
     if (s_reply.len > 0) {
-        prv_schedule_answer(&s_reply, s_frame.end_tick);
+        s_reply_end = s_frame.end_tick;
+        s_reply_waiting = !prv_try_schedule_answer();
     }
     prv_report_answer();
 }
 
 static void prv_on_events(unsigned events)
 {
+    /* The parser reports a call's checksum failures before the frame that
+     * call hands out, so they are judged against the ID in force then. */
     if ((events & KM_PARSE_CHECKSUM_ERR) &&
         km_parser_take_checksum_error(&s_parser, km_servo_id(&s_servo))) {
         km_servo_note_checksum_error(&s_servo);
@@ -139,27 +158,38 @@ static void prv_on_events(unsigned events)
     }
 }
 
+/* True while the parser must not be fed: a restart was requested (nothing
+ * received after a valid restart frame may take effect), or an answer
+ * waits for the TX buffer (the next frame's answer would overwrite it). */
+static bool prv_rx_blocked(void)
+{
+    return s_restart_pending || s_reply_waiting;
+}
+
 static void prv_drain_rx(void)
 {
     uint8_t byte;
     uint32_t tick;
     uint8_t flags;
-    for (unsigned n = 0; n < KM_APP_RX_BUDGET && km_rx_queue_pop(&s_rxq, &byte, &tick, &flags); n++) {
+    for (unsigned n = 0; n < KM_APP_RX_BUDGET && !prv_rx_blocked(); n++) {
+        if (!km_rx_queue_pop(&s_rxq, &byte, &tick, &flags)) {
+            break;
+        }
         if (flags & KM_RX_LOST) {
             km_parser_overrun(&s_parser);
         }
         prv_on_events(km_parser_feed(&s_parser, byte, tick, &s_frame));
     }
-    prv_on_events(km_parser_poll(&s_parser, km_hal_time_now(), &s_frame));
+    if (!prv_rx_blocked()) {
+        prv_on_events(km_parser_poll(&s_parser, km_hal_time_now(), &s_frame));
+    }
 }
 
-static void prv_restart_when_sent(void)
+/* 0x02 restart has no answer, but an answer to an earlier frame may still
+ * be armed or on the wire: the reset waits until it has gone out. */
+static bool prv_restart_ready(void)
 {
-    /* 0x02 restart has no answer, but an answer to an earlier frame may
-     * still be on the wire: let it finish, then reset for real. */
-    while (s_tx_armed || km_hal_uart_tx_busy()) {
-    }
-    km_hal_system_reset();
+    return s_restart_pending && !s_reply_waiting && !s_tx_armed && !km_hal_uart_tx_busy();
 }
 
 static km_control_config_t prv_control_config(void)
@@ -230,9 +260,31 @@ static const km_servo_ops_t s_ops = {
     .ctx = NULL,
 };
 
-_Noreturn void km_app_run(void)
+/* Opens the bus at the stored baud, or, if the board cannot make it, at
+ * the baud a fresh servo uses: a servo deaf at its own baud could never be
+ * reached to fix it. Extension register 0x03 tells the master. */
+static uint32_t prv_open_bus(uint32_t baud)
 {
+    if (km_hal_uart_init(baud, ISR_rx_byte, NULL)) {
+        return baud;
+    }
+    const uint32_t fallback = km_reg_default(KM_REG_BAUD, km_board_product()) * 100u;
+    (void)km_hal_uart_init(fallback, ISR_rx_byte, NULL); /* every board makes 115200 */
+    return fallback;
+}
+
+void km_app_init(void)
+{
+    s_tx_armed = false;
+    s_answer_started = false;
+    s_tx_refused = 0;
+    s_reply_waiting = false;
+    s_restart_pending = false;
+
     km_hal_system_init();
+    /* First, so a fault or a hang anywhere later (a store mount on bad
+     * flash, a stuck sensor) resets the MCU instead of hanging for ever. */
+    km_hal_watchdog_start(KM_APP_WATCHDOG_MS);
     km_hal_time_init();
     km_hal_motor_init();
     km_hal_sensors_init();
@@ -242,44 +294,68 @@ _Noreturn void km_app_run(void)
     uint32_t persisted[KM_USERDATA_MAX];
     const km_store_mount_t mount = km_app_userdata_mount(km_board_flash(), product, persisted);
     km_servo_init(&s_servo, product, persisted, km_hal_entropy(), &s_ops);
-    /* Register 0x0D tells the master where the user data came from; the
+    /* Extension 0x01 tells the master where the user data came from; the
      * store's mount results are in the same order as KM_USERDATA_*. */
     km_servo_set_userdata_source(&s_servo, (uint8_t)mount);
+    km_servo_set_reset_cause(&s_servo, (uint8_t)km_hal_reset_cause());
     const km_control_config_t cfg = prv_control_config();
     km_control_init(&s_control, &cfg);
 
-    const uint32_t baud = km_servo_active_baud(&s_servo);
+    km_rx_queue_init(&s_rxq);
+    const uint32_t baud = prv_open_bus(km_servo_active_baud(&s_servo));
+    km_servo_set_active_baud(&s_servo, baud);
+    /* docs/protocol-decisions.md "Inter-byte gap": the parser's rule, or
+     * the UART's delivery floor on an emulated board, whichever is longer. */
     uint32_t gap_us = km_parser_default_gap_us(baud);
-    if (gap_us < KM_APP_GAP_MIN_US) {
-        gap_us = KM_APP_GAP_MIN_US;
+    const uint32_t floor_us = km_hal_uart_gap_floor_us();
+    if (gap_us < floor_us) {
+        gap_us = floor_us;
     }
     km_parser_init(&s_parser, prv_us_to_ticks(gap_us));
-    km_rx_queue_init(&s_rxq);
-    (void)km_hal_uart_init(baud, ISR_rx_byte, NULL);
-    km_hal_watchdog_start(KM_APP_WATCHDOG_MS);
 
     s_last_control_tick = km_hal_time_now();
-    const uint32_t tick_period = prv_us_to_ticks(KM_APP_TICK_US);
-    uint32_t next_tick = s_last_control_tick;
+    s_tick_period = prv_us_to_ticks(KM_APP_TICK_US);
+    s_next_tick = s_last_control_tick;
+}
+
+void km_app_poll(void)
+{
+    prv_report_answer();
+    if (s_reply_waiting) {
+        s_reply_waiting = !prv_try_schedule_answer();
+    }
+    prv_drain_rx();
+    if (prv_restart_ready()) {
+        km_hal_system_reset();
+    }
+    const uint32_t now = km_hal_time_now();
+    if ((int32_t)(now - s_next_tick) >= 0) {
+        s_next_tick += s_tick_period;
+        prv_control_tick(now);
+        km_hal_watchdog_kick();
+    } else if (!km_app_userdata_maintain()) {
+        /* Check and sleep under the lock: WFI still wakes on an interrupt
+         * that became pending after the check (a byte, the answer timer,
+         * TX done, the 1 ms wake-up). */
+        const uint32_t irq = km_hal_irq_lock();
+        const bool rx_work = !prv_rx_blocked() && !km_rx_queue_empty(&s_rxq);
+        const bool tx_work = s_reply_waiting && !km_hal_uart_tx_busy();
+        if (!rx_work && !tx_work && !prv_restart_ready()) {
+            km_hal_idle();
+        }
+        km_hal_irq_restore(irq);
+    }
+}
+
+uint32_t km_app_tx_refused(void)
+{
+    return s_tx_refused;
+}
+
+_Noreturn void km_app_run(void)
+{
+    km_app_init();
     for (;;) {
-        prv_report_answer();
-        prv_drain_rx();
-        if (s_restart_pending) {
-            prv_restart_when_sent();
-        }
-        const uint32_t now = km_hal_time_now();
-        if ((int32_t)(now - next_tick) >= 0) {
-            next_tick += tick_period;
-            prv_control_tick(now);
-            km_hal_watchdog_kick();
-        } else if (!km_app_userdata_maintain()) {
-            /* Check and sleep under the lock: WFI still wakes on an
-             * interrupt that became pending after the check. */
-            const uint32_t irq = km_hal_irq_lock();
-            if (km_rx_queue_empty(&s_rxq) && !s_restart_pending) {
-                km_hal_idle();
-            }
-            km_hal_irq_restore(irq);
-        }
+        km_app_poll();
     }
 }

@@ -14,7 +14,22 @@ const km_flash_t *km_board_flash(void);
 /* Measurement hook (weak, empty by default): see km_app.c. */
 void km_app_answer_started(uint32_t frame_end, uint32_t started, uint32_t delay_us);
 
-/* Initialises everything and runs the main loop; never returns. */
+/* Initialises everything and runs the main loop; never returns. It is
+ * km_app_init() then km_app_poll() for ever; the two are separate so a host
+ * test can drive the real loop one pass at a time over a fake hal. */
 _Noreturn void km_app_run(void);
+
+/* Boot: hal, store mount, dispatcher, control, bus. Resets every piece of
+ * the app's state, so a test may call it again to model a reset. */
+void km_app_init(void);
+
+/* One pass of the main loop: report the last answer's timing, hand a
+ * waiting answer to TX, parse up to 64 received bytes, restart if one is
+ * due and nothing is left to send, run the control tick when due, else
+ * compact the store or sleep in km_hal_idle(). Never waits on the bus. */
+void km_app_poll(void);
+
+/* Answers the UART refused to start (0 unless a board breaks its contract). */
+uint32_t km_app_tx_refused(void);
 
 #endif
