@@ -636,15 +636,15 @@ static bool prv_multi_k_ok(uint8_t addr, uint8_t k)
 /* "Multi-ID write": every servo on the bus judges the frame. */
 static void prv_multi_write(km_servo_t *s, const km_frame_t *f)
 {
-    if (f->body_len < 2u || !prv_multi_addr_ok(f->body[0])) {
+    if (f->body_len < 1u || !prv_multi_addr_ok(f->body[0])) {
         /* §4: an address the command does not support is bit 5, on every
          * servo (each saw the broken command); nothing runs. */
         prv_exception(s);
         s->sync.full = false;
         return;
     }
-    const uint8_t n_params = (uint8_t)(f->body_len - 2u);
-    const uint8_t k = f->body[1];
+    const uint8_t n_params = f->body_len >= 2u ? (uint8_t)(f->body_len - 2u) : 0u;
+    const uint8_t k = f->body_len >= 2u ? f->body[1] : 0u;
     if (!prv_multi_k_ok(f->body[0], k) || n_params == 0u || n_params % (k + 1u) != 0u) {
         prv_fail(s); /* the right address with malformed entries: a bad value */
         s->sync.full = false;
@@ -724,17 +724,19 @@ static prv_report_t prv_dispatch(km_servo_t *s, const km_frame_t *f, km_reply_t 
         prv_answer_status(s, km_servo_status(s), f->id, reply);
         return PRV_ALL;
     case CMD_READ:
+        prv_read(s, f, reply);
         if (broadcast) {
+            reply->len = 0; /* run, so a bad address is bit 5; never answered */
             return PRV_UNANSWERED;
         }
-        prv_read(s, f, reply);
         /* The status register's value is the ping's status byte. */
         return f->body_len == 1 && f->body[0] == 0x01 && !s->flags ? PRV_ALL : PRV_OWN;
     case KM_CMD_EXT:
+        prv_ext_read(s, f, reply);
         if (broadcast) {
+            reply->len = 0;
             return PRV_UNANSWERED;
         }
-        prv_ext_read(s, f, reply);
         return PRV_OWN;
     case CMD_WRITE: {
         bool may_answer = true;
