@@ -109,8 +109,17 @@ static km_flash_result_t prv_program(void *ctx, uint32_t offset, const void *dat
         uint32_t word[2];
         memcpy(word, src + done, sizeof word);
         /* Only onto erased cells (NOR rule of the contract; the controller
-         * would also refuse with PROGERR). */
-        if (dst[0] != 0xFFFFFFFFu || dst[1] != 0xFFFFFFFFu) {
+         * would also refuse with PROGERR). This check reads content, so it
+         * cannot see a double word whose program a power cut started with
+         * no data bit moved yet: the store never asks for one (it never
+         * programs a cell a past session may have touched, see
+         * docs/store.md). A double ECC error on the read (ECC bits partly
+         * written) does show such a word: refuse it too. */
+        FLASH_ECCR = FLASH_ECCR_ECCC | FLASH_ECCR_ECCD;
+        s_ecc_nmi = false;
+        const bool ones = dst[0] == 0xFFFFFFFFu && dst[1] == 0xFFFFFFFFu;
+        if (!ones || s_ecc_nmi || (FLASH_ECCR & FLASH_ECCR_ECCD) != 0u) {
+            FLASH_ECCR = FLASH_ECCR_ECCC | FLASH_ECCR_ECCD;
             return KM_FLASH_ERR_PROGRAM;
         }
         if (!prv_begin()) {
