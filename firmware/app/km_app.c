@@ -352,6 +352,11 @@ uint32_t km_app_tx_refused(void)
     return s_tx_refused;
 }
 
+const km_servo_t *km_app_servo(void)
+{
+    return &s_servo;
+}
+
 _Noreturn void km_app_run(void)
 {
     km_app_init();

@@ -6,6 +6,7 @@
 
 #include "km_hal_flash.h"
 #include "km_product.h"
+#include "km_servo.h"
 
 /* Provided by the board: its product config and its user-data flash region. */
 const km_product_t *km_board_product(void);
@@ -31,5 +32,9 @@ void km_app_poll(void);
 
 /* Answers the UART refused to start (0 unless a board breaks its contract). */
 uint32_t km_app_tx_refused(void);
+
+/* The servo's register file and status, read-only, for host tests and the
+ * fuzz target's invariants (and a debugger). */
+const km_servo_t *km_app_servo(void);
 
 #endif

@@ -351,29 +351,30 @@ static void test_ext_userdata_source(void **state)
 
 /* ---- 15: TX race and unchecked UART results ------------------------------------ */
 
-/* A master that does not wait: a second frame lands while the first
- * answer's timer is due. Swept over every microsecond around the moment:
- * whatever the timing, every frame on the wire is whole and valid (the
- * old loop checked TX, then cancelled the timer, then overwrote the buffer
- * the UART was sending). */
+/* A master that does not wait: a second frame completes while the first
+ * one's answer is coming due. The response delay is 2 ms so a whole read
+ * fits before the ping's answer; the read's last byte is swept over every
+ * microsecond around that moment. Whatever the timing, every frame on the
+ * wire is whole and valid and the UART never refuses an answer (the old
+ * loop checked TX, then cancelled the timer, then overwrote the buffer:
+ * a timer firing in between sent one answer's head with another's tail). */
 static void test_s3_tx_buffer_never_overwritten_while_sending(void **state)
 {
     (void)state;
+    boot();
+    exchange("F9 FF 00 05 03 12 D0 07 0E", 5, NULL); /* 0x12 = 2000 us */
+    const uint8_t ping[] = {0xF9, 0xFF, 0x00, 0x02, 0x01, 0xFC};
+    uint8_t read[8];
+    const uint8_t adr = 0x0A;
+    const unsigned rn = frame(read, 0x00, 0x02, &adr, 1);
     unsigned answers = 0;
-    for (uint32_t off = 0; off < 160u; off++) {
-        kf_power_on();
-        run_ms(2);
-        const uint8_t ping[] = {0xF9, 0xFF, 0x00, 0x02, 0x01, 0xFC};
-        uint8_t read[8];
-        const uint8_t adr = 0x0A;
-        const unsigned rn = frame(read, 0x00, 0x02, &adr, 1);
+    for (uint32_t off = 0; off < 200u; off++) {
         const uint32_t t0 = kf_world.now;
         kf_send_at(t0, ping, sizeof ping);
-        /* the ping's last byte at t0 + 5 bytes; its answer due 200 us later */
-        const uint32_t ping_end = t0 + 5u * kf_byte_us();
-        const uint32_t read_start = ping_end + 200u - 80u + off - (uint32_t)(rn - 1u) * kf_byte_us();
-        kf_send_at(read_start, read, rn);
-        run_ms(10);
+        const uint32_t ping_end = kf_world.rx[kf_world.rx_n - 1u].tick;
+        const uint32_t read_last = ping_end + 2000u - 100u + off;
+        kf_send_at(read_last - (uint32_t)(rn - 1u) * kf_byte_us(), read, rn);
+        run_ms(12);
         wire_t w;
         take(&w);
         const unsigned frames = wire_frames_ok(&w);
@@ -384,7 +385,7 @@ static void test_s3_tx_buffer_never_overwritten_while_sending(void **state)
         assert_int_equal(km_app_tx_refused(), 0);
         assert_int_equal(kf_world.tx_refused, 0);
     }
-    assert_true(answers >= 160u);
+    assert_true(answers >= 200u);
 }
 
 /* A stored baud the board cannot make: the servo opens the bus at 115200

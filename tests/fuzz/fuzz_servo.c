@@ -1,97 +1,75 @@
-/* libFuzzer target for parser + dispatcher together: bus bytes in, answers
- * out, exactly as the firmware wires them (PROTOCOL.md §2-§5).
+/* libFuzzer target for the servo as the firmware wires it: bytes on a wire
+ * into the real main loop (firmware/app/km_app.c: RX queue, parser,
+ * checksum hand-off, dispatcher, answer timer, store on the NOR simulator,
+ * restarts), over the fake board of tests/support/km_fake_hal.h in virtual
+ * time (PROTOCOL.md §2-§5).
  *
- * Input: the same format as fuzz_parser.c (byte 0 gap, byte 1 start tick,
- * then (byte, control) pairs; control's top bits: 00 advance, 01 advance and
- * poll, 10 overrun, 11 tick jump), so the §2 seed corpus serves both. Byte 0
- * also picks the product variant (bit 4) and whether commits fail (bit 5).
+ * Input: byte 0 picks the servo's starting ID (low bits: 0 or 1, so the §2
+ * worked frames of the seed corpus address it) and the UART delivery floor
+ * (bit 4); byte 1 is unused (kept so the corpus of fuzz_parser serves
+ * both); then (byte, control) pairs: control's top bits 00 = the byte
+ * follows at line rate plus (control & 0x3F) us, 01 = plus that many ms,
+ * 10 = plus that many x 10 ms (long gaps, restarts), 11 = the servo resets
+ * (pin) before the byte.
  *
  * Invariants (abort() on violation):
- *  - an answer is a well-formed F9 F5 frame (length, checksum) of at most
- *    256 bytes, carries the ID the servo had when the frame arrived, and is
- *    never given to a broadcast frame or to a frame for another ID;
- *  - every register the servo stores passes its own validation: no write,
- *    however malformed, stores an out-of-range value (§4: a rejected write
- *    changes nothing);
- *  - commits name only persisted registers; a failed commit changes none of
- *    them;
- *  - a restart re-initialises from what was committed, and the servo keeps
- *    working. */
+ *  - everything the servo puts on the wire is whole F9 F5 frames with valid
+ *    checksums, and none overlaps another (one answer at a time);
+ *  - the main loop never spins and the watchdog never fires; the UART never
+ *    refuses an answer;
+ *  - every register the servo stores passes its own validation, and the
+ *    user data in RAM is what a reset reads back from flash;
+ *  - bits 5/6 are never reported twice: of two pings in a row, the second
+ *    answers with bits 5 and 6 clear; and the servo still answers. */
 #include <stddef.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "km_parser.h"
-#include "km_servo.h"
+#include "km_app.h"
+#include "km_fake_hal.h"
+#include "km_frame.h"
+#include "km_registers.h"
 
-static const km_product_t s_products[2] = {
-    {.model = "FUZZ-POT", .firmware_version = 0x00100100u, .variant = KM_VARIANT_POTENTIOMETER,
-     .max_current_ma = 2000, .max_speed_dps = 360, .zero_offset1 = 12, .angle_min = -1350,
-     .angle_max = 1350, .voltage_high_v = 9, .voltage_low_v = 6, .current_threshold_ma = 1500,
-     .baud_min_100 = 96, .baud_max_100 = 10000, .current_max_ma = 3000, .speed_max_dps = 720,
-     .travel_min = -1350, .travel_max = 1350, .zero_offset2_max = 100, .voltage_max_v = 20},
-    {.model = "FUZZ-ENCODER-16CH", .firmware_version = 0x52111002u, .variant = KM_VARIANT_ENCODER,
-     .max_current_ma = 3000, .max_speed_dps = 600, .zero_offset1 = 0, .angle_min = 0,
-     .angle_max = 0, .voltage_high_v = 14, .voltage_low_v = 9, .current_threshold_ma = 2500,
-     .baud_min_100 = 96, .baud_max_100 = 10000, .current_max_ma = 5000, .speed_max_dps = 1000,
-     .travel_min = -32768, .travel_max = 32767, .zero_offset2_max = 1800, .voltage_max_v = 30},
-};
-
-static km_servo_t s_servo;
-static const km_product_t *s_product;
-static uint32_t s_persisted[KM_REG_COUNT];
-static bool s_commit_fails;
-static bool s_restart;
-
-static bool prv_commit(void *ctx, const uint8_t *addrs, const uint32_t *values, uint8_t n)
+static void prv_check(int ok)
 {
-    (void)ctx;
-    for (uint8_t i = 0; i < n; i++) {
-        const int r = km_reg_find(addrs[i]);
-        if (r < 0 || !km_reg_table[r].persisted) {
-            abort();
-        }
-    }
-    if (s_commit_fails) {
-        return false;
-    }
-    for (uint8_t i = 0; i < n; i++) {
-        s_persisted[km_reg_find(addrs[i])] = values[i];
-    }
-    return true;
-}
-
-static void prv_restart(void *ctx)
-{
-    (void)ctx;
-    s_restart = true;
-}
-
-static void prv_request(void *ctx, const km_request_t *req)
-{
-    (void)ctx;
-    if ((unsigned)req->kind > (unsigned)KM_REQ_PROTECTION_CLEAR) {
+    if (!ok) {
         abort();
     }
 }
 
-static const km_servo_ops_t s_ops = {prv_commit, prv_restart, prv_request, NULL};
-
-static void prv_boot(uint32_t seed)
+static uint8_t prv_sum(const uint8_t *b, unsigned n)
 {
-    uint32_t p[KM_REG_COUNT];
-    uint8_t k = 0;
-    for (unsigned i = 0; i < KM_REG_COUNT; i++) {
-        if (km_reg_table[i].persisted) {
-            p[k++] = s_persisted[i];
-        }
+    unsigned s = 0;
+    for (unsigned i = 0; i < n; i++) {
+        s += b[i];
     }
-    km_servo_init(&s_servo, s_product, p, seed, &s_ops);
+    return (uint8_t)~s;
+}
+
+/* Everything sent so far is whole, valid frames; returns the count. */
+static unsigned prv_check_wire(uint8_t *last_status)
+{
+    static uint8_t w[KF_TX_MAX];
+    const unsigned n = kf_take_tx(w, sizeof w);
+    unsigned frames = 0;
+    for (unsigned i = 0; i < n;) {
+        prv_check(i + 4u <= n && w[i] == KM_HDR0 && w[i + 1] == KM_HDR1_RESPONSE);
+        const unsigned len = w[i + 3];
+        prv_check(len >= 2u && i + 4u + len <= n);
+        prv_check(w[i + 3 + len] == prv_sum(&w[i + 2], len + 1u));
+        if (len == 2u && last_status) {
+            *last_status = w[i + 4];
+        }
+        i += 4u + len;
+        frames++;
+    }
+    return frames;
 }
 
 static void prv_check_registers(void)
 {
+    const km_servo_t *s = km_app_servo();
     for (unsigned i = 0; i < KM_REG_COUNT; i++) {
         const km_reg_t *r = &km_reg_table[i];
         const uint8_t size = km_reg_fixed_size((km_layout_t)r->layout);
@@ -100,49 +78,36 @@ static void prv_check_registers(void)
         }
         uint8_t bytes[4];
         uint32_t packed;
-        km_put_le(bytes, km_servo_reg(&s_servo, (km_reg_index_t)i), size);
-        if (!km_reg_validate((km_reg_index_t)i, s_product, bytes, size, &packed)) {
-            abort();
-        }
-        if (r->persisted && km_servo_reg(&s_servo, (km_reg_index_t)i) != s_persisted[i]) {
-            abort(); /* RAM and flash disagree: a failed commit leaked */
+        km_put_le(bytes, km_servo_reg(s, (km_reg_index_t)i), size);
+        prv_check(km_reg_validate((km_reg_index_t)i, s->product, bytes, size, &packed));
+    }
+}
+
+static void prv_run(uint32_t us)
+{
+    prv_check(kf_run_for(us));
+    prv_check(!kf_world.spun && kf_world.watchdog_resets == 0);
+    prv_check(km_app_tx_refused() == 0 && kf_world.tx_refused == 0);
+}
+
+/* Runs until the wire is quiet: every byte delivered, no answer armed or
+ * on the wire (an answer may be a response delay of up to 65 ms away). */
+static void prv_settle(void)
+{
+    for (int i = 0; i < 200; i++) {
+        prv_run(1000);
+        if (kf_world.rx_head == kf_world.rx_n && !kf_world.timer_armed && !kf_world.tx_buf) {
+            prv_run(2000); /* past any inter-byte gap and a restart */
+            return;
         }
     }
 }
 
-static void prv_check_answer(const km_frame_t *f, uint8_t id_before, const km_reply_t *reply)
+static void prv_ping(uint8_t id)
 {
-    if (reply->len == 0) {
-        return;
-    }
-    if (f->id == KM_ID_BROADCAST || (f->id != id_before && f->id != KM_ID_SUPER)) {
-        abort();
-    }
-    const uint8_t *b = reply->bytes;
-    if (reply->len > KM_FRAME_MAX || reply->len < 6 || b[0] != KM_HDR0 || b[1] != KM_HDR1_RESPONSE ||
-        b[2] != id_before || b[3] + 4u != reply->len ||
-        km_checksum(&b[2], (uint32_t)reply->len - 3u) != b[reply->len - 1u]) {
-        abort();
-    }
-}
-
-static void prv_dispatch(unsigned events, km_frame_t *frame, km_parser_t *parser, uint32_t seed)
-{
-    if ((events & KM_PARSE_CHECKSUM_ERR) && km_parser_take_checksum_error(parser, km_servo_id(&s_servo))) {
-        km_servo_note_checksum_error(&s_servo);
-    }
-    if (!(events & KM_PARSE_FRAME)) {
-        return;
-    }
-    static km_reply_t reply;
-    const uint8_t id_before = km_servo_id(&s_servo);
-    km_servo_handle(&s_servo, frame, &reply);
-    prv_check_answer(frame, id_before, &reply);
-    prv_check_registers();
-    if (s_restart) {
-        s_restart = false;
-        prv_boot(seed);
-    }
+    uint8_t f[6] = {KM_HDR0, KM_HDR1_COMMAND, id, 0x02, 0x01, 0};
+    f[5] = prv_sum(&f[2], 3);
+    kf_send_at(kf_world.now, f, sizeof f);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -150,41 +115,64 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (size < 2) {
         return 0;
     }
-    s_product = &s_products[(data[0] >> 4) & 1u];
-    s_commit_fails = (data[0] & 0x20u) != 0;
-    for (unsigned i = 0; i < KM_REG_COUNT; i++) {
-        s_persisted[i] = km_reg_default((km_reg_index_t)i, s_product);
+    kf_power_on();
+    kf_world.gap_floor_us = (data[0] & 0x10u) ? 20000u : 0u;
+    if (data[0] & 0x01u) { /* start as ID 1: the worked frames' ID */
+        const uint8_t set_id[] = {0xF9, 0xFF, 0x00, 0x04, 0x03, 0x0F, 0x01, 0xE8};
+        kf_send_at(kf_world.now, set_id, sizeof set_id);
     }
-    s_persisted[KM_REG_ID] = 1; /* the §2 worked frames talk to ID 1 */
-    const uint32_t seed = 175u + data[1];
-    prv_boot(seed);
+    kf_boot(KM_RESET_POWER_ON);
+    prv_settle();
 
-    static km_parser_t parser;
-    static km_frame_t frame;
-    km_parser_init(&parser, (uint32_t)(data[0] & 0x0Fu) + 1u);
-    uint32_t tick = 0xFFFFFF00u + data[1];
+    uint32_t at = kf_world.now;
     for (size_t i = 2; i + 1 < size; i += 2) {
         const uint8_t ctl = data[i + 1];
+        const uint32_t v = ctl & 0x3Fu;
         switch (ctl >> 6) {
         case 0:
-            tick += ctl & 0x3Fu;
+            at += v;
             break;
         case 1:
-            tick += ctl & 0x3Fu;
-            prv_dispatch(km_parser_poll(&parser, tick, &frame), &frame, &parser, seed);
+            at += v * 1000u;
             break;
         case 2:
-            km_parser_overrun(&parser);
+            at += v * 10000u;
             break;
         default:
-            tick += (uint32_t)(ctl & 0x3Fu) << 26;
+            prv_run(at - kf_world.now > 0x7FFFFFFFu ? 0u : at - kf_world.now);
+            kf_boot(KM_RESET_PIN);
+            at = kf_world.now;
             break;
         }
-        prv_dispatch(km_parser_feed(&parser, data[i], tick, &frame), &frame, &parser, seed);
+        kf_send_at(at, &data[i], 1);
+        at = kf_world.now > at ? kf_world.now : at;
+        at += kf_byte_us();
     }
-    for (int n = 0; n < 4; n++) {
-        tick += 1000u;
-        prv_dispatch(km_parser_poll(&parser, tick, &frame), &frame, &parser, seed);
+    /* Let everything land, every answer and restart finish. */
+    prv_run(at > kf_world.now ? at - kf_world.now : 0u);
+    prv_settle();
+    (void)prv_check_wire(NULL);
+    prv_check_registers();
+
+    /* RAM equals flash: a reset reads back exactly the user data in force. */
+    const km_servo_t *s = km_app_servo();
+    uint32_t before[KM_REG_COUNT];
+    memcpy(before, s->value, sizeof before);
+    kf_boot(KM_RESET_PIN);
+    for (unsigned i = 0; i < KM_REG_COUNT; i++) {
+        if (km_reg_table[i].persisted) {
+            prv_check(s->value[i] == before[i]);
+        }
     }
+
+    /* Two pings: the second reports no bit 5/6 (never told twice). */
+    const uint8_t id = km_servo_id(s);
+    prv_ping(id);
+    prv_settle();
+    prv_ping(id);
+    prv_settle();
+    uint8_t status = 0xFF;
+    prv_check(prv_check_wire(&status) == 2u);
+    prv_check((status & 0x60u) == 0u);
     return 0;
 }
