@@ -55,6 +55,9 @@ class Bus:
             raise SystemExit("servo-bus did not get ready (exit %s)" % self.proc.returncode)
         host, port = line.split()[1].rsplit(":", 1)
         self.sock = socket.create_connection((host, int(port)))
+        # A frame written in pieces must leave at once: with Nagle a piece can
+        # wait ~40 ms for the ACK of the last one, longer than the gap rule.
+        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.parser = kmbus.Parser()
 
     def close(self):
