@@ -127,7 +127,10 @@ def check_gap(bus, dev_id, opts):
     dropped (§7); the next whole ping is answered."""
     floor = GAP_FLOOR_DEFAULT_US if opts.gap_floor_us is None else opts.gap_floor_us
     gap_us = max(floor, 1000)  # parser: max(10 byte times, 1 ms) = 1 ms at 115200
-    pause = (gap_us + 7000) / 1e6
+    # Well past the gap: the servo must see the pause, and a host-sim
+    # process stalled by a loaded machine reads both pieces together (then
+    # there is no pause on its wire), so give it 50 ms of margin.
+    pause = (gap_us + 50000) / 1e6
     r = bus.split_frame(kmbus.ping(dev_id), 3, pause, 0)
     check(r == [], "§7 a ping paused %.0f ms after 3 bytes (gap %.0f ms): dropped"
           % (pause * 1000, gap_us / 1000))
