@@ -14,6 +14,7 @@
 
 #include "km_app.h"
 #include "km_fake_hal.h"
+#include "km_test_support.h" /* kt_hex, kt_sum: the §2 rules written out for tests */
 
 /* ---- wire helpers ----------------------------------------------------------- */
 
@@ -21,35 +22,6 @@ typedef struct {
     uint8_t b[8192];
     unsigned n;
 } wire_t;
-
-static unsigned hex_bytes(const char *hex, uint8_t *out, unsigned cap)
-{
-    unsigned n = 0;
-    for (const char *p = hex; *p && n < cap;) {
-        if (*p == ' ') {
-            p++;
-            continue;
-        }
-        unsigned v = 0;
-        for (int k = 0; k < 2; k++) {
-            const char c = p[k];
-            v = v * 16u + (unsigned)(c <= '9' ? c - '0' : (c | 0x20) - 'a' + 10);
-        }
-        out[n++] = (uint8_t)v;
-        p += 2;
-    }
-    return n;
-}
-
-/* §2 checksum, computed here from the rule, not by protocol/. */
-static uint8_t sum(const uint8_t *b, unsigned n)
-{
-    unsigned s = 0;
-    for (unsigned i = 0; i < n; i++) {
-        s += b[i];
-    }
-    return (uint8_t)~s;
-}
 
 /* A command frame F9 FF id len cmd body cs into out; returns its size. */
 static unsigned frame(uint8_t *out, uint8_t id, uint8_t cmd, const uint8_t *body, unsigned n)
@@ -60,7 +32,7 @@ static unsigned frame(uint8_t *out, uint8_t id, uint8_t cmd, const uint8_t *body
     out[3] = (uint8_t)(n + 2u);
     out[4] = cmd;
     memcpy(&out[5], body, n);
-    out[5 + n] = sum(&out[2], n + 3u);
+    out[5 + n] = kt_sum(&out[2], n + 3u);
     return n + 6u;
 }
 
@@ -85,7 +57,7 @@ static void run_ms(uint32_t ms)
 static void answered(const char *hex)
 {
     uint8_t want[512];
-    const unsigned n = hex_bytes(hex, want, sizeof want);
+    const unsigned n = kt_hex(hex, want, sizeof want);
     wire_t w;
     take(&w);
     if (w.n != n || memcmp(w.b, want, n) != 0) {
@@ -122,7 +94,7 @@ static void exchange(const char *hex, uint32_t ms, const char *want)
 static void ping_is(uint8_t id, uint8_t status)
 {
     uint8_t want[6] = {0xF9, 0xF5, id, 0x02, status, 0};
-    want[5] = sum(&want[2], 3);
+    want[5] = kt_sum(&want[2], 3);
     send_frame(id, 0x01, NULL, 0);
     run_ms(30); /* a ping and its answer take 12.7 ms at 9600 baud */
     wire_t w;
@@ -147,7 +119,7 @@ static unsigned wire_frames_ok(const wire_t *w)
             return 0;
         }
         const unsigned len = w->b[i + 3];
-        if (i + 4u + len > w->n || w->b[i + 3 + len] != sum(&w->b[i + 2], len + 1u)) {
+        if (i + 4u + len > w->n || w->b[i + 3 + len] != kt_sum(&w->b[i + 2], len + 1u)) {
             return 0;
         }
         i += 4u + len;
@@ -168,7 +140,7 @@ static void test_s3_restart_at_once_nothing_after_it_runs(void **state)
     /* Both frames already received when the loop gets to them (as a UART
      * FIFO, DMA or host-sim's socket hands them over): one tick for all. */
     uint8_t b[32];
-    const unsigned n = hex_bytes("F9 FF 00 07 03 02 E1 E2 E3 E4 69 F9 FF 00 04 03 0F 05 E4", b, sizeof b);
+    const unsigned n = kt_hex("F9 FF 00 07 03 02 E1 E2 E3 E4 69 F9 FF 00 04 03 0F 05 E4", b, sizeof b);
     kf_send_burst_at(kf_world.now, b, n);
     run_ms(20);
     nothing_sent();
