@@ -1,15 +1,17 @@
 /* Commit, reset and idle compaction of the user-data store.
  *
  * Why each step is safe at a power cut is argued in docs/store.md; in short:
- *  - a record counts only once its commit cell (last, all zeros) is read
- *    back, so a cut mid-record leaves the previous state;
- *  - a page is compacted into a freshly erased page; the old page stays
- *    intact until it is itself the next target;
- *  - what a cut can leave half-done (a torn record, a torn snapshot) may read
- *    differently at each boot, so before the session acknowledges anything:
- *    suspect pages are erased, a page with unreadable cells after its last
- *    record is compacted away, and the first record restates the newest
- *    record of the previous session, so the state no longer depends on it. */
+ *  - the store programs only cells of a page this session erased (and
+ *    blank-checked), each once: a cut ends the session, so no cell that a
+ *    past session's cut may have left weak (reading erased now, programmed
+ *    later; on the STM32G0 with its ECC partly written) is ever programmed;
+ *  - so the first commit of every session compacts: it erases a page (the
+ *    one mount chose), writes a snapshot of the new state there, reads it
+ *    back, then programs the confirmation cell K after it and reads that
+ *    back; only then is the commit acknowledged. Later commits of the
+ *    session append deltas after K in that page;
+ *  - a record counts only once its commit cell (last, all zeros) reads
+ *    back, so a cut mid-record leaves the previous state. */
 #include <string.h>
 
 #include "km_store.h"
@@ -21,13 +23,17 @@ static uint32_t prv_page_bit(uint32_t page)
     return 1u << page;
 }
 
+static uint8_t prv_next(const km_store_t *s, uint32_t page)
+{
+    return (uint8_t)((page + 1u) % s->flash->page_count);
+}
+
 /* Erase and blank-check: a page counts as erased only if every cell reads
  * all ones after the erase. */
 static bool prv_erase(km_store_t *s, uint32_t page)
 {
     const km_flash_t *f = s->flash;
     s->erased &= ~prv_page_bit(page);
-    s->suspect |= prv_page_bit(page);
     if (f->erase(f->ctx, page) != KM_FLASH_OK) {
         return false;
     }
@@ -37,8 +43,16 @@ static bool prv_erase(km_store_t *s, uint32_t page)
         }
     }
     s->erased |= prv_page_bit(page);
-    s->suspect &= ~prv_page_bit(page);
     return true;
+}
+
+/* Programs one cell and reads it back. */
+static bool prv_cell(const km_flash_t *f, uint32_t addr, const uint8_t *cell)
+{
+    uint8_t back[KM_REC_MAX_CELL];
+    return f->program(f->ctx, addr, cell, f->prog_size) == KM_FLASH_OK &&
+           f->read(f->ctx, addr, back, f->prog_size) == KM_FLASH_OK &&
+           memcmp(back, cell, f->prog_size) == 0;
 }
 
 /* Programs a record one cell at a time: the body, then reads it back, then
@@ -50,35 +64,42 @@ static bool prv_write(km_store_t *s, uint32_t page, uint32_t offset, const uint8
     const uint32_t c = f->prog_size;
     const uint32_t base = page * f->page_size + offset;
     uint8_t back[KM_REC_MAX_CELL];
-    for (uint32_t at = 0; at < size; at += c) {
-        if (at + c == size) {
-            /* Commit cell: only after the whole body is known good. */
-            for (uint32_t chk = 0; chk < at; chk += c) {
-                if (f->read(f->ctx, base + chk, back, c) != KM_FLASH_OK ||
-                    memcmp(back, &rec[chk], c) != 0) {
-                    return false;
-                }
-            }
-        }
+    for (uint32_t at = 0; at + c < size; at += c) {
         if (f->program(f->ctx, base + at, &rec[at], c) != KM_FLASH_OK) {
             return false;
         }
     }
-    return f->read(f->ctx, base + size - c, back, c) == KM_FLASH_OK &&
-           memcmp(back, &rec[size - c], c) == 0;
+    /* Commit cell: only after the whole body is known good. */
+    for (uint32_t chk = 0; chk + c < size; chk += c) {
+        if (f->read(f->ctx, base + chk, back, c) != KM_FLASH_OK ||
+            memcmp(back, &rec[chk], c) != 0) {
+            return false;
+        }
+    }
+    return prv_cell(f, base + size - c, &rec[size - c]);
 }
 
-/* Writes state as a snapshot of generation gen+1 into the next page of the
- * ring, erased first unless this session already erased it. */
-static bool prv_compact(km_store_t *s, const uint32_t *state)
+/* Writes state as a snapshot of the next generation at the start of
+ * target, erased first unless this session erased it and left it untouched,
+ * then its confirmation cell K. On the session's first compaction every
+ * page without a valid snapshot is erased too, so no page can hold a torn
+ * snapshot of a generation as high as the new one. */
+static bool prv_compact(km_store_t *s, uint32_t target, const uint32_t *state)
 {
     const km_flash_t *f = s->flash;
-    const uint32_t target =
-        (s->active == KM_STORE_NO_PAGE) ? 0u : ((uint32_t)s->active + 1u) % f->page_count;
+    s->own = false;
+    for (uint32_t p = 0; p < f->page_count; p++) {
+        if ((s->suspect & prv_page_bit(p)) != 0u && p != target) {
+            if (!prv_erase(s, p)) {
+                return false;
+            }
+            s->suspect &= ~prv_page_bit(p);
+        }
+    }
     if ((s->erased & prv_page_bit(target)) == 0u && !prv_erase(s, target)) {
         return false;
     }
-    s->erased &= ~prv_page_bit(target);
+    s->erased &= ~prv_page_bit(target); /* programmed from here on */
     uint8_t buf[KM_REC_MAX_BYTES];
     const km_rec_t hdr = {.type = KM_REC_SNAPSHOT,
                           .version = s->schema->version,
@@ -86,121 +107,54 @@ static bool prv_compact(km_store_t *s, const uint32_t *state)
                           .hash = s->hash};
     const uint32_t size =
         km_rec_encode(buf, &hdr, s->schema, state, km_store_all_keys(s->schema), f->prog_size);
-    if (!prv_write(s, target, 0u, buf, size)) {
-        s->suspect |= prv_page_bit(target);
+    static const uint8_t k_zero[KM_REC_MAX_CELL] = {0};
+    /* K last: a K that reads programmed then proves the snapshot solid. */
+    if (!prv_write(s, target, 0u, buf, size) ||
+        !prv_cell(f, target * f->page_size + size, k_zero)) {
+        s->target = (uint8_t)target; /* a retry erases it again */
         return false;
     }
+    s->suspect &= ~prv_page_bit(target);
     s->active = (uint8_t)target;
     s->gen++;
-    s->tail = size;
-    s->last_keys = km_store_all_keys(s->schema);
-    s->dirty = false;
-    s->need_snapshot = false;
-    s->restate = false;
-    s->restate_snapshot = false;
+    s->tail = size + f->prog_size;
+    s->own = true;
     return true;
-}
-
-static bool prv_erase_suspects(km_store_t *s)
-{
-    for (uint32_t p = 0; p < s->flash->page_count; p++) {
-        if ((s->suspect & prv_page_bit(p)) != 0u && !prv_erase(s, p)) {
-            return false;
-        }
-    }
-    return true;
-}
-
-/* Appends the change as one record, restating the previous session's newest
- * record on the session's first commit. */
-static bool prv_append(km_store_t *s, const uint32_t *next, uint32_t changed)
-{
-    const km_flash_t *f = s->flash;
-    km_rec_t hdr = {.type = KM_REC_DELTA,
-                    .version = s->schema->version,
-                    .gen = s->gen,
-                    .hash = s->hash};
-    uint8_t buf[KM_REC_MAX_BYTES];
-    uint32_t mask = changed;
-    if (s->restate && s->restate_snapshot) {
-        /* The page's snapshot may be torn and read valid only by chance: a
-         * copy of it (the old state, same generation) keeps the page valid
-         * on its own. The change follows as a delta, so the next session
-         * restates that small delta instead of copying the snapshot again. */
-        hdr.type = KM_REC_SNAPSHOT;
-        const uint32_t all = km_store_all_keys(s->schema);
-        const uint32_t copy = km_rec_encode(buf, &hdr, s->schema, s->values, all, f->prog_size);
-        uint32_t n = 0;
-        for (uint32_t m = changed; m != 0u; m &= m - 1u) {
-            n++;
-        }
-        const uint32_t after = km_rec_size(KM_REC_DELTA, n, f->prog_size);
-        if (copy + after > f->page_size - s->tail) {
-            return prv_compact(s, next);
-        }
-        if (!prv_write(s, s->active, s->tail, buf, copy)) {
-            s->dirty = true;
-            return false;
-        }
-        s->tail += copy;
-        s->last_keys = all;
-        s->restate = false;
-        s->restate_snapshot = false;
-        hdr.type = KM_REC_DELTA;
-        if (mask == 0u) {
-            /* Nothing changed: one key still follows, so the copy is not
-             * the newest record and the next session need not copy it. */
-            mask = 1u;
-        }
-    } else if (s->restate) {
-        mask |= s->last_keys;
-    }
-    const uint32_t size = km_rec_encode(buf, &hdr, s->schema, next, mask, f->prog_size);
-    if (size > f->page_size - s->tail) {
-        return prv_compact(s, next);
-    }
-    if (!prv_write(s, s->active, s->tail, buf, size)) {
-        /* The record may be half there: never append after it, and put the
-         * old state back in a fresh page now if the flash lets us. */
-        s->dirty = true;
-        (void)prv_compact(s, s->values);
-        return false;
-    }
-    s->tail += size;
-    s->last_keys = mask;
-    s->restate = false;
-    s->restate_snapshot = false;
-    return true;
-}
-
-/* True if a later mount could show another state than RAM holds: a torn
- * record or page from a past cut, which a read may find valid or not, has
- * not been settled by a write in this session yet. An acknowledgement must
- * be durable for the whole state, so even an unchanged commit then writes
- * (once per session at most; a session that commits nothing writes nothing). */
-static bool prv_in_doubt(const km_store_t *s)
-{
-    return s->dirty || s->suspect != 0u || s->restate;
 }
 
 static km_store_status_t prv_commit_state(km_store_t *s, const uint32_t *next)
 {
+    const km_flash_t *f = s->flash;
     uint32_t changed = 0;
     for (uint32_t i = 0; i < s->schema->count; i++) {
         if (next[i] != s->values[i]) {
             changed |= 1u << i;
         }
     }
-    if (changed == 0u && !prv_in_doubt(s)) {
+    bool ok;
+    if (!s->own) {
+        /* First commit of the session (or after a failure): even when
+         * nothing changed, since what mount read may read otherwise at the
+         * next mount; an acknowledgement must be durable for the whole
+         * state. */
+        ok = prv_compact(s, s->target, next);
+    } else if (changed == 0u) {
         return KM_STORE_OK;
-    }
-    s->wrote = true;
-    bool ok = prv_erase_suspects(s);
-    if (ok) {
-        if (s->active == KM_STORE_NO_PAGE || s->dirty || s->need_snapshot) {
-            ok = prv_compact(s, next);
+    } else {
+        const km_rec_t hdr = {.type = KM_REC_DELTA, .version = 0u, .gen = 0u, .hash = 0u};
+        uint8_t buf[KM_REC_MAX_BYTES];
+        const uint32_t size = km_rec_encode(buf, &hdr, s->schema, next, changed, f->prog_size);
+        if (size > f->page_size - s->tail) {
+            ok = prv_compact(s, prv_next(s, s->active), next);
+        } else if (prv_write(s, s->active, s->tail, buf, size)) {
+            s->tail += size;
+            ok = true;
         } else {
-            ok = prv_append(s, next, changed);
+            /* The record may be half there and read valid later, or not:
+             * nothing may follow it. Put the old state in a fresh page now
+             * if the flash lets us. */
+            (void)prv_compact(s, prv_next(s, s->active), s->values);
+            ok = false;
         }
     }
     if (!ok) {
@@ -249,30 +203,25 @@ km_store_status_t km_store_reset(km_store_t *s, const uint8_t *keep, uint32_t n_
 
 bool km_store_maintain(km_store_t *s)
 {
-    if (!s->mounted || !s->wrote) {
-        return false; /* a session that commits nothing touches no flash */
+    if (!s->mounted || !s->own) {
+        /* Before the session's first commit nothing here is safe to erase
+         * (and a session that commits nothing touches no flash). After it,
+         * the session's page is confirmed and read back: every other page
+         * is history, and the next one of the ring may be erased early. */
+        return false;
     }
     const km_flash_t *f = s->flash;
-    for (uint32_t p = 0; p < f->page_count; p++) {
-        if ((s->suspect & prv_page_bit(p)) != 0u) {
-            (void)prv_erase(s, p);
-            return true;
-        }
-    }
-    if (s->active == KM_STORE_NO_PAGE) {
-        return false;
-    }
-    /* Keep room for the largest record (a snapshot copy or a full reset) so
-     * a commit does not wait on an erase. */
+    /* Keep room for the largest record so a commit does not wait on an
+     * erase. */
     const uint32_t room = km_rec_size(KM_REC_SNAPSHOT, s->schema->count, f->prog_size);
-    if (!s->dirty && !s->need_snapshot && f->page_size - s->tail >= room) {
+    if (f->page_size - s->tail >= room) {
         return false;
     }
-    const uint32_t target = ((uint32_t)s->active + 1u) % f->page_count;
+    const uint32_t target = prv_next(s, s->active);
     if ((s->erased & prv_page_bit(target)) == 0u) {
         (void)prv_erase(s, target);
     } else {
-        (void)prv_compact(s, s->values);
+        (void)prv_compact(s, target, s->values);
     }
     return true;
 }

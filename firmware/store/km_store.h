@@ -8,7 +8,9 @@
  *  - after a cut, mount shows the last acknowledged state or the one being
  *    committed, never a mix, never older;
  *  - mount, and a session that commits nothing, do zero flash operations
- *    (km_store_maintain() stays idle until the first commit of the session).
+ *    (km_store_maintain() stays idle until the first commit of the session);
+ *  - the store programs only cells of a page this session erased, so no
+ *    cell a past session's cut may have left weak is ever programmed.
  * Not thread-safe: call from the main loop only. */
 #ifndef KM_STORE_H
 #define KM_STORE_H
@@ -56,18 +58,15 @@ typedef struct {
     const km_store_schema_t *schema;
     uint32_t values[KM_STORE_MAX_KEYS]; /* committed values, schema order */
     uint32_t hash;          /* of the schema's key list */
-    uint32_t gen;           /* generation of the active page's snapshot */
-    uint32_t tail;          /* next byte offset to program in the active page */
-    uint32_t last_keys;     /* keys of the newest record (restated, see .c) */
-    uint32_t suspect;       /* pages to erase before the next acknowledgement */
-    uint32_t erased;        /* pages erased and blank-checked in this session */
-    uint8_t active;         /* page of the newest valid snapshot, or KM_STORE_NO_PAGE */
+    uint32_t gen;           /* generation of the active page's snapshot (the highest read) */
+    uint32_t tail;          /* next byte offset to program in the active page, once own */
+    uint32_t suspect;       /* pages without a valid snapshot: erased by the first commit */
+    uint32_t erased;        /* pages erased and blank-checked in this session, untouched since */
+    uint8_t active;         /* page the values come from, or KM_STORE_NO_PAGE */
+    uint8_t target;         /* page the session's first commit erases and writes */
     bool mounted;
-    bool wrote;             /* a commit was attempted in this session */
-    bool dirty;             /* torn record after the last one, or next page in doubt: compact first */
-    bool need_snapshot;     /* schema changed since the snapshot: compact first */
-    bool restate;           /* newest record is from a past session: restate it */
-    bool restate_snapshot;  /* ... and it is a snapshot */
+    bool own;               /* this session erased the active page and confirmed its snapshot:
+                               deltas go after tail; before that every commit compacts */
 } km_store_t;
 
 /* Reads the flash and loads values (schema order) into values_out (may be
@@ -79,20 +78,21 @@ km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash,
 bool km_store_mount_is_defaults(km_store_mount_t m);
 
 /* Commits n key/value pairs, all or nothing. KM_STORE_OK once they are in
- * flash and read back. Unchanged values cost no flash op, except on the
- * session's first commit after a mount that left the flash in doubt (a
- * record from a past session, a torn record or page), which writes once to
- * make the acknowledged state durable. On any error the old values stay in
- * force. Commit an ID or baud change before applying it. */
+ * flash and read back. The session's first commit always writes (one erase
+ * and a snapshot in a page this session erased: what a past session left
+ * may read differently at the next mount); after it, unchanged values cost
+ * no flash op. On any error the old values stay in force. Commit an ID or
+ * baud change before applying it. */
 km_store_status_t km_store_commit(km_store_t *s, const uint8_t *keys, const uint32_t *values,
                                   uint32_t n);
 
 /* User data reset: commits the default of every key not listed in keep. */
 km_store_status_t km_store_reset(km_store_t *s, const uint8_t *keep, uint32_t n_keep);
 
-/* Idle work: compacts ahead of time so a commit rarely waits on an erase.
- * Does at most one erase or one record per call, nothing before the
- * session's first commit. Returns true if it did flash work (call again on
+/* Idle work: when the session's page is nearly full, erases the next page
+ * and compacts into it ahead of time, so a commit rarely waits on an erase.
+ * At most one erase or one record per call, nothing before the session's
+ * first commit succeeded. Returns true if it did flash work (call again on
  * a later idle tick; a failing flash keeps it returning true). */
 bool km_store_maintain(km_store_t *s);
 

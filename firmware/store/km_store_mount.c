@@ -1,6 +1,6 @@
-/* Mount: find the newest valid snapshot, replay its page, and note what the
- * first commit of the session must repair. Reads only: a boot that commits
- * nothing leaves the flash untouched. */
+/* Mount: find the newest valid snapshot, replay its page, and choose the
+ * page the session's first commit will erase. Reads only: a boot that
+ * commits nothing leaves the flash untouched. */
 #include <string.h>
 
 #include "km_crc32.h"
@@ -9,15 +9,12 @@
 #include "km_store_record.h"
 
 typedef struct {
-    bool erased;          /* every cell reads all ones */
-    bool has_snapshot;
-    uint16_t version;     /* of the last valid snapshot */
+    bool valid;           /* the snapshot at offset 0 reads valid */
+    bool confirmed;       /* ... and its confirmation cell K reads programmed */
+    bool erased;          /* no valid snapshot and every cell reads all ones */
+    uint16_t version;
     uint32_t gen;
     uint32_t hash;
-    uint32_t valid_end;   /* byte after the last valid record */
-    uint32_t used_end;    /* byte after the last cell that is not erased */
-    uint8_t last_type;
-    uint32_t last_keys;
 } prv_page_t;
 
 int32_t km_store_index(const km_store_schema_t *schema, uint8_t key)
@@ -42,62 +39,60 @@ static void prv_defaults(const km_store_schema_t *schema, uint32_t *values)
     }
 }
 
-/* Applies a record's entries whose keys the schema still has; returns the
- * bitmap of those keys. Keys dropped from the schema are ignored. */
-static uint32_t prv_apply(const km_store_schema_t *schema, const km_rec_t *rec, uint32_t *values,
-                          bool apply)
+/* Applies a record's entries whose keys the schema still has (apply false:
+ * none, the values of another schema version mean something else). Keys
+ * dropped from the schema are ignored. */
+static void prv_apply(const km_store_schema_t *schema, const km_rec_t *rec, uint32_t *values,
+                      bool apply)
 {
-    uint32_t mask = 0;
-    for (uint32_t i = 0; i < rec->count; i++) {
+    for (uint32_t i = 0; apply && i < rec->count; i++) {
         const int32_t at = km_store_index(schema, km_rec_key(rec, i));
         if (at >= 0) {
-            mask |= 1u << (uint32_t)at;
-            if (apply) {
-                values[at] = km_rec_value(rec, i);
-            }
+            values[at] = km_rec_value(rec, i);
         }
     }
-    return mask;
 }
 
-/* Walks a page record by record. A cell that starts no valid record is
- * skipped one cell at a time, never trusted. values becomes the page's
- * state: its last valid snapshot plus the valid deltas after it. Each page
- * is read once: a torn cell may read differently at each read, so the
+/* Reads a page once: the snapshot at offset 0, its confirmation cell K
+ * right after it, and, under a confirmed snapshot, the deltas after K up to
+ * the first one that is not valid. values becomes the page's state. Each
+ * cell is read once: a weak cell may read differently at each read, so the
  * choice of page and its state must come from the same reads. */
 static void prv_scan(const km_store_t *s, uint32_t page, prv_page_t *pi, uint32_t *values)
 {
     const km_flash_t *f = s->flash;
+    const uint32_t base = page * f->page_size;
     uint8_t buf[KM_REC_MAX_BYTES];
     km_rec_t rec;
     memset(pi, 0, sizeof *pi);
-    pi->erased = true;
-    uint32_t off = 0;
-    while (off < f->page_size) {
-        if (km_rec_read(f, page, off, buf, &rec) &&
-            (rec.type == KM_REC_SNAPSHOT || pi->has_snapshot)) {
-            if (rec.type == KM_REC_SNAPSHOT) {
-                pi->has_snapshot = true;
-                pi->gen = rec.gen;
-                pi->version = rec.version;
-                pi->hash = rec.hash;
-                prv_defaults(s->schema, values);
-            }
-            /* Another schema version: the values mean something else. */
-            const bool same = (pi->version == s->schema->version);
-            pi->last_keys = prv_apply(s->schema, &rec, values, same);
-            pi->last_type = rec.type;
-            pi->erased = false;
-            off += rec.size;
-            pi->valid_end = off;
-            pi->used_end = off;
-        } else {
-            if (!km_rec_cell_erased(f, page * f->page_size + off)) {
-                pi->erased = false;
-                pi->used_end = off + f->prog_size;
-            }
-            off += f->prog_size;
+    if (!km_rec_read(f, page, 0u, buf, &rec) || rec.type != KM_REC_SNAPSHOT) {
+        pi->erased = true;
+        for (uint32_t off = 0; off < f->page_size && pi->erased; off += f->prog_size) {
+            pi->erased = km_rec_cell_erased(f, base + off);
         }
+        return;
+    }
+    pi->valid = true;
+    pi->gen = rec.gen;
+    pi->version = rec.version;
+    pi->hash = rec.hash;
+    /* Another schema version: the values mean something else. */
+    const bool same = (rec.version == s->schema->version);
+    prv_apply(s->schema, &rec, values, same);
+    uint32_t off = rec.size;
+    /* K is programmed only after the snapshot's commit cell was read back:
+     * any K that does not read erased proves the snapshot solid. Deltas
+     * are written only after K was read back, so none follow a K that
+     * reads erased. The geometry check leaves room for K. */
+    pi->confirmed = !km_rec_cell_erased(f, base + off);
+    if (!pi->confirmed) {
+        return;
+    }
+    off += f->prog_size;
+    while (off < f->page_size && km_rec_read(f, page, off, buf, &rec) &&
+           rec.type == KM_REC_DELTA) {
+        prv_apply(s->schema, &rec, values, same);
+        off += rec.size;
     }
 }
 
@@ -117,8 +112,40 @@ static bool prv_geometry_ok(const km_flash_t *f, const km_store_schema_t *schema
         f->page_count > KM_STORE_MAX_PAGES) {
         return false;
     }
-    /* Room for a snapshot, its restated copy and some deltas. */
+    /* Room for a snapshot, K and at least a full-state delta after it. */
     return f->page_size >= 3u * km_rec_size(KM_REC_SNAPSHOT, schema->count, c);
+}
+
+/* The page the session's first commit erases and writes its snapshot into.
+ * It must not be a page whose loss could leave a later mount without the
+ * last acknowledged state (docs/store.md, "Why every cut is safe"):
+ *  - the active page is confirmed (its K reads programmed, so its snapshot
+ *    is solid and reads valid until it is erased): any other page, the next
+ *    one of the ring;
+ *  - the active page is not confirmed and no other page is valid: the next
+ *    page (the active one may be the only solid copy, its K weak);
+ *  - the active page is not confirmed and another page is valid: the
+ *    active page may be a torn snapshot read valid by chance while the last
+ *    solid state is in another page. With three pages or more, a page that
+ *    is neither the active nor the highest confirmed one; with two, the
+ *    active page itself (the residual case of docs/store.md). */
+static uint8_t prv_target(uint32_t pages, uint8_t active, bool confirmed, uint32_t valid,
+                          uint8_t anchor)
+{
+    if (active == KM_STORE_NO_PAGE) {
+        return 0u;
+    }
+    uint32_t t = ((uint32_t)active + 1u) % pages;
+    if (confirmed || (valid & ~(1u << active)) == 0u) {
+        return (uint8_t)t;
+    }
+    if (pages == 2u) {
+        return active;
+    }
+    while (t == active || t == anchor) {
+        t = (t + 1u) % pages;
+    }
+    return (uint8_t)t;
 }
 
 km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash,
@@ -137,6 +164,9 @@ km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash,
     prv_defaults(schema, s->values);
 
     bool all_erased = true;
+    uint32_t valid = 0;
+    uint8_t anchor = KM_STORE_NO_PAGE; /* highest-generation confirmed page */
+    uint32_t anchor_gen = 0;
     prv_page_t pi;
     prv_page_t best;
     uint32_t cand[KM_STORE_MAX_KEYS];
@@ -144,53 +174,38 @@ km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash,
     for (uint32_t p = 0; p < flash->page_count; p++) {
         prv_defaults(schema, cand);
         prv_scan(s, p, &pi, cand);
-        if (pi.has_snapshot) {
+        if (pi.valid) {
+            valid |= 1u << p;
             if (s->active == KM_STORE_NO_PAGE || pi.gen > s->gen) {
                 s->active = (uint8_t)p;
                 s->gen = pi.gen;
                 best = pi;
                 memcpy(s->values, cand, schema->count * sizeof cand[0]);
             }
+            if (pi.confirmed && (anchor == KM_STORE_NO_PAGE || pi.gen > anchor_gen)) {
+                anchor = (uint8_t)p;
+                anchor_gen = pi.gen;
+            }
         } else {
-            /* May hold a torn snapshot that a later read finds valid, even
-             * if it reads erased now (a cut erase leaves weak cells):
-             * erased before the session acknowledges anything. */
+            /* May hold a torn snapshot of any generation that a later read
+             * finds valid, even if it reads erased now (a cut erase leaves
+             * weak cells): erased before the session acknowledges anything,
+             * so no page can ever outrank the one it writes. */
             s->suspect |= 1u << p;
         }
         all_erased = all_erased && pi.erased;
     }
+    s->target = prv_target(flash->page_count, s->active, best.confirmed, valid, anchor);
 
     km_store_mount_t result;
     if (s->active == KM_STORE_NO_PAGE) {
         result = all_erased ? KM_STORE_MOUNT_DEFAULTS_BLANK : KM_STORE_MOUNT_DEFAULTS_INVALID;
+    } else if (best.version != schema->version) {
+        result = KM_STORE_MOUNT_DEFAULTS_SCHEMA;
+    } else if (best.hash != s->hash) {
+        result = KM_STORE_MOUNT_MIGRATED;
     } else {
-        pi = best;
-        /* The cell after the last valid record may be the first cell of a
-         * record a cut tore: weak, it can read erased now and not later, and
-         * on the G0 its ECC may be partly written. Never program it: the
-         * session starts one cell further. */
-        s->tail = pi.valid_end + flash->prog_size;
-        if (s->tail > flash->page_size) {
-            s->tail = flash->page_size;
-        }
-        /* Compact first if a torn record follows the last valid one, or if
-         * the next page of the ring (the only one a compaction from this
-         * page writes a higher generation into) is in doubt: it then gets
-         * the new snapshot, which also ends the doubt for later sessions. */
-        const uint32_t next = ((uint32_t)s->active + 1u) % flash->page_count;
-        s->dirty = pi.used_end > pi.valid_end || (s->suspect & (1u << next)) != 0u;
-        s->restate = true;
-        s->restate_snapshot = (pi.last_type == KM_REC_SNAPSHOT);
-        s->last_keys = pi.last_keys;
-        if (pi.version != schema->version) {
-            result = KM_STORE_MOUNT_DEFAULTS_SCHEMA;
-            s->need_snapshot = true;
-        } else if (pi.hash != s->hash) {
-            result = KM_STORE_MOUNT_MIGRATED;
-            s->need_snapshot = true;
-        } else {
-            result = KM_STORE_MOUNT_LOADED;
-        }
+        result = KM_STORE_MOUNT_LOADED;
     }
     s->mounted = true;
     if (values_out != NULL) {
