@@ -385,6 +385,143 @@ static void test_unchanged_commit_settles_past_session_once(void **state)
     assert_int_equal(s_sim.count.illegal, 0);
 }
 
+/* The STM32G0 controller: an erased check that reads the cell, and the ECC
+ * double-word rule. */
+static void prv_g0_real(unsigned pages)
+{
+    const km_nor_sim_config_t g0 = {2048u, 8u, pages, 0xFFu};
+    assert_true(km_nor_sim_init(&s_sim, &g0, &s_flash));
+    const km_nor_sim_rules_t rules = {.ecc_dword = true, .content_check = true};
+    km_nor_sim_set_rules(&s_sim, &rules);
+    (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
+}
+
+/* Ops of a compaction on the G0 layout: the erase, 15 snapshot cells, K. */
+#define G0_SNAP_CELLS 15u
+#define G0_OP_COMMIT_CELL G0_SNAP_CELLS        /* erase is op 0 */
+#define G0_OP_K (G0_SNAP_CELLS + 1u)
+
+static void prv_commit_cut(uint8_t key, uint32_t value, uint32_t op, km_nor_prog_outcome_t p,
+                           km_nor_erase_outcome_t e)
+{
+    km_nor_sim_arm_cut(&s_sim, op, p, e);
+    assert_int_equal(km_store_commit(&s_store, &key, &value, 1), KM_STORE_ERR_FLASH);
+    assert_true(km_nor_sim_cut_fired(&s_sim));
+}
+
+static void prv_remount_reading(km_nor_weak_reads_t how)
+{
+    km_nor_sim_power_cycle(&s_sim);
+    km_nor_sim_set_weak_reads(&s_sim, how);
+    (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
+}
+
+/* Issue 13 item 12, case 1: the first program of a session's first commit
+ * is cut and leaves a weak cell that reads erased at the next mount. Every
+ * session compacts into a page it erases, so the weak cell is never
+ * programmed again, however many sessions it takes. */
+static void test_weak_first_program_is_never_programmed_again(void **state)
+{
+    (void)state;
+    prv_g0_real(2u);
+    prv_commit1(0x0F, 1u);
+    prv_commit1(0x12, 300u);
+    for (unsigned n = 0; n < 6; n++) {
+        prv_remount_reading(KM_NOR_WEAK_HIGH);
+        assert_int_equal(prv_get(0x12), 300u);
+        prv_commit_cut(0x13, 500u + n, 1u, KM_NOR_PROG_TORN_WEAK, KM_NOR_ERASE_DONE);
+    }
+    prv_remount_reading(KM_NOR_WEAK_HIGH);
+    prv_commit1(0x13, 999u);
+    for (unsigned r = 0; r < 3; r++) {
+        prv_remount_reading((km_nor_weak_reads_t)r);
+        assert_int_equal(prv_get(0x0F), 1u);
+        assert_int_equal(prv_get(0x13), 999u);
+    }
+    assert_int_equal(s_sim.count.violations, 0);
+}
+
+/* Case 2: a snapshot cut in its commit cell, weak, reads valid as the newest
+ * record. Its K is erased, so the next session erases that page, not the
+ * one holding the last solid state: a second cut there, then a mount that
+ * reads the weak snapshot invalid, still shows the last acknowledged state. */
+static void test_weak_snapshot_never_costs_the_solid_page(void **state)
+{
+    (void)state;
+    prv_g0_real(2u);
+    prv_commit1(0x12, 300u); /* acknowledged, page 0 */
+    prv_remount_reading(KM_NOR_WEAK_RANDOM);
+    prv_commit_cut(0x12, 301u, G0_OP_COMMIT_CELL, KM_NOR_PROG_TORN_WEAK, KM_NOR_ERASE_DONE);
+    prv_remount_reading(KM_NOR_WEAK_LOW);
+    assert_int_equal(prv_get(0x12), 301u); /* in flight, read valid */
+    assert_int_equal(s_store.target, s_store.active);
+    prv_commit_cut(0x13, 7u, 0u, KM_NOR_PROG_DONE, KM_NOR_ERASE_WEAK);
+    prv_remount_reading(KM_NOR_WEAK_HIGH);
+    assert_int_equal(prv_get(0x12), 300u);
+    assert_int_equal(s_sim.count.violations, 0);
+}
+
+/* Why mount does not ignore a snapshot whose K reads erased: a K cut weak
+ * that reads programmed sends the next session to erase the other page; if
+ * that erase is cut too and a later mount reads K erased, the snapshot
+ * under K is still the only copy of a state (solid: K is programmed only
+ * after its commit cell read back). Ignoring it would load defaults. */
+static void test_weak_k_read_both_ways_keeps_the_state(void **state)
+{
+    (void)state;
+    prv_g0_real(2u);
+    prv_commit1(0x0F, 4u);
+    prv_commit1(0x12, 300u);
+    prv_remount_reading(KM_NOR_WEAK_RANDOM);
+    prv_commit_cut(0x12, 301u, G0_OP_K, KM_NOR_PROG_TORN_WEAK, KM_NOR_ERASE_DONE);
+    prv_remount_reading(KM_NOR_WEAK_LOW);
+    assert_int_equal(prv_get(0x12), 301u);
+    assert_int_not_equal(s_store.target, s_store.active); /* K reads programmed */
+    prv_commit_cut(0x13, 7u, 0u, KM_NOR_PROG_DONE, KM_NOR_ERASE_WEAK);
+    prv_remount_reading(KM_NOR_WEAK_HIGH);
+    assert_int_equal(prv_get(0x0F), 4u);
+    assert_int_equal(prv_get(0x12), 301u);
+    /* K reads erased and no other page is valid: the other page is erased,
+     * the one with the solid snapshot kept. */
+    assert_int_not_equal(s_store.target, s_store.active);
+    prv_commit1(0x13, 8u);
+    for (unsigned r = 0; r < 3; r++) {
+        prv_remount_reading((km_nor_weak_reads_t)r);
+        assert_int_equal(prv_get(0x12), 301u);
+        assert_int_equal(prv_get(0x13), 8u);
+    }
+    assert_int_equal(s_sim.count.violations, 0);
+}
+
+/* With three pages or more, a session whose newest snapshot is not
+ * confirmed keeps both it and the newest confirmed page, and writes into a
+ * third: the two-page residual of docs/store.md cannot start. */
+static void test_three_pages_keep_both_candidates(void **state)
+{
+    (void)state;
+    prv_g0_real(3u);
+    prv_commit1(0x12, 300u); /* page 0 */
+    prv_remount_reading(KM_NOR_WEAK_RANDOM);
+    /* Page 2 reads blank, no valid snapshot: erased first (op 0), then
+     * page 1 (op 1), so K is one op later. */
+    prv_commit_cut(0x12, 301u, G0_OP_K + 1u, KM_NOR_PROG_TORN_WEAK, KM_NOR_ERASE_DONE);
+    prv_remount_reading(KM_NOR_WEAK_HIGH); /* page 1: valid, K reads erased */
+    assert_int_equal(s_store.active, 1u);
+    assert_int_equal(s_store.target, 2u);
+    prv_commit_cut(0x13, 7u, 0u, KM_NOR_PROG_DONE, KM_NOR_ERASE_WEAK);
+    for (unsigned r = 0; r < 3; r++) {
+        prv_remount_reading((km_nor_weak_reads_t)r);
+        const uint32_t v = prv_get(0x12);
+        assert_true(v == 300u || v == 301u);
+    }
+    prv_commit1(0x13, 8u);
+    for (unsigned r = 0; r < 3; r++) {
+        prv_remount_reading((km_nor_weak_reads_t)r);
+        assert_int_equal(prv_get(0x13), 8u);
+    }
+    assert_int_equal(s_sim.count.violations, 0);
+}
+
 static void test_bad_geometry_is_refused(void **state)
 {
     (void)state;
@@ -415,6 +552,10 @@ int main(void)
         cmocka_unit_test(test_failed_program_keeps_old_value),
         cmocka_unit_test(test_torn_unstable_snapshot_cannot_win_later),
         cmocka_unit_test(test_unchanged_commit_settles_past_session_once),
+        cmocka_unit_test(test_weak_first_program_is_never_programmed_again),
+        cmocka_unit_test(test_weak_snapshot_never_costs_the_solid_page),
+        cmocka_unit_test(test_weak_k_read_both_ways_keeps_the_state),
+        cmocka_unit_test(test_three_pages_keep_both_candidates),
         cmocka_unit_test(test_bad_geometry_is_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
