@@ -1,15 +1,22 @@
-/* CRC-32, bitwise: no 1 KiB table in the M0 image; records are short and
- * checked only at mount and after a write, so speed does not matter. */
+/* CRC-32 by nibbles: a 64-byte table instead of a 1 KiB one in the M0
+ * image, and a quarter of the bitwise loop's steps. Records are short, but
+ * mount checks every snapshot and delta at each boot, and the host's
+ * power-cut runner checks millions of mounts. */
 #include "km_crc32.h"
+
+static const uint32_t k_nibble[16] = {
+    0x00000000u, 0x1DB71064u, 0x3B6E20C8u, 0x26D930ACu,
+    0x76DC4190u, 0x6B6B51F4u, 0x4DB26158u, 0x5005713Cu,
+    0xEDB88320u, 0xF00F9344u, 0xD6D6A3E8u, 0xCB61B38Cu,
+    0x9B64C2B0u, 0x86D3D2D4u, 0xA00AE278u, 0xBDBDF21Cu};
 
 uint32_t km_crc32(uint32_t crc, const uint8_t *data, uint32_t n)
 {
     crc = ~crc;
     for (uint32_t i = 0; i < n; i++) {
         crc ^= data[i];
-        for (unsigned b = 0; b < 8u; b++) {
-            crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
-        }
+        crc = (crc >> 4) ^ k_nibble[crc & 15u];
+        crc = (crc >> 4) ^ k_nibble[crc & 15u];
     }
     return ~crc;
 }

@@ -37,10 +37,8 @@ static bool prv_erase(km_store_t *s, uint32_t page)
     if (f->erase(f->ctx, page) != KM_FLASH_OK) {
         return false;
     }
-    for (uint32_t off = 0; off < f->page_size; off += f->prog_size) {
-        if (!km_rec_cell_erased(f, page * f->page_size + off)) {
-            return false;
-        }
+    if (!km_rec_range_erased(f, page * f->page_size, f->page_size)) {
+        return false;
     }
     s->erased |= prv_page_bit(page);
     return true;

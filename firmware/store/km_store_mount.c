@@ -66,10 +66,7 @@ static void prv_scan(const km_store_t *s, uint32_t page, prv_page_t *pi, uint32_
     km_rec_t rec;
     memset(pi, 0, sizeof *pi);
     if (!km_rec_read(f, page, 0u, buf, &rec) || rec.type != KM_REC_SNAPSHOT) {
-        pi->erased = true;
-        for (uint32_t off = 0; off < f->page_size && pi->erased; off += f->prog_size) {
-            pi->erased = km_rec_cell_erased(f, base + off);
-        }
+        pi->erased = km_rec_range_erased(f, base, f->page_size);
         return;
     }
     pi->valid = true;

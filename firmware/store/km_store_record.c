@@ -133,3 +133,22 @@ bool km_rec_cell_erased(const km_flash_t *f, uint32_t addr)
     }
     return true;
 }
+
+bool km_rec_range_erased(const km_flash_t *f, uint32_t addr, uint32_t len)
+{
+    uint8_t chunk[4u * KM_REC_MAX_CELL];
+    while (len > 0u) {
+        const uint32_t n = (len < sizeof chunk) ? len : (uint32_t)sizeof chunk;
+        if (f->read(f->ctx, addr, chunk, n) != KM_FLASH_OK) {
+            return false;
+        }
+        for (uint32_t i = 0; i < n; i++) {
+            if (chunk[i] != 0xFFu) {
+                return false;
+            }
+        }
+        addr += n;
+        len -= n;
+    }
+    return true;
+}

@@ -55,4 +55,8 @@ uint32_t km_rec_value(const km_rec_t *rec, uint32_t i);
 /* Reads one cell; true if it reads all ones without ECC error. */
 bool km_rec_cell_erased(const km_flash_t *f, uint32_t addr);
 
+/* Reads len bytes from addr (whole cells) a few cells per read; true if
+ * every cell reads all ones without ECC error. */
+bool km_rec_range_erased(const km_flash_t *f, uint32_t addr, uint32_t len);
+
 #endif
