@@ -98,6 +98,7 @@ static const km_nor_sim_config_t s_geoms[] = {
     {2048u, 8u, 2u, 0xFFu}, /* STM32G0 */
     {1024u, 2u, 2u, 0xFFu}, /* STM32F0 / GD32 */
     {1024u, 4u, 2u, 0xFFu}, /* nRF51 */
+    {2048u, 8u, 3u, 0xFFu}, /* STM32G031 as boards/stm32g031 ships it: three pages */
 };
 
 static km_nor_sim_t s_sim;   /* the flash under test; s_flash points at it */
@@ -532,10 +533,11 @@ static void prv_run_geometry(unsigned g)
 #define SESSIONS 12u
 
 static unsigned long s_seed_acked, s_seed_lost, s_seed_violations, s_seed_cuts;
+static uint32_t s_seed_pages = 2u; /* pages of the seeded histories' flash */
 
 static void prv_seed_history(uint32_t seed)
 {
-    const km_nor_sim_config_t cfg = {2048u, 8u, 2u, 0xFFu};
+    const km_nor_sim_config_t cfg = {2048u, 8u, s_seed_pages, 0xFFu};
     assert_true(km_nor_sim_init(&s_sim, &cfg, &s_flash));
     prv_real_rules(&s_sim);
     km_nor_sim_seed(&s_sim, seed * 2654435761u + 1u);
@@ -604,6 +606,7 @@ static void prv_seed_history(uint32_t seed)
 static void test_powercut_seeds_stm32g0(void **state)
 {
     (void)state;
+    s_seed_pages = 2u;
     for (uint32_t seed = 0; seed < SEEDS; seed++) {
         s_where_scn = "seeded history";
         s_where_n = seed;
@@ -614,6 +617,30 @@ static void test_powercut_seeds_stm32g0(void **state)
            SEEDS, s_seed_cuts, s_seed_acked, s_seed_lost, s_seed_violations);
     assert_int_equal(s_seed_lost, 0);
     assert_int_equal(s_seed_violations, 0);
+}
+
+/* The same histories on the page count the G031 board ships with. */
+static void test_powercut_seeds_stm32g031_three_pages(void **state)
+{
+    (void)state;
+    s_seed_pages = 3u;
+    s_seed_cuts = s_seed_acked = s_seed_lost = s_seed_violations = 0;
+    for (uint32_t seed = 0; seed < SEEDS; seed++) {
+        s_where_scn = "seeded history, three pages";
+        s_where_n = seed;
+        prv_seed_history(seed);
+    }
+    printf("seeded histories (STM32G031 2 KiB/8 B x3): %u seeds, %lu power cuts, %lu acknowledged "
+           "commits, %lu lost at a later mount, %lu programs onto touched cells\n",
+           SEEDS, s_seed_cuts, s_seed_acked, s_seed_lost, s_seed_violations);
+    assert_int_equal(s_seed_lost, 0);
+    assert_int_equal(s_seed_violations, 0);
+}
+
+static void test_powercut_stm32g031_three_pages(void **state)
+{
+    (void)state;
+    prv_run_geometry(3);
 }
 
 static void test_powercut_stm32g0(void **state)
@@ -660,6 +687,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_powercut_stm32f0),
         cmocka_unit_test(test_powercut_nrf51),
         cmocka_unit_test(test_powercut_seeds_stm32g0),
+        cmocka_unit_test(test_powercut_stm32g031_three_pages),
+        cmocka_unit_test(test_powercut_seeds_stm32g031_three_pages),
     };
     return cmocka_run_group_tests(tests, NULL, prv_summary);
 }
