@@ -1,77 +1,94 @@
-/* Control interface and sensing (see km_control.h for what is not here yet). */
+/* The control tick (see km_control.h): sensing, servo mode, position loop
+ * and output stage, in that order, once per tick. */
 #include "km_control.h"
 
 #include <string.h>
 
-#define CONFIG_DIRECTION   0x04u
-#define CONFIG_IDLE_BRAKE  0x02u
-#define CONFIG_POWERON_BRAKE 0x01u
-
-/* Speed is position change over a 20 ms window: at 0.1 deg resolution a
- * 1 ms difference would quantise speed to 100 deg/s steps. */
-#define SPEED_WINDOW_US 20000u
-
-static km_bridge_t prv_idle_output(const km_control_config_t *cfg, uint8_t brake_bit)
-{
-    km_bridge_t b = {(cfg->config & brake_bit) ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE, 0};
-    return b;
-}
-
-void km_control_init(km_control_t *c, const km_control_config_t *cfg)
+void km_control_init(km_control_t *c, const km_control_params_t *p)
 {
     memset(c, 0, sizeof *c);
-    c->bridge = prv_idle_output(cfg, CONFIG_POWERON_BRAKE); /* §5.1 0x11 bit 0 */
+    km_servo_mode_init(&c->servo, p);
+    km_position_loop_init(&c->loop);
+    km_speed_window_init(&c->speed);
+    /* §5.1 0x11 bit 0: the power-on output until the first tick says otherwise */
+    c->bridge = km_output_bridge(p->power_on_brake ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE, 0, 0, false);
 }
 
-void km_control_request(km_control_t *c, const km_request_t *req, const km_control_config_t *cfg)
+bool km_control_request(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
 {
     c->requests++;
     c->last_request = *req;
-    if (req->kind == KM_REQ_TORQUE_SWITCH) {
-        /* §5.4 0x64: 0 free, 1 brake damping; 2 and 3 need the position loop,
-         * which is not here yet: the output stays at the idle setting. */
-        if (req->u.u8 == 0u) {
-            c->bridge.mode = KM_BRIDGE_FREE;
-        } else if (req->u.u8 == 1u) {
-            c->bridge.mode = KM_BRIDGE_BRAKE;
-        } else {
-            c->bridge = prv_idle_output(cfg, CONFIG_IDLE_BRAKE);
-        }
+    switch (req->kind) {
+    case KM_REQ_TORQUE_SWITCH:
+    case KM_REQ_MOVE_TIME:
+    case KM_REQ_MOVE_SPEED:
+    case KM_REQ_SERVO_ADVANCED:
+    case KM_REQ_INTERPOLATE:
+        return km_servo_mode_request(&c->servo, req, p, c->position);
+    default:
+        /* motor mode, zeroing, protection clear: later issues; accepted as
+         * before, nothing moves */
+        return true;
     }
 }
 
-void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_config_t *cfg,
+/* §5.1: reported position = sensor + level-1 + level-2 zero offsets, with
+ * the sign flipped when 0x11 bit 2 makes counter-clockwise positive. */
+static int32_t prv_position(const km_sensors_t *in, const km_control_params_t *p)
+{
+    const int32_t pos = in->position + p->zero_offset1 + p->zero_offset2;
+    return p->reverse ? -pos : pos;
+}
+
+void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p,
                      uint32_t dt_us, km_live_t *live, km_bridge_t *bridge)
 {
-    /* §5.1: reported position = sensor + level-1 + level-2 zero offsets, with
-     * the sign flipped when 0x11 bit 2 makes counter-clockwise positive. */
-    int32_t pos = in->position + cfg->zero_offset1 + cfg->zero_offset2;
-    if (cfg->config & CONFIG_DIRECTION) {
-        pos = -pos;
+    /* 1. sensing */
+    const int32_t pos = prv_position(in, p);
+    if (!c->have_position) {
+        km_speed_fast_init(&c->fast, pos);
     }
-    if (c->have_position) {
-        c->speed_acc += pos - c->last_position;
-        c->speed_us += dt_us;
-        if (c->speed_us >= SPEED_WINDOW_US) {
-            /* 0.1 deg per us -> deg/s: x 1e6 / 10. Clamped so the product
-             * stays in 32 bits (M0 has no 64-bit divide instruction);
-             * +-20000 x 0.1 deg in one window is far past any servo. */
-            const int32_t acc = c->speed_acc > 20000 ? 20000 : (c->speed_acc < -20000 ? -20000 : c->speed_acc);
-            c->speed_dps = (acc * 100000) / (int32_t)c->speed_us;
-            c->speed_acc = 0;
-            c->speed_us = 0;
-        }
-    }
-    c->last_position = pos;
+    const int32_t speed_dps = km_speed_window_step(&c->speed, pos, dt_us);
+    const int32_t speed_ddps = c->have_position ? km_speed_fast_step(&c->fast, pos, dt_us) : 0;
+    c->position = pos;
     c->have_position = true;
+
+    /* 2. servo mode */
+    km_servo_mode_out_t sm;
+    km_servo_mode_step(&c->servo, p, pos, dt_us, &sm);
+
+    /* 3. position loop, 4. output */
+    int32_t limit = p->torque_limit < p->max_torque ? p->torque_limit : p->max_torque;
+    if (sm.pwm_cap < limit) {
+        limit = sm.pwm_cap;
+    }
+    int32_t pwm = 0;
+    if (sm.bridge == KM_BRIDGE_PWM) {
+        if (sm.reset_loop) {
+            km_position_loop_init(&c->loop);
+        }
+        const km_position_loop_in_t li = {
+            .setpoint_u = sm.setpoint_u,
+            .setpoint_ddps = sm.setpoint_ddps,
+            .position = pos,
+            .speed_ddps = speed_ddps,
+            .pwm_max = limit,
+        };
+        pwm = km_position_loop_step(&c->loop, &p->gains, &li, dt_us);
+    }
+    c->bridge = km_output_bridge(sm.bridge, pwm, limit, p->reverse);
 
     memset(live, 0, sizeof *live);
     live->position = pos;
-    live->speed = c->speed_dps;
+    live->speed = speed_dps;
     live->current = in->current_ma;
-    live->pwm = c->bridge.mode == KM_BRIDGE_PWM ? (c->bridge.pwm < 0 ? -c->bridge.pwm : c->bridge.pwm) : 0;
+    live->pwm = km_output_pwm_reported(&c->bridge);
     live->temperature = in->temperature_c10 / 10;
     live->voltage = in->voltage_mv;
+    live->deviation = km_servo_mode_deviation(&c->servo, pos);
+    live->rotation_ms = c->servo.rotation_ms;
+    live->running = c->servo.running;
+    live->protecting = c->servo.ts == 5u;
     live->hw_faults = in->faults;
     *bridge = c->bridge;
 }

@@ -1,11 +1,18 @@
-/* Control: turns sensor readings into the live registers and the bus
- * requests into a bridge command, as step(inputs, dt) -> outputs so the host
- * tests drive it without hardware.
+/* Control: one tick turns the sensors into the live registers and a bridge
+ * command, as step(state, inputs, dt) so host tests drive it without
+ * hardware. The app runs it every KM_CONTROL_TICK_US (1 kHz) on every
+ * board, and hands it the dispatcher's typed requests.
  *
- * This is the control *interface* and its sensing half. The motion half
- * (position loop, profiles, motor modes, protection supervisor) is a later
- * issue: until it lands, motion requests are received and counted, and the
- * bridge only ever coasts or brakes, so the plant stays where it is. */
+ * One tick, in order (sensing, limits and output in one place):
+ *   1. sensing: position in the master's frame = (sensor + 0x16 + 0x17),
+ *      negated when 0x11 bit 2 is set; speeds (km_speed_est);
+ *   2. servo mode: torque switch and profile (km_servo_mode, km_profile);
+ *   3. position loop (km_position_loop) when the torque is on;
+ *   4. output (km_output): PWM limit 0x5B (and a move's own cap), direction
+ *      back to the sensor's frame, bridge mode.
+ * Motor mode (0x6E..0x70) and the protection supervisor are later issues:
+ * motor requests are accepted and counted, nothing moves. Only this header
+ * and km_servo_io.h are the interface; the modules are internals. */
 #ifndef KM_CONTROL_H
 #define KM_CONTROL_H
 
@@ -13,45 +20,33 @@
 #include <stdint.h>
 
 #include "km_hal_sensors.h"
-#include "km_servo.h"
+#include "km_output.h"
+#include "km_position_loop.h"
+#include "km_servo_io.h"
+#include "km_servo_mode.h"
+#include "km_speed_est.h"
 
-typedef enum {
-    KM_BRIDGE_FREE = 0,
-    KM_BRIDGE_BRAKE = 1,
-    KM_BRIDGE_PWM = 2,
-} km_bridge_mode_t;
-
-typedef struct {
-    km_bridge_mode_t mode;
-    int16_t pwm; /* -1000..1000 when mode is PWM */
-} km_bridge_t;
-
-/* Register values control needs each tick (read from the register file). */
-typedef struct {
-    int16_t zero_offset1;   /* 0x16, 0.1 deg */
-    int16_t zero_offset2;   /* 0x17, 0.1 deg */
-    uint8_t config;         /* 0x11: bit2 direction, bit1 idle output, bit0 power-on output */
-    uint8_t torque_switch;  /* 0x64 */
-} km_control_config_t;
+#define KM_CONTROL_TICK_US 1000u /* 1 kHz: sensing, position loop and output */
 
 typedef struct {
-    km_bridge_t bridge;
-    int32_t last_position;  /* 0.1 deg, for speed */
-    int32_t speed_acc;      /* 0.1 deg moved since the last speed update */
-    uint32_t speed_us;      /* time accumulated for the speed estimate */
-    int32_t speed_dps;
+    km_servo_mode_t servo;
+    km_position_loop_t loop;
+    km_speed_window_t speed;     /* 0x47 */
+    km_speed_fast_t fast;        /* the loop's damping input */
+    km_bridge_t bridge;          /* the last command */
+    int32_t position;            /* 0.1 deg, master's frame, last tick */
     bool have_position;
-    uint32_t requests;      /* typed requests received (diagnostics) */
+    uint32_t requests;           /* typed requests received (diagnostics) */
     km_request_t last_request;
 } km_control_t;
 
-void km_control_init(km_control_t *c, const km_control_config_t *cfg);
+void km_control_init(km_control_t *c, const km_control_params_t *p);
 
-/* A typed request from the dispatcher. */
-void km_control_request(km_control_t *c, const km_request_t *req, const km_control_config_t *cfg);
+/* A typed request from the dispatcher; false = refused (status bit 6). */
+bool km_control_request(km_control_t *c, const km_request_t *req, const km_control_params_t *p);
 
 /* One control tick: sensors in, live registers and bridge command out. */
-void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_config_t *cfg,
+void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p,
                      uint32_t dt_us, km_live_t *live, km_bridge_t *bridge);
 
 #endif

@@ -11,6 +11,31 @@ typedef enum {
     KM_VARIANT_ENCODER = 1,       /* multi-turn, speed control, zeroing */
 } km_variant_t;
 
+/* Position-loop gains and profile limits (control/, docs/tuning.md): the
+ * product's, since they depend on its motor, gearbox and supply. Tuned on
+ * the simulated plant (sim/plant/km_plant_default.c); a servo maker tunes
+ * their own as docs/tuning.md says. */
+typedef struct {
+    uint16_t kp_q8;          /* PWM per 0.1 deg of position error, Q8 */
+    uint16_t kd_q8;          /* PWM per deg/s of speed error (profile - measured), Q8 */
+    uint16_t ki_q8;          /* PWM per 0.1 deg.s of integrated error, Q8 */
+    uint16_t i_max_pwm;      /* integrator contribution bound, PWM */
+    uint16_t kv_q8;          /* speed feedforward, PWM per deg/s, Q8 (1000 / no-load speed) */
+    uint16_t friction_pwm;   /* feedforward against Coulomb friction while moving, PWM */
+    uint32_t accel_dps2;     /* profile acceleration of speed moves and "fastest", deg/s^2 */
+    uint16_t fastest_dps;    /* "fastest" when 0x5D is 0, deg/s */
+    uint16_t arrive_ddeg;    /* a move ends when the shaft is this close to the target, 0.1 deg */
+    uint16_t settle_ms;      /* ... or this long after the profile reached it (blocked shaft) */
+} km_control_gains_t;
+
+/* The defaults, tuned on the simulated plant: docs/tuning.md. */
+#define KM_CONTROL_GAINS_DEFAULT                                                     \
+    {                                                                                \
+        .kp_q8 = 2560, .kd_q8 = 256, .ki_q8 = 2560, .i_max_pwm = 150, .kv_q8 = 700,  \
+        .friction_pwm = 15, .accel_dps2 = 4000, .fastest_dps = 360, .arrive_ddeg = 5, \
+        .settle_ms = 300,                                                            \
+    }
+
 typedef struct {
     const char *model;            /* 0x0A, ASCII, at most 16 characters */
     uint32_t firmware_version;    /* 0x0C, 0x@@##&&&& */
@@ -33,6 +58,7 @@ typedef struct {
     int16_t travel_max;           /* highest angle limit / target, 0.1 deg */
     int16_t zero_offset2_max;     /* |0x17| bound, 0.1 deg */
     uint8_t voltage_max_v;        /* upper bound of 0x3C fields */
+    const km_control_gains_t *gains; /* NULL = KM_CONTROL_GAINS_DEFAULT */
 } km_product_t;
 
 #endif

@@ -39,11 +39,20 @@ static void prv_exception(km_servo_t *s)
     s->flags |= KM_ST_EXCEPTION;
 }
 
-static void prv_request(km_servo_t *s, const km_request_t *req)
+/* True when control accepted it (no control attached: accepted). */
+static bool prv_request(km_servo_t *s, const km_request_t *req)
 {
     if (s->ops && s->ops->request) {
-        s->ops->request(s->ops->ctx, req);
+        return s->ops->request(s->ops->ctx, req);
     }
+    return true;
+}
+
+/* Every register change goes through here, so the change counter sees it. */
+static void prv_set(km_servo_t *s, km_reg_index_t r, uint32_t v)
+{
+    s->value[r] = v;
+    s->params_gen++;
 }
 
 static bool prv_commit(km_servo_t *s, const uint8_t *addrs, const uint32_t *values, uint8_t n)
@@ -64,7 +73,7 @@ static uint8_t prv_next_random(km_servo_t *s)
 /* Runtime mirrors (§5.4): 0x5B/0x5C/0x5D follow 0x13/0x14/0x15 writes. */
 static void prv_apply(km_servo_t *s, km_reg_index_t r, uint32_t v)
 {
-    s->value[r] = v;
+    prv_set(s, r, v);
     if (r == KM_REG_MAX_TORQUE) {
         s->value[KM_REG_TORQUE_LIMIT] = v;
     } else if (r == KM_REG_MAX_CURRENT) {
@@ -211,11 +220,61 @@ void km_servo_set_live(km_servo_t *s, const km_live_t *live)
 {
     s->live = *live;
     s->hw_latched |= live->hw_faults; /* §5.2 0x35: latched until restart */
+    if (live->protecting && prv_reg(s, KM_REG_TORQUE_SWITCH) != 5u) {
+        prv_set(s, KM_REG_TORQUE_SWITCH, 5u); /* §5.4 0x64 = 5: set by the servo */
+    }
 }
 
 void km_servo_set_torque_switch(km_servo_t *s, uint8_t value)
 {
-    s->value[KM_REG_TORQUE_SWITCH] = value;
+    prv_set(s, KM_REG_TORQUE_SWITCH, value);
+}
+
+uint32_t km_servo_params_gen(const km_servo_t *s)
+{
+    return s->params_gen;
+}
+
+static const km_control_gains_t s_default_gains = KM_CONTROL_GAINS_DEFAULT;
+
+void km_servo_control_params(const km_servo_t *s, km_control_params_t *out)
+{
+    const uint8_t config = (uint8_t)prv_reg(s, KM_REG_CONFIG);
+    const uint32_t volt = prv_reg(s, KM_REG_VOLTAGE_LIMITS);
+    const uint32_t temp = prv_reg(s, KM_REG_TEMP_LIMITS);
+    const uint32_t cur = prv_reg(s, KM_REG_CURRENT_LIMIT);
+    const uint32_t stall = prv_reg(s, KM_REG_STALL_LIMIT);
+    memset(out, 0, sizeof *out);
+    out->variant = s->product->variant;
+    out->reverse = (config & 0x04u) != 0u;
+    out->idle_brake = (config & 0x02u) != 0u;
+    out->power_on_brake = (config & 0x01u) != 0u;
+    out->zero_offset1 = (int16_t)prv_reg(s, KM_REG_ZERO_OFFSET1);
+    out->zero_offset2 = (int16_t)prv_reg(s, KM_REG_ZERO_OFFSET2);
+    out->max_torque = (uint16_t)prv_reg(s, KM_REG_MAX_TORQUE);
+    out->max_current_ma = (uint16_t)prv_reg(s, KM_REG_MAX_CURRENT);
+    out->max_speed_dps = (uint16_t)prv_reg(s, KM_REG_MAX_SPEED);
+    out->angle_min = (int16_t)prv_reg(s, KM_REG_ANGLE_MIN);
+    out->angle_max = (int16_t)prv_reg(s, KM_REG_ANGLE_MAX);
+    out->travel_min = s->product->travel_min;
+    out->travel_max = s->product->travel_max;
+    out->prot_enable = (uint8_t)prv_reg(s, KM_REG_PROT_ENABLE);
+    out->prot_release = (uint8_t)prv_reg(s, KM_REG_PROT_RELEASE);
+    out->prot_state = (uint8_t)prv_reg(s, KM_REG_PROT_STATE);
+    out->voltage_high_v = (uint8_t)volt;
+    out->voltage_low_v = (uint8_t)(volt >> 8);
+    out->temp_trip_c = (uint8_t)temp;
+    out->temp_hysteresis_c = (uint8_t)(temp >> 8);
+    out->current_trip_ma = (uint16_t)cur;
+    out->current_time_100ms = (uint8_t)(cur >> 16);
+    out->stall_pwm = (uint16_t)stall;
+    out->stall_time_100ms = (uint8_t)(stall >> 16);
+    out->control_mode = (uint8_t)prv_reg(s, KM_REG_CONTROL_MODE);
+    out->torque_limit = (uint16_t)prv_reg(s, KM_REG_TORQUE_LIMIT);
+    out->current_limit_ma = (uint16_t)prv_reg(s, KM_REG_CURRENT_LIMIT_NOW);
+    out->speed_limit_dps = (uint16_t)prv_reg(s, KM_REG_SPEED_LIMIT);
+    out->torque_switch = (uint8_t)prv_reg(s, KM_REG_TORQUE_SWITCH);
+    out->gains = s->product->gains ? *s->product->gains : s_default_gains;
 }
 
 void km_servo_set_userdata_source(km_servo_t *s, uint8_t source)
@@ -424,10 +483,13 @@ static void prv_servo_motion(km_servo_t *s, km_reg_index_t r, const uint8_t *d, 
         prv_fail(s);
         return;
     }
-    if (prv_reg(s, KM_REG_TORQUE_SWITCH) == 3u) {
-        s->value[KM_REG_TORQUE_SWITCH] = 2u; /* §5.4 0x64 = 3: on at the next rotation */
+    if (!prv_request(s, &req)) {
+        prv_fail(s); /* control refused it: nothing moves, 0x64 stays */
+        return;
     }
-    prv_request(s, &req);
+    if (prv_reg(s, KM_REG_TORQUE_SWITCH) == 3u) {
+        prv_set(s, KM_REG_TORQUE_SWITCH, 2u); /* §5.4 0x64 = 3: on at the next rotation */
+    }
 }
 
 static void prv_motor_motion(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t len)
@@ -461,11 +523,10 @@ static void prv_motor_motion(km_servo_t *s, km_reg_index_t r, const uint8_t *d, 
         req.kind = r == KM_REG_MOTOR_TORQUE ? KM_REQ_MOTOR_TORQUE : KM_REQ_MOTOR_SPEED;
         req.u.i16 = (int16_t)packed;
     }
-    if (!prv_motor_motion_allowed(s)) {
+    if (!prv_motor_motion_allowed(s) || !prv_request(s, &req)) {
         prv_fail(s);
         return;
     }
-    prv_request(s, &req);
 }
 
 /* "Zeroing": 0x46 written and 0x18 = 0 on encoder products both make the
@@ -479,7 +540,9 @@ static void prv_zero_position(km_servo_t *s)
         return;
     }
     const km_request_t req = {.kind = KM_REQ_ZERO_POSITION};
-    prv_request(s, &req);
+    if (!prv_request(s, &req)) {
+        prv_fail(s);
+    }
 }
 
 /* "Limits that contradict each other": a runtime limit (0x5B..0x5D) above
@@ -567,17 +630,22 @@ static bool prv_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t len
         }
         req.kind = KM_REQ_PROTECTION_CLEAR;
         req.u.u8 = (uint8_t)v;
-        prv_request(s, &req);
+        if (!prv_request(s, &req)) {
+            prv_fail(s);
+        }
         return true;
     case KM_REG_TORQUE_SWITCH:
         if (!km_reg_validate(r, s->product, d, len, &v) || (v == 2u && s->hw_latched)) {
             prv_fail(s); /* 4, 5 and up are not writable; no holding with a fault */
             return true;
         }
-        s->value[r] = v;
         req.kind = KM_REQ_TORQUE_SWITCH;
         req.u.u8 = (uint8_t)v;
-        prv_request(s, &req);
+        if (!prv_request(s, &req)) {
+            prv_fail(s); /* control refused (e.g. a protection latched): 0x64 stays */
+            return true;
+        }
+        prv_set(s, r, v);
         return true;
     case KM_REG_CONTROL_MODE:
         /* §5.4 0x5A: motor-only only when idle or with torque off. */
@@ -586,7 +654,7 @@ static bool prv_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t len
             prv_fail(s);
             return true;
         }
-        s->value[r] = v;
+        prv_set(s, r, v);
         return true;
     case KM_REG_MOVE_TIME:
     case KM_REG_MOVE_SPEED:
@@ -605,7 +673,7 @@ static bool prv_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t len
         } else if (km_reg_table[r].persisted) {
             prv_commit_one(s, r, v); /* ID and baud too: committed before they apply */
         } else {
-            s->value[r] = v;
+            prv_set(s, r, v);
         }
         return true;
     }

@@ -12,6 +12,7 @@
 #include "km_frame.h"
 #include "km_product.h"
 #include "km_registers.h"
+#include "km_servo_io.h" /* request, live state, control parameters */
 
 /* Status byte bits (§4). */
 #define KM_ST_RUNNING    0x80u
@@ -20,37 +21,6 @@
 #define KM_ST_HW_FAULT   0x10u
 #define KM_ST_PROTECTION 0x0Fu /* stall, temperature, current, voltage */
 
-/* Typed requests to control (motion, torque, zeroing, protection). */
-typedef enum {
-    KM_REQ_TORQUE_SWITCH,   /* .u8 = new 0x64 value (0, 1, 2, 3) */
-    KM_REQ_MOVE_TIME,       /* .move: target 0.1 deg, param ms (0 = fastest) */
-    KM_REQ_MOVE_SPEED,      /* .move: target 0.1 deg, param deg/s (0 = fastest) */
-    KM_REQ_SERVO_ADVANCED,  /* .adv: control byte, p1, p2 (§5.4 0x67) */
-    KM_REQ_INTERPOLATE,     /* .move.target */
-    KM_REQ_MOTOR_TORQUE,    /* .i16 PWM -1000..1000 */
-    KM_REQ_MOTOR_SPEED,     /* .i16 deg/s */
-    KM_REQ_MOTOR_ADVANCED,  /* .adv: control byte, p1, p2 (§5.4 0x70) */
-    KM_REQ_ZERO_POSITION,   /* make the current position zero (0x46 write, 0x18 = 0 on encoders) */
-    KM_REQ_PROTECTION_CLEAR,/* .u8 = mask of protections to release (0x36) */
-} km_request_kind_t;
-
-typedef struct {
-    km_request_kind_t kind;
-    union {
-        uint8_t u8;
-        int16_t i16;
-        struct {
-            int16_t target;
-            uint16_t param;
-        } move;
-        struct {
-            uint8_t control;
-            uint16_t p1;  /* as sent: an i16 for 0x67, a u16 for 0x70 */
-            uint16_t p2;
-        } adv;
-    } u;
-} km_request_t;
-
 /* What the firmware provides: narrow, typed, no hardware types. */
 typedef struct {
     /* Commit persisted registers all-or-nothing; true once durable. On
@@ -58,25 +28,13 @@ typedef struct {
     bool (*commit)(void *ctx, const uint8_t *addrs, const uint32_t *values, uint8_t n);
     /* 0x02 with the exact magic: restart now, no answer. */
     void (*restart)(void *ctx);
-    /* Motion and protection requests; `req` is valid during the call only. */
-    void (*request)(void *ctx, const km_request_t *req);
+    /* Motion and protection requests; `req` is valid during the call only.
+     * Returns false when control refuses it (a motion the variant cannot do,
+     * a protection latched): the dispatcher then sets status bit 6 and
+     * changes nothing. */
+    bool (*request)(void *ctx, const km_request_t *req);
     void *ctx;
 } km_servo_ops_t;
-
-/* Live state from control, copied in every control tick. */
-typedef struct {
-    int32_t position;      /* 0.1 deg, zero offsets applied */
-    int32_t speed;         /* deg/s */
-    int32_t current;       /* mA */
-    int32_t pwm;           /* 0..1000 */
-    int32_t temperature;   /* deg C */
-    int32_t voltage;       /* mV */
-    int32_t deviation;     /* 0.1 deg */
-    uint32_t rotation_ms;  /* 0x4D */
-    bool running;          /* status bit 7 */
-    uint8_t protections;   /* active protections, 0x36 bits / status bits 0..3 */
-    uint8_t hw_faults;     /* 0x35 bits seen by power-on checks */
-} km_live_t;
 
 /* The answer to send: `len` 0 = none. Starts `delay_us` after the frame's
  * last byte. */
@@ -99,6 +57,7 @@ typedef struct {
     uint8_t hw_latched;           /* 0x35, latched until restart */
     uint8_t userdata_source;      /* KM_USERDATA_*, extension register 0x01 */
     uint8_t reset_cause;          /* km_reset_cause_t of this boot, extension 0x02 */
+    uint32_t params_gen;          /* bumped on every applied register change */
     struct {
         bool full;
         uint8_t addr;
@@ -119,10 +78,19 @@ void km_servo_handle(km_servo_t *s, const km_frame_t *frame, km_reply_t *reply);
  * answer reports it ("Status bits 5 and 6"). */
 void km_servo_note_checksum_error(km_servo_t *s);
 
+/* Control's live state, every tick. live->protecting makes 0x64 read 5
+ * (set by the servo after a protection, not writable, §5.4). */
 void km_servo_set_live(km_servo_t *s, const km_live_t *live);
 
 /* Control sets 0x64 to 5 after a protection (not writable from the bus). */
 void km_servo_set_torque_switch(km_servo_t *s, uint8_t value);
+
+/* The control registers decoded into engineering units (km_servo_io.h). */
+void km_servo_control_params(const km_servo_t *s, km_control_params_t *out);
+
+/* Changes every time a register value changes (a write, a commit, a reset,
+ * 0x64 turned on by a rotation command): decode the params again only then. */
+uint32_t km_servo_params_gen(const km_servo_t *s);
 
 /* This firmware's extension registers, read with command 0x7F ("customer
  * custom", PROTOCOL.md §7) so they stay out of the vendor's register map:

@@ -29,7 +29,7 @@
 #include "km_rx_queue.h"
 #include "km_servo.h"
 
-#define KM_APP_TICK_US 1000u      /* control tick */
+#define KM_APP_TICK_US KM_CONTROL_TICK_US /* control tick: 1 kHz */
 #define KM_APP_RX_BUDGET 64u      /* bytes parsed per loop pass: bounds tick jitter */
 #define KM_APP_WATCHDOG_MS 500u
 
@@ -39,6 +39,8 @@ static km_frame_t s_frame;
 static km_servo_t s_servo;
 static km_reply_t s_reply;
 static km_control_t s_control;
+static km_control_params_t s_params;   /* the control registers, decoded */
+static uint32_t s_params_gen;          /* km_servo_params_gen() they were decoded at */
 static uint32_t s_last_control_tick;
 static uint32_t s_next_tick;
 static uint32_t s_tick_period;
@@ -192,15 +194,16 @@ static bool prv_restart_ready(void)
     return s_restart_pending && !s_reply_waiting && !s_tx_armed && !km_hal_uart_tx_busy();
 }
 
-static km_control_config_t prv_control_config(void)
+/* The control registers in engineering units, decoded again only after
+ * the dispatcher applied a change. */
+static const km_control_params_t *prv_params(void)
 {
-    km_control_config_t cfg = {
-        .zero_offset1 = (int16_t)km_servo_reg(&s_servo, KM_REG_ZERO_OFFSET1),
-        .zero_offset2 = (int16_t)km_servo_reg(&s_servo, KM_REG_ZERO_OFFSET2),
-        .config = (uint8_t)km_servo_reg(&s_servo, KM_REG_CONFIG),
-        .torque_switch = (uint8_t)km_servo_reg(&s_servo, KM_REG_TORQUE_SWITCH),
-    };
-    return cfg;
+    const uint32_t gen = km_servo_params_gen(&s_servo);
+    if (gen != s_params_gen) {
+        km_servo_control_params(&s_servo, &s_params);
+        s_params_gen = gen;
+    }
+    return &s_params;
 }
 
 static void prv_apply_bridge(const km_bridge_t *b)
@@ -223,11 +226,10 @@ static void prv_control_tick(uint32_t now)
     km_sensors_t sensors;
     km_live_t live;
     km_bridge_t bridge;
-    const km_control_config_t cfg = prv_control_config();
     const uint32_t dt_ticks = now - s_last_control_tick;
     s_last_control_tick = now;
     km_hal_sensors_read(&sensors);
-    km_control_step(&s_control, &sensors, &cfg, dt_ticks / s_ticks_per_us, &live, &bridge);
+    km_control_step(&s_control, &sensors, prv_params(), dt_ticks / s_ticks_per_us, &live, &bridge);
     km_servo_set_live(&s_servo, &live);
     prv_apply_bridge(&bridge);
 }
@@ -246,11 +248,10 @@ static void prv_ops_restart(void *ctx)
     s_restart_pending = true;
 }
 
-static void prv_ops_request(void *ctx, const km_request_t *req)
+static bool prv_ops_request(void *ctx, const km_request_t *req)
 {
     (void)ctx;
-    const km_control_config_t cfg = prv_control_config();
-    km_control_request(&s_control, req, &cfg);
+    return km_control_request(&s_control, req, prv_params());
 }
 
 static const km_servo_ops_t s_ops = {
@@ -298,8 +299,9 @@ void km_app_init(void)
      * store's mount results are in the same order as KM_USERDATA_*. */
     km_servo_set_userdata_source(&s_servo, (uint8_t)mount);
     km_servo_set_reset_cause(&s_servo, (uint8_t)km_hal_reset_cause());
-    const km_control_config_t cfg = prv_control_config();
-    km_control_init(&s_control, &cfg);
+    km_servo_control_params(&s_servo, &s_params);
+    s_params_gen = km_servo_params_gen(&s_servo);
+    km_control_init(&s_control, &s_params);
 
     km_rx_queue_init(&s_rxq);
     const uint32_t baud = prv_open_bus(km_servo_active_baud(&s_servo));

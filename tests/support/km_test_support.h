@@ -100,6 +100,7 @@ typedef struct {
     km_request_t requests[KT_MAX_REQUESTS];
     unsigned n_requests;
     bool fail_next_commit;
+    bool refuse_requests;    /* control answers "refused" (recorded all the same) */
 } kt_fake_t;
 
 static inline bool kt_fake_commit(void *ctx, const uint8_t *addrs, const uint32_t *values, uint8_t n)
@@ -122,11 +123,12 @@ static inline void kt_fake_restart(void *ctx)
     f->restarts++;
 }
 
-static inline void kt_fake_request(void *ctx, const km_request_t *req)
+static inline bool kt_fake_request(void *ctx, const km_request_t *req)
 {
     kt_fake_t *f = ctx;
     assert_true(f->n_requests < KT_MAX_REQUESTS);
     f->requests[f->n_requests++] = *req;
+    return !f->refuse_requests;
 }
 
 /* Value of `addr` in commit c, or fails the test if absent. */

@@ -1,5 +1,5 @@
-/* control/km_control.c as it is today (the sensing half and the request
- * interface; the motion half is not written yet, see km_control.h):
+/* control/km_control.c, the tick without the plant (the plant-backed
+ * motion tests are tests/unit/test_control_servo.c):
  * PROTOCOL.md §5.1 zero offsets 0x16 + 0x17 and direction (0x11 bit 2),
  * §5.1 0x11 bits 0/1 power-on and idle output, §5.4 0x64 torque switch to
  * bridge mode, §5.3 live registers (speed over a 20 ms window, current,
@@ -16,14 +16,26 @@
 
 static km_control_t c;
 
-static km_control_config_t cfg_of(int16_t zo1, int16_t zo2, uint8_t config, uint8_t torque_switch)
+/* Params as the dispatcher decodes them from 0x16, 0x17, 0x11 and 0x64
+ * (the rest at the values a fresh servo has). */
+static km_control_params_t cfg_of(int16_t zo1, int16_t zo2, uint8_t config, uint8_t torque_switch)
 {
-    km_control_config_t cfg = {
-        .zero_offset1 = zo1,
-        .zero_offset2 = zo2,
-        .config = config,
-        .torque_switch = torque_switch,
-    };
+    km_control_params_t cfg;
+    memset(&cfg, 0, sizeof cfg);
+    const km_control_gains_t g = KM_CONTROL_GAINS_DEFAULT;
+    cfg.zero_offset1 = zo1;
+    cfg.zero_offset2 = zo2;
+    cfg.reverse = (config & 0x04) != 0;
+    cfg.idle_brake = (config & 0x02) != 0;
+    cfg.power_on_brake = (config & 0x01) != 0;
+    cfg.torque_switch = torque_switch;
+    cfg.max_torque = 1000;
+    cfg.torque_limit = 1000;
+    cfg.speed_limit_dps = 360;
+    cfg.max_speed_dps = 360;
+    cfg.travel_min = -32000;
+    cfg.travel_max = 32000;
+    cfg.gains = g;
     return cfg;
 }
 
@@ -37,7 +49,7 @@ static km_sensors_t sensors_at(int32_t position)
 
 /* One tick; returns the live state and checks the bridge output equals the
  * control's own bridge command. */
-static km_live_t step(const km_sensors_t *in, const km_control_config_t *cfg, uint32_t dt_us)
+static km_live_t step(const km_sensors_t *in, const km_control_params_t *cfg, uint32_t dt_us)
 {
     km_live_t live;
     memset(&live, 0x5A, sizeof live); /* every field must be written */
@@ -48,13 +60,13 @@ static km_live_t step(const km_sensors_t *in, const km_control_config_t *cfg, ui
     return live;
 }
 
-static void torque_switch(uint8_t v, const km_control_config_t *cfg)
+static void torque_switch(uint8_t v, const km_control_params_t *cfg)
 {
     km_request_t req;
     memset(&req, 0, sizeof req);
     req.kind = KM_REQ_TORQUE_SWITCH;
     req.u.u8 = v;
-    km_control_request(&c, &req, cfg);
+    assert_true(km_control_request(&c, &req, cfg));
 }
 
 /* §5.1: reported position = sensor + level-1 zero offset (0x16) + level-2
@@ -68,7 +80,7 @@ static void test_s5_1_position_is_sensor_plus_both_zero_offsets(void **state)
         {123456, 5, 5, 123466},
     };
     for (unsigned i = 0; i < sizeof t / sizeof t[0]; i++) {
-        const km_control_config_t cfg = cfg_of(t[i].zo1, t[i].zo2, 0x02, 3);
+        const km_control_params_t cfg = cfg_of(t[i].zo1, t[i].zo2, 0x02, 3);
         km_control_init(&c, &cfg);
         const km_sensors_t in = sensors_at(t[i].sensor);
         const km_live_t live = step(&in, &cfg, 1000);
@@ -81,15 +93,15 @@ static void test_s5_1_position_is_sensor_plus_both_zero_offsets(void **state)
 static void test_s5_1_direction_bit_flips_position(void **state)
 {
     (void)state;
-    const km_control_config_t fwd = cfg_of(37, -20, 0x02, 3);
-    const km_control_config_t rev = cfg_of(37, -20, 0x02 | 0x04, 3);
+    const km_control_params_t fwd = cfg_of(37, -20, 0x02, 3);
+    const km_control_params_t rev = cfg_of(37, -20, 0x02 | 0x04, 3);
     km_control_init(&c, &fwd);
     const km_sensors_t in = sensors_at(100);
     assert_int_equal(step(&in, &fwd, 1000).position, 117);
     km_control_init(&c, &rev);
     assert_int_equal(step(&in, &rev, 1000).position, -117);
     /* other bits (response level, output bits) do not flip it */
-    const km_control_config_t other = cfg_of(37, -20, 0x0B, 3);
+    const km_control_params_t other = cfg_of(37, -20, 0x0B, 3);
     km_control_init(&c, &other);
     assert_int_equal(step(&in, &other, 1000).position, 117);
 }
@@ -99,7 +111,7 @@ static void test_s5_1_power_on_output_bit0(void **state)
 {
     (void)state;
     for (uint8_t config = 0; config < 16; config++) {
-        const km_control_config_t cfg = cfg_of(0, 0, config, 3);
+        const km_control_params_t cfg = cfg_of(0, 0, config, 3);
         memset(&c, 0xA5, sizeof c);
         km_control_init(&c, &cfg);
         const km_bridge_mode_t want = (config & 0x01) ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE;
@@ -112,14 +124,14 @@ static void test_s5_1_power_on_output_bit0(void **state)
     }
 }
 
-/* §5.4 0x64 as the bridge sees it today: 0 free, 1 brake damping whatever
- * 0x11 says; 2 and 3 (hold / armed: the position loop is not written yet)
- * the idle output of 0x11 bit 1: 0 free, 1 brake. */
+/* §5.4 0x64 as the bridge sees it after the next tick: 0 free, 1 brake
+ * damping whatever 0x11 says; 2 on (the position loop drives: PWM, 0 at
+ * the held position); 3 armed = off, the idle output of 0x11 bit 1. */
 static void test_s5_4_torque_switch_bridge_mode(void **state)
 {
     (void)state;
     for (uint8_t config = 0; config < 16; config++) {
-        const km_control_config_t cfg = cfg_of(0, 0, config, 3);
+        const km_control_params_t cfg = cfg_of(0, 0, config, 3);
         const km_bridge_mode_t idle = (config & 0x02) ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE;
         static const uint8_t order[] = {0, 1, 2, 0, 3, 1, 2, 3};
         km_control_init(&c, &cfg);
@@ -128,12 +140,14 @@ static void test_s5_4_torque_switch_bridge_mode(void **state)
             km_bridge_mode_t want = idle;
             if (order[i] == 0) want = KM_BRIDGE_FREE;
             if (order[i] == 1) want = KM_BRIDGE_BRAKE;
+            if (order[i] == 2) want = KM_BRIDGE_PWM;
+            const km_sensors_t in = sensors_at(0);
+            const km_live_t live = step(&in, &cfg, 1000);
             if (c.bridge.mode != want) {
                 fail_msg("0x11 = 0x%02X, 0x64 = %u: bridge %d, want %d", config, order[i], c.bridge.mode, want);
             }
-            const km_sensors_t in = sensors_at(0);
-            const km_live_t live = step(&in, &cfg, 1000);
-            assert_int_equal(live.pwm, 0); /* never PWM today */
+            assert_int_equal(live.pwm, 0); /* holding where it is: no error, no PWM */
+            assert_false(live.running);
         }
         assert_int_equal(c.requests, sizeof order);
         assert_int_equal(c.last_request.kind, KM_REQ_TORQUE_SWITCH);
@@ -141,12 +155,13 @@ static void test_s5_4_torque_switch_bridge_mode(void **state)
     }
 }
 
-/* Motion requests are received and counted but leave the bridge as it is
- * (km_control.h: the motion half is a later issue). */
-static void test_motion_requests_counted_bridge_unchanged(void **state)
+/* Rotation requests with the torque off (0x64 = 0, 1) are refused and
+ * leave the bridge as it is; motor-mode requests (a later slice) are
+ * accepted and counted, and move nothing. */
+static void test_motion_refused_torque_off_motor_counted(void **state)
 {
     (void)state;
-    const km_control_config_t cfg = cfg_of(0, 0, 0x02, 3);
+    const km_control_params_t cfg = cfg_of(0, 0, 0x02, 3);
     km_control_init(&c, &cfg);
     torque_switch(1, &cfg);
     km_request_t req;
@@ -154,23 +169,26 @@ static void test_motion_requests_counted_bridge_unchanged(void **state)
     req.kind = KM_REQ_MOVE_TIME;
     req.u.move.target = 900;
     req.u.move.param = 1000;
-    km_control_request(&c, &req, &cfg);
+    assert_false(km_control_request(&c, &req, &cfg));
     assert_int_equal(c.requests, 2);
     assert_int_equal(c.last_request.kind, KM_REQ_MOVE_TIME);
     assert_int_equal(c.last_request.u.move.target, 900);
     assert_int_equal(c.last_request.u.move.param, 1000);
+    const km_sensors_t in = sensors_at(0);
+    assert_false(step(&in, &cfg, 1000).running);
     assert_int_equal(c.bridge.mode, KM_BRIDGE_BRAKE);
     req.kind = KM_REQ_MOTOR_TORQUE;
     req.u.i16 = -500;
-    km_control_request(&c, &req, &cfg);
+    assert_true(km_control_request(&c, &req, &cfg));
     assert_int_equal(c.requests, 3);
+    (void)step(&in, &cfg, 1000);
     assert_int_equal(c.bridge.mode, KM_BRIDGE_BRAKE);
 }
 
 /* Runs `ticks` ticks of `dt_us`, the sensor moving `per_tick` 0.1 deg each;
  * returns the last live state. */
 static km_live_t ramp(int32_t *pos, int32_t per_tick, unsigned ticks, uint32_t dt_us,
-                      const km_control_config_t *cfg)
+                      const km_control_params_t *cfg)
 {
     km_live_t live = {0};
     for (unsigned i = 0; i < ticks; i++) {
@@ -187,7 +205,7 @@ static km_live_t ramp(int32_t *pos, int32_t per_tick, unsigned ticks, uint32_t d
 static void test_s5_3_speed_over_20ms_window(void **state)
 {
     (void)state;
-    const km_control_config_t cfg = cfg_of(0, 0, 0x02, 3);
+    const km_control_params_t cfg = cfg_of(0, 0, 0x02, 3);
     km_control_init(&c, &cfg);
     int32_t pos = 500;
     const km_sensors_t first = sensors_at(pos);
@@ -213,7 +231,7 @@ static void test_s5_3_speed_over_20ms_window(void **state)
 static void test_s5_3_speed_follows_direction(void **state)
 {
     (void)state;
-    const km_control_config_t rev = cfg_of(37, 100, 0x06, 3);
+    const km_control_params_t rev = cfg_of(37, 100, 0x06, 3);
     km_control_init(&c, &rev);
     int32_t pos = 0;
     const km_sensors_t first = sensors_at(pos);
@@ -224,13 +242,13 @@ static void test_s5_3_speed_follows_direction(void **state)
 }
 
 /* §5.3 live fields copied from the sensors: current mA, voltage mV,
- * temperature 0.1 degC -> degC (integer division), 0x35 fault bits; the
- * rest of km_live_t (running, protections, deviation, rotation time, PWM)
- * is 0 today. */
+ * temperature 0.1 degC -> degC (integer division), 0x35 fault bits; with
+ * the torque armed (off) the rest of km_live_t (running, protections,
+ * deviation, rotation time, PWM) is 0. */
 static void test_s5_3_live_fields_from_sensors(void **state)
 {
     (void)state;
-    const km_control_config_t cfg = cfg_of(0, 0, 0x02, 3);
+    const km_control_params_t cfg = cfg_of(0, 0, 0x02, 3);
     km_control_init(&c, &cfg);
     static const struct { int32_t cur, mv, c10; uint8_t faults; int32_t want_c; } t[] = {
         {1500, 12100, 415, 0x00, 41}, {-800, 7400, 419, 0x20, 41}, {0, 0, 0, 0xFF, 0},
@@ -263,7 +281,7 @@ int main(void)
         cmocka_unit_test(test_s5_1_direction_bit_flips_position),
         cmocka_unit_test(test_s5_1_power_on_output_bit0),
         cmocka_unit_test(test_s5_4_torque_switch_bridge_mode),
-        cmocka_unit_test(test_motion_requests_counted_bridge_unchanged),
+        cmocka_unit_test(test_motion_refused_torque_off_motor_counted),
         cmocka_unit_test(test_s5_3_speed_over_20ms_window),
         cmocka_unit_test(test_s5_3_speed_follows_direction),
         cmocka_unit_test(test_s5_3_live_fields_from_sensors),

@@ -1,0 +1,39 @@
+/* Position loop (see km_position_loop.h): PID with speed feedforward and
+ * anti-windup, 32-bit fixed point. */
+#include "km_position_loop.h"
+
+static int32_t prv_clamp(int32_t v, int32_t lo, int32_t hi)
+{
+    return v < lo ? lo : (v > hi ? hi : v);
+}
+
+void km_position_loop_init(km_position_loop_t *l)
+{
+    l->i_acc = 0;
+}
+
+int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g,
+                              const km_position_loop_in_t *in, uint32_t dt_us)
+{
+    /* error in 0.001 x 0.1 deg, bounded to +-200 deg: far past saturation */
+    const int32_t e_u = prv_clamp(in->setpoint_u - in->position * 1000, -2000000, 2000000);
+    const int32_t ev = prv_clamp(in->setpoint_ddps - in->speed_ddps, -20000, 20000);
+    const int32_t vs = prv_clamp(in->setpoint_ddps, -20000, 20000);
+    /* kp: PWM per 0.1 deg Q8 -> kp x e_u / 1000 / 256; e_u / 100 first keeps 32 bits */
+    int32_t out = (int32_t)g->kp_q8 * (e_u / 100) / 2560;
+    out += (int32_t)g->kd_q8 * ev / 2560;   /* kd: PWM per deg/s Q8, ev 0.1 deg/s */
+    out += (int32_t)g->kv_q8 * vs / 2560;   /* kv: PWM per deg/s Q8 */
+    if (vs != 0) {
+        out += vs > 0 ? (int32_t)g->friction_pwm : -(int32_t)g->friction_pwm;
+    }
+    /* integrator: ki PWM per 0.1 deg.s Q8; acc in PWM x 256000 */
+    const int32_t i_max = (int32_t)g->i_max_pwm * 256000;
+    const int32_t e_d = prv_clamp(e_u / 1000, -100, 100); /* 10 deg: the integrator is for small errors */
+    const int32_t di = (int32_t)g->ki_q8 * e_d / 10 * (int32_t)(dt_us > 2000u ? 2000u : dt_us) / 100;
+    const int32_t before = out + l->i_acc / 256000;
+    if (!((before >= in->pwm_max && di > 0) || (before <= -in->pwm_max && di < 0))) {
+        l->i_acc = prv_clamp(l->i_acc + di, -i_max, i_max);
+    }
+    out += l->i_acc / 256000;
+    return prv_clamp(out, -in->pwm_max, in->pwm_max);
+}

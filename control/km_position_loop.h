@@ -1,0 +1,33 @@
+/* Position loop: the PWM that makes the shaft follow the profile's
+ * set-point. PWM = speed feedforward (kv x set-point speed, plus friction
+ * while the set-point moves) + kp x position error + kd x speed error
+ * (set-point speed - measured speed) + ki x integrated error. The
+ * integrator stops growing while the output is saturated in the direction
+ * it would push (anti-windup) and is bounded by i_max. Output clamped to
+ * +-pwm_max. Units: 0.1 deg, 0.1 deg/s, PWM 0..1000, gains km_product.h. */
+#ifndef KM_POSITION_LOOP_H
+#define KM_POSITION_LOOP_H
+
+#include <stdint.h>
+
+#include "km_servo_io.h"
+
+typedef struct {
+    int32_t i_acc;   /* integrator, PWM x 256000 */
+} km_position_loop_t;
+
+typedef struct {
+    int32_t setpoint_u;     /* profile set-point, 0.001 x 0.1 deg */
+    int32_t setpoint_ddps;  /* profile speed, 0.1 deg/s */
+    int32_t position;       /* measured, 0.1 deg */
+    int32_t speed_ddps;     /* measured, 0.1 deg/s */
+    int32_t pwm_max;        /* output bound, 0..1000 */
+} km_position_loop_in_t;
+
+void km_position_loop_init(km_position_loop_t *l);
+
+/* Returns the PWM, -pwm_max..pwm_max, in the frame of the set-point. */
+int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g,
+                              const km_position_loop_in_t *in, uint32_t dt_us);
+
+#endif

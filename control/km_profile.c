@@ -1,0 +1,175 @@
+/* Trajectory generator (see km_profile.h): time-optimal moves under speed
+ * and acceleration bounds, moves in a given time, and constant-speed
+ * stream segments. 32-bit arithmetic except one 64-bit product and its
+ * square root (shifts and compares: no 64-bit divide on the M0). */
+#include "km_profile.h"
+
+#include <string.h>
+
+#define STEP_MAX_US 1000u /* longer ticks are integrated in pieces */
+#define ACCEL_MAX 1000000 /* u/s per ms = 100,000 deg/s^2: keeps accel x dt in 32 bits */
+
+static int32_t prv_abs(int32_t v)
+{
+    return v < 0 ? -v : v;
+}
+
+static int32_t prv_ddeg_to_u(int32_t ddeg)
+{
+    return ddeg * KM_PROFILE_U_PER_DDEG;
+}
+
+/* floor(sqrt(x)), bit by bit. */
+static uint32_t prv_isqrt64(uint64_t x)
+{
+    uint64_t r = 0;
+    uint64_t bit = (uint64_t)1 << 62;
+    while (bit > x) {
+        bit >>= 2;
+    }
+    while (bit != 0u) {
+        if (x >= r + bit) {
+            x -= r + bit;
+            r = (r >> 1) + bit;
+        } else {
+            r >>= 1;
+        }
+        bit >>= 2;
+    }
+    return (uint32_t)r;
+}
+
+void km_profile_reset(km_profile_t *p, int32_t pos_ddeg)
+{
+    memset(p, 0, sizeof *p);
+    p->pos = prv_ddeg_to_u(pos_ddeg);
+    p->target = p->pos;
+    p->vmax = 1;
+    p->accel = 1;
+    p->done = true;
+}
+
+void km_profile_move(km_profile_t *p, int32_t target_ddeg, int32_t vmax_ups, int32_t accel)
+{
+    p->target = prv_ddeg_to_u(target_ddeg);
+    p->vmax = vmax_ups > 0 ? vmax_ups : 1;
+    p->accel = accel > 0 ? (accel < ACCEL_MAX ? accel : ACCEL_MAX) : 1;
+    p->stream = false;
+    p->done = false;
+}
+
+void km_profile_move_time(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, int32_t vlimit_ups)
+{
+    const int32_t d = prv_abs(prv_ddeg_to_u(target_ddeg) - p->pos);
+    if (time_ms > 65535u) {
+        time_ms = 65535u;
+    }
+    const int32_t ta = time_ms >= 4u ? (int32_t)(time_ms / 4u) : 1;
+    const int32_t tc = (int32_t)time_ms - ta > 0 ? (int32_t)time_ms - ta : 1;
+    /* cruise speed D / (T - T/4) in u/s: D (< 2^27) / ms x 1000, with the
+     * remainder kept so short moves are exact */
+    int32_t v = (d / tc) * 1000 + ((d % tc) * 1000) / tc;
+    if (v > vlimit_ups) {
+        v = vlimit_ups; /* the speed limit wins: the move takes longer */
+    }
+    if (v < 1) {
+        v = 1;
+    }
+    const int32_t a = v / ta > 0 ? v / ta : 1;
+    km_profile_move(p, target_ddeg, v, a);
+}
+
+void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_us, int32_t vlimit_ups)
+{
+    p->target = prv_ddeg_to_u(target_ddeg);
+    const int32_t d = prv_abs(p->target - p->pos);
+    uint32_t ms = interval_us / 1000u;
+    if (ms < 1u) {
+        ms = 1u;
+    }
+    int32_t v = (d / (int32_t)ms) * 1000 + ((d % (int32_t)ms) * 1000) / (int32_t)ms;
+    if (v > vlimit_ups) {
+        v = vlimit_ups;
+    }
+    p->vmax = v > 0 ? v : 1;
+    p->vel = p->target >= p->pos ? p->vmax : -p->vmax;
+    p->vel_rem = 0;
+    p->stream = true;
+    p->done = false;
+}
+
+/* pos += vel * dt / 1e6 exactly, remainder carried (dt <= 1000). */
+static void prv_advance(km_profile_t *p, uint32_t dt_us)
+{
+    const int32_t q = p->vel / 1000, r = p->vel % 1000;
+    const int32_t qd = q * (int32_t)dt_us; /* |q| < 2^21, dt <= 1000 */
+    p->pos += qd / 1000;
+    p->pos_rem += (qd % 1000) * 1000 + r * (int32_t)dt_us;
+    p->pos += p->pos_rem / 1000000;
+    p->pos_rem %= 1000000;
+}
+
+/* One piece of at most STEP_MAX_US. */
+static void prv_step(km_profile_t *p, uint32_t dt_us)
+{
+    const int32_t e = p->target - p->pos;
+    if (p->stream) {
+        prv_advance(p, dt_us);
+        const int32_t left = p->target - p->pos;
+        if (left == 0 || (left > 0) != (e > 0)) {
+            p->pos = p->target;
+            p->pos_rem = 0;
+            p->vel = 0;
+            p->done = true;
+        }
+        return;
+    }
+    /* speed change allowed this piece: accel (u/s per ms) x dt, remainder kept */
+    int32_t dv = p->accel * (int32_t)dt_us + p->vel_rem;
+    p->vel_rem = dv % 1000;
+    dv /= 1000;
+    /* the fastest speed that can still brake to a stop on the target */
+    const uint64_t two_a_d = 2u * (uint64_t)(uint32_t)p->accel * 1000u * (uint64_t)(uint32_t)prv_abs(e);
+    int32_t vb = (int32_t)prv_isqrt64(two_a_d);
+    if (vb > p->vmax) {
+        vb = p->vmax;
+    }
+    const int32_t want = e >= 0 ? vb : -vb;
+    if (p->vel < want) {
+        p->vel = p->vel + dv < want ? p->vel + dv : want;
+    } else if (p->vel > want) {
+        p->vel = p->vel - dv > want ? p->vel - dv : want;
+    }
+    prv_advance(p, dt_us);
+    const int32_t left = p->target - p->pos;
+    /* arrived (or crossed within one piece): stop on the target */
+    if (left == 0 || ((left > 0) != (e > 0) && e != 0) ||
+        (prv_abs(left) <= prv_abs(p->vel) / 1000 + 1 && prv_abs(p->vel) <= dv)) {
+        p->pos = p->target;
+        p->pos_rem = 0;
+        p->vel = 0;
+        p->vel_rem = 0;
+        p->done = true;
+    }
+}
+
+bool km_profile_step(km_profile_t *p, uint32_t dt_us)
+{
+    while (!p->done && dt_us > 0u) {
+        const uint32_t piece = dt_us > STEP_MAX_US ? STEP_MAX_US : dt_us;
+        prv_step(p, piece);
+        dt_us -= piece;
+    }
+    return p->done;
+}
+
+int32_t km_profile_pos_ddeg(const km_profile_t *p)
+{
+    const int32_t h = KM_PROFILE_U_PER_DDEG / 2;
+    return p->pos >= 0 ? (p->pos + h) / KM_PROFILE_U_PER_DDEG : -((-p->pos + h) / KM_PROFILE_U_PER_DDEG);
+}
+
+int32_t km_profile_vel_ddps(const km_profile_t *p)
+{
+    return p->vel / 1000;
+}

@@ -1,0 +1,60 @@
+/* Trajectory generator: the set-point the position loop follows.
+ *
+ * Units: position in u = 0.001 x 0.1 deg (1e-4 deg), speed in u/s
+ * (10,000 u/s = 1 deg/s), acceleration in u/s per ms (10 = 1 deg/s^2).
+ *
+ *  - a move (0x65/0x66/0x67) is time-optimal under a speed and an
+ *    acceleration bound: it speeds up at `accel`, cruises at `vmax`, and
+ *    brakes on the curve v = sqrt(2 a d) so it stops on the target without
+ *    passing it. A new move starts from the current set-point and speed, so
+ *    a command during a move blends into it.
+ *  - a move in time T from rest: braking and speeding up take T/4 each, the
+ *    cruise speed is D / (3T/4); it arrives in T (+ one tick) unless that
+ *    speed is above the speed limit, which wins (the move takes longer).
+ *  - a stream segment (0x68): constant speed from the current set-point to
+ *    the new target over the time since the previous target (the master's
+ *    rate), so a stream of targets is followed at constant speed one
+ *    interval late, without stopping at each. Speed bounded by `vmax`.
+ * step(state, dt) advances it; no float, no 64-bit divide. */
+#ifndef KM_PROFILE_H
+#define KM_PROFILE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#define KM_PROFILE_U_PER_DDEG 1000
+#define KM_PROFILE_UPS_PER_DPS 10000
+
+typedef struct {
+    int32_t pos;       /* set-point, u */
+    int32_t vel;       /* set-point speed, u/s */
+    int32_t target;    /* u */
+    int32_t vmax;      /* u/s, > 0 */
+    int32_t accel;     /* u/s per ms, > 0 */
+    int32_t pos_rem;   /* position remainder, u/1e6 */
+    int32_t vel_rem;   /* speed remainder, u/s per 1000 */
+    bool stream;       /* constant-speed segment (0x68) */
+    bool done;         /* at the target, at rest */
+} km_profile_t;
+
+/* At rest at `pos_ddeg`. */
+void km_profile_reset(km_profile_t *p, int32_t pos_ddeg);
+
+/* Move to target at most `vmax_ups` fast, speeding up and braking at `accel`. */
+void km_profile_move(km_profile_t *p, int32_t target_ddeg, int32_t vmax_ups, int32_t accel);
+
+/* Move to target in `time_ms` (> 0), no faster than `vlimit_ups`. */
+void km_profile_move_time(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, int32_t vlimit_ups);
+
+/* Stream segment: reach target at constant speed in `interval_us`, no
+ * faster than `vlimit_ups`. */
+void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_us, int32_t vlimit_ups);
+
+/* Advance by dt_us. Returns true once at the target and at rest. */
+bool km_profile_step(km_profile_t *p, uint32_t dt_us);
+
+/* Set-point in 0.1 deg (rounded) and speed in 0.1 deg/s. */
+int32_t km_profile_pos_ddeg(const km_profile_t *p);
+int32_t km_profile_vel_ddps(const km_profile_t *p);
+
+#endif

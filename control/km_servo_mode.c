@@ -1,0 +1,209 @@
+/* Servo mode: torque switch state machine and rotation commands (see
+ * km_servo_mode.h for the rules). */
+#include "km_servo_mode.h"
+
+#include <string.h>
+
+enum { TS_FREE = 0, TS_BRAKE = 1, TS_ON = 2, TS_ARMED = 3, TS_PROTECTING = 5 };
+
+void km_servo_mode_init(km_servo_mode_t *m, const km_control_params_t *p)
+{
+    memset(m, 0, sizeof *m);
+    m->ts = p->torque_switch;
+    m->pwm_cap = 1000;
+    km_profile_reset(&m->profile, 0);
+}
+
+int32_t km_servo_mode_clamp(const km_control_params_t *p, int32_t t)
+{
+    int32_t lo = p->travel_min, hi = p->travel_max;
+    if (p->angle_min != 0 && p->angle_min > lo) {
+        lo = p->angle_min;
+    }
+    if (p->angle_max != 0 && p->angle_max < hi) {
+        hi = p->angle_max;
+    }
+    if (lo > hi) {
+        return t; /* no valid range (cannot happen: the dispatcher keeps min < max) */
+    }
+    return t < lo ? lo : (t > hi ? hi : t);
+}
+
+/* Speed limit in profile units: 0x5D, or the product's fastest when 0. */
+static int32_t prv_vlimit(const km_control_params_t *p)
+{
+    const uint32_t dps = p->speed_limit_dps ? p->speed_limit_dps : p->gains.fastest_dps;
+    return (int32_t)(dps ? dps : 1u) * KM_PROFILE_UPS_PER_DPS;
+}
+
+static int32_t prv_accel(const km_control_params_t *p)
+{
+    const uint32_t a = p->gains.accel_dps2 ? p->gains.accel_dps2 : 1u;
+    return (int32_t)(a > 100000u ? 100000u : a) * 10; /* deg/s^2 -> u/s per ms */
+}
+
+static void prv_stop(km_servo_mode_t *m, uint8_t ts)
+{
+    m->ts = ts;
+    m->running = false;
+    m->streaming = false;
+    m->touched = true;
+}
+
+/* Turns the torque on holding `position`. */
+static void prv_on_at(km_servo_mode_t *m, int32_t position)
+{
+    km_profile_reset(&m->profile, position);
+    m->target = position;
+    m->ts = TS_ON;
+    m->pwm_cap = 1000;
+    m->reset_loop = true;
+    m->touched = true;
+}
+
+/* Speed for a speed parameter in deg/s (0 = fastest), in profile units. */
+static int32_t prv_speed(const km_control_params_t *p, uint32_t dps)
+{
+    const int32_t lim = prv_vlimit(p);
+    if (dps == 0u) {
+        return lim;
+    }
+    const int32_t v = (int32_t)dps * KM_PROFILE_UPS_PER_DPS;
+    return v < lim ? v : lim;
+}
+
+bool km_servo_mode_request(km_servo_mode_t *m, const km_request_t *req, const km_control_params_t *p,
+                           int32_t position)
+{
+    if (req->kind == KM_REQ_TORQUE_SWITCH) {
+        const uint8_t v = req->u.u8;
+        if (m->ts == TS_PROTECTING && v == TS_ON) {
+            return false; /* a protection holds the output until released */
+        }
+        if (v == TS_ON) {
+            if (m->ts != TS_ON) {
+                prv_on_at(m, position); /* hold the current position */
+            }
+            return true;
+        }
+        if (v == TS_FREE || v == TS_BRAKE || v == TS_ARMED) {
+            prv_stop(m, v);
+            return true;
+        }
+        return false;
+    }
+    if (req->kind != KM_REQ_MOVE_TIME && req->kind != KM_REQ_MOVE_SPEED &&
+        req->kind != KM_REQ_SERVO_ADVANCED && req->kind != KM_REQ_INTERPOLATE) {
+        return false;
+    }
+    if (m->ts != TS_ON && m->ts != TS_ARMED) {
+        return false; /* torque off or protecting */
+    }
+    const bool was_on = m->ts == TS_ON;
+    if (!was_on) {
+        prv_on_at(m, position); /* §5.4 0x64 = 3: on at the next rotation command */
+    }
+    const int32_t vlim = prv_vlimit(p);
+    const int32_t accel = prv_accel(p);
+    m->pwm_cap = 1000;
+    int32_t target;
+    switch (req->kind) {
+    case KM_REQ_MOVE_TIME:
+        target = km_servo_mode_clamp(p, req->u.move.target);
+        if (req->u.move.param == 0u) {
+            km_profile_move(&m->profile, target, vlim, accel);
+        } else {
+            km_profile_move_time(&m->profile, target, req->u.move.param, vlim);
+        }
+        break;
+    case KM_REQ_MOVE_SPEED:
+        target = km_servo_mode_clamp(p, req->u.move.target);
+        km_profile_move(&m->profile, target, prv_speed(p, req->u.move.param), accel);
+        break;
+    case KM_REQ_SERVO_ADVANCED: {
+        const uint8_t hi = (uint8_t)(req->u.adv.control >> 4), lo = (uint8_t)(req->u.adv.control & 0x0Fu);
+        const int32_t p1 = (int16_t)req->u.adv.p1;
+        /* relative: from the target in force (or the position if just on) */
+        target = km_servo_mode_clamp(p, hi == 1u ? m->target + p1 : p1);
+        if (lo == 0u && req->u.adv.p2 != 0u) {
+            km_profile_move_time(&m->profile, target, req->u.adv.p2, vlim);
+        } else if (lo == 1u) {
+            km_profile_move(&m->profile, target, prv_speed(p, req->u.adv.p2), accel);
+        } else {
+            if (lo == 2u) {
+                m->pwm_cap = req->u.adv.p2 > 1000u ? 1000 : (int32_t)req->u.adv.p2;
+            }
+            km_profile_move(&m->profile, target, vlim, accel);
+        }
+        break;
+    }
+    default: { /* KM_REQ_INTERPOLATE */
+        target = km_servo_mode_clamp(p, req->u.move.target);
+        const bool in_stream = was_on && m->streaming && m->stream_us <= KM_STREAM_GAP_US;
+        km_profile_stream(&m->profile, target, in_stream ? m->stream_us : KM_STREAM_FIRST_US, vlim);
+        break;
+    }
+    }
+    m->streaming = req->kind == KM_REQ_INTERPOLATE;
+    m->stream_us = 0;
+    m->target = target;
+    m->running = true;
+    m->rotation_ms = 0;
+    m->rotation_rem_us = 0;
+    m->settle_us = 0;
+    return true;
+}
+
+void km_servo_mode_protect(km_servo_mode_t *m)
+{
+    prv_stop(m, TS_PROTECTING);
+}
+
+int32_t km_servo_mode_deviation(const km_servo_mode_t *m, int32_t position)
+{
+    return m->ts == TS_ON ? position - m->target : 0;
+}
+
+void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_t position, uint32_t dt_us,
+                        km_servo_mode_out_t *out)
+{
+    memset(out, 0, sizeof *out);
+    out->pwm_cap = m->pwm_cap;
+    if (m->stream_us < KM_STREAM_GAP_US + 1u) {
+        m->stream_us += dt_us;
+    }
+    switch (m->ts) {
+    case TS_ON: {
+        const bool done = km_profile_step(&m->profile, dt_us);
+        out->bridge = KM_BRIDGE_PWM;
+        out->setpoint_u = m->profile.pos;
+        out->setpoint_ddps = km_profile_vel_ddps(&m->profile);
+        out->reset_loop = m->reset_loop;
+        m->reset_loop = false;
+        if (m->running) {
+            m->rotation_rem_us += dt_us;
+            m->rotation_ms += m->rotation_rem_us / 1000u;
+            m->rotation_rem_us %= 1000u;
+            if (done) {
+                m->settle_us += dt_us;
+                const int32_t dev = position - m->target;
+                const int32_t band = (int32_t)p->gains.arrive_ddeg;
+                if ((dev <= band && dev >= -band) || m->settle_us >= (uint32_t)p->gains.settle_ms * 1000u) {
+                    m->running = false; /* the motion ended: 0x4D stops counting */
+                }
+            }
+        }
+        return;
+    }
+    case TS_BRAKE:
+        out->bridge = KM_BRIDGE_BRAKE;
+        return;
+    case TS_ARMED:
+        /* off now: the idle output, or the power-on output before any command */
+        out->bridge = (m->touched ? p->idle_brake : p->power_on_brake) ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE;
+        return;
+    default: /* TS_FREE, TS_PROTECTING */
+        out->bridge = KM_BRIDGE_FREE;
+        return;
+    }
+}

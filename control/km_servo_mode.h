@@ -1,0 +1,92 @@
+/* Servo mode (PROTOCOL.md §5.4): the torque switch 0x64 as a state machine
+ * and the rotation commands 0x65..0x68 turned into profile moves.
+ *
+ *  0x64 = 0  off, free: motion stops, bridge free.
+ *  0x64 = 1  off, brake damping: motion stops, bridge brake.
+ *  0x64 = 2  on: holds the position it had when switched on, or the
+ *            target of the last rotation command.
+ *  0x64 = 3  armed: off now (the idle output of 0x11 bit 1; before any
+ *            torque command, the power-on output of 0x11 bit 0); the next
+ *            rotation command turns it on (2) from the current position.
+ *  0x64 = 5  protecting: km_servo_mode_protect(), the hook for the
+ *            protection supervisor (a later issue): motion stops, free.
+ *
+ * Targets (0.1 deg, the master's frame) are clamped to the product travel
+ * and to the angle limits 0x19/0x1A when they are set (0 = no limit). A
+ * relative move (0x67 high nibble 1) adds to the target in force (the last
+ * one commanded, or the held position), or to the measured position when
+ * the torque was off, and the sum is clamped the same way: relative moves
+ * never accumulate the tracking error and never pass a limit.
+ *
+ * Speeds: "fastest" (omitted or 0 parameter) = the speed limit 0x5D (or the
+ * product's fastest_dps when 0x5D is 0), at the product acceleration; a
+ * requested speed above 0x5D is cut to it; a move in time whose speed would
+ * exceed 0x5D takes longer. A stream of 0x68 targets: each target is
+ * reached at constant speed over the time since the previous one (first
+ * one: KM_STREAM_FIRST_US), so the shaft runs one interval behind the
+ * master without stopping at each target.
+ *
+ * Running (status bit 7) and rotation time (0x4D) start at each accepted
+ * rotation command. The motion ends when the profile is at the target and
+ * the shaft is within the product's arrive_ddeg of it, or settle_ms after
+ * the profile got there (a blocked shaft): bit 7 clears and 0x4D stops.
+ * Switching the torque off (0, 1) or protecting ends it at once.
+ * Deviation (0x4C) = measured position - target, 0 with the torque off. */
+#ifndef KM_SERVO_MODE_H
+#define KM_SERVO_MODE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "km_output.h"
+#include "km_profile.h"
+#include "km_servo_io.h"
+
+#define KM_STREAM_FIRST_US 20000u  /* interval assumed for the first 0x68 of a stream */
+#define KM_STREAM_GAP_US 200000u   /* a 0x68 later than this after the previous one starts a new stream */
+
+typedef struct {
+    uint8_t ts;             /* 0x64 as control runs it: 0, 1, 2, 3, 5 */
+    bool touched;           /* a torque command has come since power-on */
+    km_profile_t profile;
+    int32_t target;         /* 0.1 deg, the target in force */
+    int32_t pwm_cap;        /* this move's own PWM bound (0x67 nibble 2), else 1000 */
+    bool running;           /* status bit 7 */
+    uint32_t rotation_ms;   /* 0x4D */
+    uint32_t rotation_rem_us;
+    uint32_t settle_us;     /* since the profile reached the target */
+    bool streaming;         /* the last rotation command was 0x68 */
+    uint32_t stream_us;     /* since the last 0x68 */
+    bool reset_loop;        /* the loop starts afresh at the next tick */
+} km_servo_mode_t;
+
+typedef struct {
+    km_bridge_mode_t bridge;  /* PWM = the position loop drives */
+    int32_t setpoint_u;       /* profile set-point, 0.001 x 0.1 deg */
+    int32_t setpoint_ddps;    /* profile speed, 0.1 deg/s */
+    int32_t pwm_cap;          /* the move's own PWM bound */
+    bool reset_loop;          /* clear the loop's integrator first */
+} km_servo_mode_out_t;
+
+void km_servo_mode_init(km_servo_mode_t *m, const km_control_params_t *p);
+
+/* A torque switch or rotation request at measured `position` (0.1 deg).
+ * Returns false when refused (torque off or protecting, or not a servo
+ * mode request). */
+bool km_servo_mode_request(km_servo_mode_t *m, const km_request_t *req, const km_control_params_t *p,
+                           int32_t position);
+
+/* One tick: advances the profile and the running state. */
+void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_t position, uint32_t dt_us,
+                        km_servo_mode_out_t *out);
+
+/* Hook for the protection supervisor: 0x64 = 5, motion stops, output free. */
+void km_servo_mode_protect(km_servo_mode_t *m);
+
+/* Deviation (0x4C): position - target while on, else 0. */
+int32_t km_servo_mode_deviation(const km_servo_mode_t *m, int32_t position);
+
+/* Clamps a target to the travel and the angle limits (0 = none). */
+int32_t km_servo_mode_clamp(const km_control_params_t *p, int32_t target);
+
+#endif

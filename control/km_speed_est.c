@@ -1,0 +1,61 @@
+/* Speed estimators of the control tick (see km_speed_est.h). Pure, 32-bit. */
+#include "km_speed_est.h"
+
+#include <string.h>
+
+void km_speed_window_init(km_speed_window_t *w)
+{
+    memset(w, 0, sizeof *w);
+}
+
+int32_t km_speed_window_step(km_speed_window_t *w, int32_t position, uint32_t dt_us)
+{
+    if (w->have_position) {
+        w->acc += position - w->last_position;
+        w->us += dt_us;
+        if (w->us >= KM_SPEED_WINDOW_US) {
+            /* 0.1 deg per us -> deg/s: x 1e6 / 10. Clamped so the product
+             * stays in 32 bits (M0 has no 64-bit divide instruction);
+             * +-20000 x 0.1 deg in one window is far past any servo. */
+            const int32_t acc = w->acc > 20000 ? 20000 : (w->acc < -20000 ? -20000 : w->acc);
+            w->dps = (acc * 100000) / (int32_t)w->us;
+            w->acc = 0;
+            w->us = 0;
+        }
+    }
+    w->last_position = position;
+    w->have_position = true;
+    return w->dps;
+}
+
+void km_speed_fast_init(km_speed_fast_t *f, int32_t position)
+{
+    memset(f, 0, sizeof *f);
+    f->pos[0] = position;
+    f->count = 1;
+}
+
+int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
+{
+    if (dt_us > 100000u) {
+        dt_us = 100000u; /* a stalled tick: the estimate stays finite */
+    }
+    f->head = (uint8_t)((f->head + 1u) % KM_SPEED_FAST_N);
+    f->pos[f->head] = position;
+    f->dt[f->head] = dt_us; /* time from the sample before */
+    if (f->count < KM_SPEED_FAST_N) {
+        f->count++;
+    }
+    /* span: the newest count-1 intervals, from the oldest sample kept */
+    uint32_t span = 0;
+    uint8_t i = f->head;
+    for (uint8_t k = 1; k < f->count; k++) {
+        span += f->dt[i];
+        i = (uint8_t)((i + KM_SPEED_FAST_N - 1u) % KM_SPEED_FAST_N);
+    }
+    f->span_us = span;
+    int32_t d = position - f->pos[i];
+    d = d > 2000 ? 2000 : (d < -2000 ? -2000 : d); /* keeps d x 1e6 in 32 bits */
+    f->ddps = span ? (d * 1000000) / (int32_t)span : 0;
+    return f->ddps;
+}
