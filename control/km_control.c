@@ -73,6 +73,7 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
             .position = pos,
             .speed_ddps = speed_ddps,
             .pwm_max = limit,
+            .integrate = sm.holding,
         };
         pwm = km_position_loop_step(&c->loop, &p->gains, &li, dt_us);
     }

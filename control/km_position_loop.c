@@ -10,6 +10,7 @@ static int32_t prv_clamp(int32_t v, int32_t lo, int32_t hi)
 void km_position_loop_init(km_position_loop_t *l)
 {
     l->i_acc = 0;
+    l->last_sp_ddps = 0;
 }
 
 int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g,
@@ -22,7 +23,11 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     /* kp: PWM per 0.1 deg Q8 -> kp x e_u / 1000 / 256; e_u / 100 first keeps 32 bits */
     int32_t out = (int32_t)g->kp_q8 * (e_u / 100) / 2560;
     out += (int32_t)g->kd_q8 * ev / 2560;   /* kd: PWM per deg/s Q8, ev 0.1 deg/s */
-    out += (int32_t)g->kv_q8 * vs / 2560;   /* kv: PWM per deg/s Q8 */
+    /* acceleration feedforward: tau x dv/dt as a speed, 0.1 deg/s */
+    const uint32_t dt_ms = dt_us >= 1000u ? dt_us / 1000u : 1u;
+    const int32_t va = prv_clamp((vs - l->last_sp_ddps) * (int32_t)g->tau_ms / (int32_t)dt_ms, -20000, 20000);
+    l->last_sp_ddps = vs;
+    out += (int32_t)g->kv_q8 * (vs + va) / 2560;   /* kv: PWM per deg/s Q8 */
     if (vs != 0) {
         out += vs > 0 ? (int32_t)g->friction_pwm : -(int32_t)g->friction_pwm;
     }
@@ -31,7 +36,7 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     const int32_t e_d = prv_clamp(e_u / 1000, -100, 100); /* 10 deg: the integrator is for small errors */
     const int32_t di = (int32_t)g->ki_q8 * e_d / 10 * (int32_t)(dt_us > 2000u ? 2000u : dt_us) / 100;
     const int32_t before = out + l->i_acc / 256000;
-    if (!((before >= in->pwm_max && di > 0) || (before <= -in->pwm_max && di < 0))) {
+    if (in->integrate && !((before >= in->pwm_max && di > 0) || (before <= -in->pwm_max && di < 0))) {
         l->i_acc = prv_clamp(l->i_acc + di, -i_max, i_max);
     }
     out += l->i_acc / 256000;

@@ -1,19 +1,23 @@
 /* Position loop: the PWM that makes the shaft follow the profile's
- * set-point. PWM = speed feedforward (kv x set-point speed, plus friction
- * while the set-point moves) + kp x position error + kd x speed error
- * (set-point speed - measured speed) + ki x integrated error. The
- * integrator stops growing while the output is saturated in the direction
- * it would push (anti-windup) and is bounded by i_max. Output clamped to
+ * set-point. PWM = feedforward kv x (set-point speed + tau x set-point
+ * acceleration), plus friction while the set-point moves; + kp x position
+ * error + kd x speed error (set-point speed - measured speed) + ki x
+ * integrated error. The integrator runs only while holding (a moving
+ * set-point is followed by the feedforward; integrating its lag would wind
+ * up into overshoot), stops growing while the output is saturated in the
+ * direction it would push, and is bounded by i_max. Output clamped to
  * +-pwm_max. Units: 0.1 deg, 0.1 deg/s, PWM 0..1000, gains km_product.h. */
 #ifndef KM_POSITION_LOOP_H
 #define KM_POSITION_LOOP_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "km_servo_io.h"
 
 typedef struct {
-    int32_t i_acc;   /* integrator, PWM x 256000 */
+    int32_t i_acc;        /* integrator, PWM x 256000 */
+    int32_t last_sp_ddps; /* set-point speed of the last tick, for its acceleration */
 } km_position_loop_t;
 
 typedef struct {
@@ -22,6 +26,7 @@ typedef struct {
     int32_t position;       /* measured, 0.1 deg */
     int32_t speed_ddps;     /* measured, 0.1 deg/s */
     int32_t pwm_max;        /* output bound, 0..1000 */
+    bool integrate;         /* the integrator runs (holding: the set-point is at rest) */
 } km_position_loop_in_t;
 
 void km_position_loop_init(km_position_loop_t *l);

@@ -83,7 +83,10 @@ void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_u
 {
     p->target = prv_ddeg_to_u(target_ddeg);
     const int32_t d = prv_abs(p->target - p->pos);
-    uint32_t ms = interval_us / 1000u;
+    /* over 5/4 of the interval: in a steady stream each segment then ends
+     * after the next target arrived, so the set-point never stops between
+     * targets; it settles a quarter step behind the extrapolated stream */
+    uint32_t ms = (interval_us + interval_us / 4u) / 1000u;
     if (ms < 1u) {
         ms = 1u;
     }
@@ -128,8 +131,14 @@ static void prv_step(km_profile_t *p, uint32_t dt_us)
     int32_t dv = p->accel * (int32_t)dt_us + p->vel_rem;
     p->vel_rem = dv % 1000;
     dv /= 1000;
-    /* the fastest speed that can still brake to a stop on the target */
-    const uint64_t two_a_d = 2u * (uint64_t)(uint32_t)p->accel * 1000u * (uint64_t)(uint32_t)prv_abs(e);
+    /* the fastest speed that can still brake to a stop on the target from
+     * where this piece ends (so the last piece arrives at a crawl, not at
+     * the speed of the tick before) */
+    int32_t d = prv_abs(e) - prv_abs(p->vel / 1000) * (int32_t)dt_us / 1000;
+    if (d < 0) {
+        d = 0;
+    }
+    const uint64_t two_a_d = 2u * (uint64_t)(uint32_t)p->accel * 1000u * (uint64_t)(uint32_t)d;
     int32_t vb = (int32_t)prv_isqrt64(two_a_d);
     if (vb > p->vmax) {
         vb = p->vmax;

@@ -12,9 +12,12 @@
  *    cruise speed is D / (3T/4); it arrives in T (+ one tick) unless that
  *    speed is above the speed limit, which wins (the move takes longer).
  *  - a stream segment (0x68): constant speed from the current set-point to
- *    the new target over the time since the previous target (the master's
- *    rate), so a stream of targets is followed at constant speed one
- *    interval late, without stopping at each. Speed bounded by `vmax`.
+ *    the new target over 5/4 of the time since the previous target (the
+ *    master's rate). In a steady stream the next target arrives before a
+ *    segment ends, so the set-point runs at the stream's speed without ever
+ *    stopping, about 1.25 intervals behind the newest target; when the
+ *    stream stops, the last segment ends on the last target. Speed bounded
+ *    by `vmax`.
  * step(state, dt) advances it; no float, no 64-bit divide. */
 #ifndef KM_PROFILE_H
 #define KM_PROFILE_H

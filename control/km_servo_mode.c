@@ -140,7 +140,11 @@ bool km_servo_mode_request(km_servo_mode_t *m, const km_request_t *req, const km
     default: { /* KM_REQ_INTERPOLATE */
         target = km_servo_mode_clamp(p, req->u.move.target);
         const bool in_stream = was_on && m->streaming && m->stream_us <= KM_STREAM_GAP_US;
-        km_profile_stream(&m->profile, target, in_stream ? m->stream_us : KM_STREAM_FIRST_US, vlim);
+        if (in_stream) {
+            km_profile_stream(&m->profile, target, m->stream_us, vlim);
+        } else {
+            km_profile_move(&m->profile, target, vlim, accel); /* no rate to pace by yet: fastest */
+        }
         break;
     }
     }
@@ -179,6 +183,7 @@ void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_
         out->setpoint_u = m->profile.pos;
         out->setpoint_ddps = km_profile_vel_ddps(&m->profile);
         out->reset_loop = m->reset_loop;
+        out->holding = done;
         m->reset_loop = false;
         if (m->running) {
             m->rotation_rem_us += dt_us;

@@ -21,10 +21,11 @@
  * Speeds: "fastest" (omitted or 0 parameter) = the speed limit 0x5D (or the
  * product's fastest_dps when 0x5D is 0), at the product acceleration; a
  * requested speed above 0x5D is cut to it; a move in time whose speed would
- * exceed 0x5D takes longer. A stream of 0x68 targets: each target is
- * reached at constant speed over the time since the previous one (first
- * one: KM_STREAM_FIRST_US), so the shaft runs one interval behind the
- * master without stopping at each target.
+ * exceed 0x5D takes longer. A stream of 0x68 targets: the first one (or
+ * one more than KM_STREAM_GAP_US after the previous) is a fastest move;
+ * each later one is reached at constant speed over 5/4 of the time since
+ * the previous one (km_profile.h), so the shaft runs about an interval
+ * behind the master without stopping at each target.
  *
  * Running (status bit 7) and rotation time (0x4D) start at each accepted
  * rotation command. The motion ends when the profile is at the target and
@@ -42,7 +43,6 @@
 #include "km_profile.h"
 #include "km_servo_io.h"
 
-#define KM_STREAM_FIRST_US 20000u  /* interval assumed for the first 0x68 of a stream */
 #define KM_STREAM_GAP_US 200000u   /* a 0x68 later than this after the previous one starts a new stream */
 
 typedef struct {
@@ -66,6 +66,7 @@ typedef struct {
     int32_t setpoint_ddps;    /* profile speed, 0.1 deg/s */
     int32_t pwm_cap;          /* the move's own PWM bound */
     bool reset_loop;          /* clear the loop's integrator first */
+    bool holding;             /* the set-point is at rest on the target */
 } km_servo_mode_out_t;
 
 void km_servo_mode_init(km_servo_mode_t *m, const km_control_params_t *p);

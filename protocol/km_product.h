@@ -22,6 +22,7 @@ typedef struct {
     uint16_t i_max_pwm;      /* integrator contribution bound, PWM */
     uint16_t kv_q8;          /* speed feedforward, PWM per deg/s, Q8 (1000 / no-load speed) */
     uint16_t friction_pwm;   /* feedforward against Coulomb friction while moving, PWM */
+    uint16_t tau_ms;         /* acceleration feedforward: the motor's mechanical time constant, ms */
     uint32_t accel_dps2;     /* profile acceleration of speed moves and "fastest", deg/s^2 */
     uint16_t fastest_dps;    /* "fastest" when 0x5D is 0, deg/s */
     uint16_t arrive_ddeg;    /* a move ends when the shaft is this close to the target, 0.1 deg */
@@ -31,8 +32,8 @@ typedef struct {
 /* The defaults, tuned on the simulated plant: docs/tuning.md. */
 #define KM_CONTROL_GAINS_DEFAULT                                                     \
     {                                                                                \
-        .kp_q8 = 2560, .kd_q8 = 256, .ki_q8 = 2560, .i_max_pwm = 150, .kv_q8 = 700,  \
-        .friction_pwm = 15, .accel_dps2 = 4000, .fastest_dps = 360, .arrive_ddeg = 5, \
+        .kp_q8 = 2560, .kd_q8 = 768, .ki_q8 = 10240, .i_max_pwm = 400, .kv_q8 = 700,  \
+        .friction_pwm = 15, .tau_ms = 28, .accel_dps2 = 4000, .fastest_dps = 360, .arrive_ddeg = 5, \
         .settle_ms = 300,                                                            \
     }
 

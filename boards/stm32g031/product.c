@@ -3,6 +3,10 @@
  * numbers (and board_config.c's sensor calibration) for their model. */
 #include "km_app.h"
 
+/* Position-loop gains and profile limits: the defaults were tuned on the
+ * simulated plant of this servo class (docs/tuning.md says how). */
+static const km_control_gains_t s_gains = KM_CONTROL_GAINS_DEFAULT;
+
 static const km_product_t s_product = {
     .model = "KM-G031-P135",
     /* 0x@@##&&&&: no bootloader, hardware v1.0, software v0.1.00 */
@@ -24,6 +28,7 @@ static const km_product_t s_product = {
     .travel_max = 1350,
     .zero_offset2_max = 100,
     .voltage_max_v = 20,
+    .gains = &s_gains,
 };
 
 const km_product_t *km_board_product(void)

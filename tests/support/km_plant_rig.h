@@ -1,0 +1,144 @@
+/* Host fixture: control (control/km_control.h) stepped against the servo
+ * plant (sim/plant) directly, no hal, at the 1 kHz control tick, with the
+ * bridge command of one tick applied to the plant during the next one (a
+ * one-tick PWM delay, as on a board whose PWM updates at the next period).
+ *
+ * Params start as the simulated product (boards/sim-common/km_sim_product.c)
+ * decodes them at power-on: 0x11 = 0x02, travel and angle limits +-135.0 deg,
+ * 0x13 = 0x5B = 1000, 0x15 = 0x5D = 360 deg/s, 0x64 = 3 (armed), default
+ * gains. Header-only (tests/support/ is on the include path); include after
+ * cmocka's headers. */
+#ifndef KM_PLANT_RIG_H
+#define KM_PLANT_RIG_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "km_control.h"
+#include "km_plant.h"
+
+typedef struct {
+    km_plant_t plant;
+    km_control_t ctl;
+    km_control_params_t params;
+    km_plant_input_t in;   /* the command the plant runs during the next tick */
+    km_live_t live;
+    km_bridge_t bridge;
+    uint32_t t_ms;         /* ticks since kr_init */
+    bool encoder;          /* position from the multi-turn reading */
+} kr_rig_t;
+
+static inline void kr_default_params(km_control_params_t *p)
+{
+    const km_control_gains_t g = KM_CONTROL_GAINS_DEFAULT;
+    memset(p, 0, sizeof *p);
+    p->variant = KM_VARIANT_POTENTIOMETER;
+    p->idle_brake = true;
+    p->max_torque = 1000;
+    p->max_current_ma = 2000;
+    p->max_speed_dps = 360;
+    p->angle_min = -1350;
+    p->angle_max = 1350;
+    p->travel_min = -1350;
+    p->travel_max = 1350;
+    p->torque_limit = 1000;
+    p->current_limit_ma = 2000;
+    p->speed_limit_dps = 360;
+    p->torque_switch = 3;
+    p->gains = g;
+}
+
+static inline void kr_sensors(const kr_rig_t *r, km_sensors_t *s)
+{
+    memset(s, 0, sizeof *s);
+    s->position = r->encoder ? km_plant_turns_ddeg(&r->plant) : km_plant_position_ddeg(&r->plant);
+    s->current_ma = km_plant_current_ma(&r->plant);
+    s->voltage_mv = km_plant_voltage_mv(&r->plant);
+    s->temperature_c10 = km_plant_temp_dc(&r->plant);
+}
+
+/* One 1 ms tick: the plant runs the previous command, control reads it. */
+static inline void kr_tick(kr_rig_t *r)
+{
+    km_plant_step(&r->plant, &r->in, KM_CONTROL_TICK_US);
+    km_sensors_t s;
+    kr_sensors(r, &s);
+    km_control_step(&r->ctl, &s, &r->params, KM_CONTROL_TICK_US, &r->live, &r->bridge);
+    r->in.bridge = r->bridge.mode == KM_BRIDGE_PWM ? KM_PLANT_DRIVE
+                   : r->bridge.mode == KM_BRIDGE_BRAKE ? KM_PLANT_BRAKE : KM_PLANT_COAST;
+    r->in.pwm = r->bridge.mode == KM_BRIDGE_PWM ? r->bridge.pwm : 0;
+    r->t_ms++;
+}
+
+static inline void kr_run(kr_rig_t *r, uint32_t ms)
+{
+    for (uint32_t i = 0; i < ms; i++) {
+        kr_tick(r);
+    }
+}
+
+/* Plant at rest at `pos_ddeg` (sensor frame), params at the defaults,
+ * control initialised and one tick run (the first sample). */
+static inline void kr_init_at(kr_rig_t *r, const km_plant_config_t *pc, int32_t pos_ddeg)
+{
+    memset(r, 0, sizeof *r);
+    (void)km_plant_init(&r->plant, pc);
+    km_plant_set_position_ddeg(&r->plant, pos_ddeg);
+    kr_default_params(&r->params);
+    km_control_init(&r->ctl, &r->params);
+    r->in.bridge = KM_PLANT_COAST;
+    kr_tick(r);
+}
+
+static inline void kr_init(kr_rig_t *r)
+{
+    kr_init_at(r, &km_plant_default_config, 0);
+}
+
+static inline bool kr_request(kr_rig_t *r, const km_request_t *req)
+{
+    return km_control_request(&r->ctl, req, &r->params);
+}
+
+static inline bool kr_torque(kr_rig_t *r, uint8_t v)
+{
+    km_request_t q;
+    memset(&q, 0, sizeof q);
+    q.kind = KM_REQ_TORQUE_SWITCH;
+    q.u.u8 = v;
+    if (!kr_request(r, &q)) {
+        return false;
+    }
+    r->params.torque_switch = v; /* as the dispatcher stores it */
+    return true;
+}
+
+static inline bool kr_move(kr_rig_t *r, km_request_kind_t kind, int16_t target, uint16_t param)
+{
+    km_request_t q;
+    memset(&q, 0, sizeof q);
+    q.kind = kind;
+    q.u.move.target = target;
+    q.u.move.param = param;
+    return kr_request(r, &q);
+}
+
+static inline bool kr_advanced(kr_rig_t *r, uint8_t control, int16_t p1, uint16_t p2)
+{
+    km_request_t q;
+    memset(&q, 0, sizeof q);
+    q.kind = KM_REQ_SERVO_ADVANCED;
+    q.u.adv.control = control;
+    q.u.adv.p1 = (uint16_t)p1;
+    q.u.adv.p2 = p2;
+    return kr_request(r, &q);
+}
+
+/* Reported position (0x46), 0.1 deg. */
+static inline int32_t kr_pos(const kr_rig_t *r)
+{
+    return r->live.position;
+}
+
+#endif
