@@ -497,9 +497,45 @@ void km_hal_sensors_init(void)
     prv_call();
 }
 
+void kf_use_plant(int32_t pos_ddeg)
+{
+    if (!km_plant_init(&kf_world.plant, &km_plant_default_config)) {
+        abort();
+    }
+    km_plant_set_position_ddeg(&kf_world.plant, pos_ddeg);
+    kf_world.plant_last = kf_world.now;
+    kf_world.use_plant = true;
+}
+
+/* The plant runs the bridge command in force since the last read. */
+static void prv_plant_read(km_sensors_t *out)
+{
+    const km_plant_input_t in = {
+        .bridge = kf_world.motor_mode == 2 ? KM_PLANT_DRIVE
+                  : kf_world.motor_mode == 1 ? KM_PLANT_BRAKE : KM_PLANT_COAST,
+        .pwm = kf_world.motor_pwm,
+        .ext_torque_unm = 0,
+    };
+    uint32_t dt = kf_world.now - kf_world.plant_last;
+    if (dt > 100000u) {
+        dt = 100000u; /* as the simulated boards bound one step */
+    }
+    kf_world.plant_last = kf_world.now;
+    km_plant_step(&kf_world.plant, &in, dt);
+    out->position = km_plant_position_ddeg(&kf_world.plant);
+    out->current_ma = km_plant_current_ma(&kf_world.plant);
+    out->voltage_mv = km_plant_voltage_mv(&kf_world.plant);
+    out->temperature_c10 = km_plant_temp_dc(&kf_world.plant);
+    out->faults = kf_world.sensor_faults;
+}
+
 void km_hal_sensors_read(km_sensors_t *out)
 {
     prv_call();
+    if (kf_world.use_plant) {
+        prv_plant_read(out);
+        return;
+    }
     out->position = kf_world.position;
     out->current_ma = kf_world.current_ma;
     out->voltage_mv = kf_world.voltage_mv;

@@ -17,6 +17,10 @@
  *  - reset: km_hal_system_reset() and an expired watchdog longjmp back into
  *    kf_run_until(), which boots the app again (RAM state re-initialised by
  *    km_app_init, flash kept), and record why.
+ *  - sensors: fixed values a test sets, or (kf_use_plant()) the servo plant
+ *    of sim/plant, advanced by the virtual time elapsed at each sensor read
+ *    with the bridge command in force, as the simulated boards do; the
+ *    plant is physical: it survives resets.
  *  - a main loop that does not sleep for KF_SPIN_LIMIT_US of virtual time
  *    (it sleeps at least once a control tick when it is not waiting on
  *    something) is stopped and reported through kf_world.spun. */
@@ -28,6 +32,7 @@
 
 #include "km_hal_system.h"
 #include "km_nor_sim.h"
+#include "km_plant.h"
 
 #define KF_RX_MAX 8192u
 #define KF_TX_MAX 8192u
@@ -76,12 +81,18 @@ typedef struct {
     int motor_mode;              /* 0 free, 1 brake, 2 drive */
     km_nor_sim_t nor;
     km_flash_t flash;
+    bool use_plant;              /* sensors and motor are the plant's */
+    km_plant_t plant;
+    uint32_t plant_last;         /* virtual time the plant was advanced to */
 } kf_world_t;
 
 extern kf_world_t kf_world;
 
 /* Fresh world: blank flash (STM32G0 geometry), power-on, app booted. */
 void kf_power_on(void);
+/* From now on the sensors read the default servo plant (sim/plant), at
+ * rest at `pos_ddeg`, and the motor drives it. */
+void kf_use_plant(int32_t pos_ddeg);
 /* Boots the app again on the same flash with `cause` as the reset cause. */
 void kf_boot(km_reset_cause_t cause);
 
