@@ -17,22 +17,27 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
                               const km_position_loop_in_t *in, uint32_t dt_us)
 {
     /* error in 0.001 x 0.1 deg, bounded to +-200 deg: far past saturation */
-    const int32_t e_u = prv_clamp(in->setpoint_u - in->position * 1000, -2000000, 2000000);
-    const int32_t ev = prv_clamp(in->setpoint_ddps - in->speed_ddps, -20000, 20000);
+    /* both within +-1e9 u (KM_PROFILE_DDEG_MAX), so the difference fits */
+    const int32_t pos_u = prv_clamp(in->position, -1000000, 1000000) * 1000;
+    const int32_t sp_u = prv_clamp(in->setpoint_u, -1000000000, 1000000000);
+    const int32_t e_u = prv_clamp(sp_u - pos_u, -2000000, 2000000);
     const int32_t vs = prv_clamp(in->setpoint_ddps, -20000, 20000);
+    const int32_t ev = prv_clamp(vs - prv_clamp(in->speed_ddps, -20000, 20000), -20000, 20000);
     /* kp: PWM per 0.1 deg Q8 -> kp x e_u / 1000 / 256; e_u / 100 first keeps 32 bits */
     int32_t out = (int32_t)g->kp_q8 * (e_u / 100) / 2560;
     out += (int32_t)g->kd_q8 * ev / 2560;   /* kd: PWM per deg/s Q8, ev 0.1 deg/s */
     /* acceleration feedforward: tau x dv/dt as a speed, 0.1 deg/s */
     const uint32_t dt_ms = dt_us >= 1000u ? dt_us / 1000u : 1u;
-    const int32_t va = prv_clamp((vs - l->last_sp_ddps) * (int32_t)g->tau_ms / (int32_t)dt_ms, -20000, 20000);
+    const int32_t dvs = prv_clamp(vs - l->last_sp_ddps, -20000, 20000);
+    const int32_t tau = g->tau_ms > 1000u ? 1000 : (int32_t)g->tau_ms;
+    const int32_t va = prv_clamp(dvs * tau / (int32_t)dt_ms, -20000, 20000);
     l->last_sp_ddps = vs;
-    out += (int32_t)g->kv_q8 * (vs + va) / 2560;   /* kv: PWM per deg/s Q8 */
+    out += (int32_t)g->kv_q8 * prv_clamp(vs + va, -20000, 20000) / 2560;   /* kv: PWM per deg/s Q8 */
     if (vs != 0) {
         out += vs > 0 ? (int32_t)g->friction_pwm : -(int32_t)g->friction_pwm;
     }
     /* integrator: ki PWM per 0.1 deg.s Q8; acc in PWM x 256000 */
-    const int32_t i_max = (int32_t)g->i_max_pwm * 256000;
+    const int32_t i_max = (g->i_max_pwm > 1000u ? 1000 : (int32_t)g->i_max_pwm) * 256000;
     const int32_t e_d = prv_clamp(e_u / 1000, -100, 100); /* 10 deg: the integrator is for small errors */
     const int32_t di = (int32_t)g->ki_q8 * e_d / 10 * (int32_t)(dt_us > 2000u ? 2000u : dt_us) / 100;
     const int32_t before = out + l->i_acc / 256000;

@@ -14,9 +14,27 @@ static int32_t prv_abs(int32_t v)
     return v < 0 ? -v : v;
 }
 
+/* Positions are kept within +-KM_PROFILE_DDEG_MAX so u and differences of
+ * two of them fit 32 bits. */
 static int32_t prv_ddeg_to_u(int32_t ddeg)
 {
+    if (ddeg > KM_PROFILE_DDEG_MAX) {
+        ddeg = KM_PROFILE_DDEG_MAX;
+    } else if (ddeg < -KM_PROFILE_DDEG_MAX) {
+        ddeg = -KM_PROFILE_DDEG_MAX;
+    }
     return ddeg * KM_PROFILE_U_PER_DDEG;
+}
+
+/* d (u) over ms as u/s, at most `vmax` (no 32-bit overflow for any d). */
+static int32_t prv_speed_for(int32_t d, int32_t ms, int32_t vmax)
+{
+    const int32_t q = d / ms;
+    if (q >= vmax / 1000 + 1) {
+        return vmax;
+    }
+    const int32_t v = q * 1000 + ((d % ms) * 1000) / ms;
+    return v < vmax ? v : vmax;
 }
 
 /* floor(sqrt(x)), bit by bit. */
@@ -66,12 +84,9 @@ void km_profile_move_time(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms
     }
     const int32_t ta = time_ms >= 4u ? (int32_t)(time_ms / 4u) : 1;
     const int32_t tc = (int32_t)time_ms - ta > 0 ? (int32_t)time_ms - ta : 1;
-    /* cruise speed D / (T - T/4) in u/s: D (< 2^27) / ms x 1000, with the
-     * remainder kept so short moves are exact */
-    int32_t v = (d / tc) * 1000 + ((d % tc) * 1000) / tc;
-    if (v > vlimit_ups) {
-        v = vlimit_ups; /* the speed limit wins: the move takes longer */
-    }
+    /* cruise speed D / (T - T/4) in u/s, the remainder kept so short moves
+     * are exact; the speed limit wins (the move takes longer) */
+    int32_t v = prv_speed_for(d, tc, vlimit_ups);
     if (v < 1) {
         v = 1;
     }
@@ -86,14 +101,14 @@ void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_u
     /* over 5/4 of the interval: in a steady stream each segment then ends
      * after the next target arrived, so the set-point never stops between
      * targets; it settles a quarter step behind the extrapolated stream */
+    if (interval_us > 1000000u) {
+        interval_us = 1000000u;
+    }
     uint32_t ms = (interval_us + interval_us / 4u) / 1000u;
     if (ms < 1u) {
         ms = 1u;
     }
-    int32_t v = (d / (int32_t)ms) * 1000 + ((d % (int32_t)ms) * 1000) / (int32_t)ms;
-    if (v > vlimit_ups) {
-        v = vlimit_ups;
-    }
+    const int32_t v = prv_speed_for(d, (int32_t)ms, vlimit_ups);
     p->vmax = v > 0 ? v : 1;
     p->vel = p->target >= p->pos ? p->vmax : -p->vmax;
     p->vel_rem = 0;

@@ -27,6 +27,7 @@
 
 #define KM_PROFILE_U_PER_DDEG 1000
 #define KM_PROFILE_UPS_PER_DPS 10000
+#define KM_PROFILE_DDEG_MAX 1000000 /* +-100,000 deg: positions are clamped to it */
 
 typedef struct {
     int32_t pos;       /* set-point, u */

@@ -11,6 +11,9 @@
 Starts tools/servo-bus (which runs the built images), waits for its `ready`
 line, then acts as the bus master. Exits non-zero on the first mismatch.
 
+Both backends: the servo moves (torque on, 0x65 to +45.0 deg in 500 ms,
+0x46 read until it arrives, 0x66 back, torque off).
+
 host-sim only (its UART runs at the servo's baud and stamps each byte with
 its wire time, so both are faithful there): a burst far over the servo's
 128-byte RX queue in one TCP write, every frame answered; and a frame whose
@@ -138,6 +141,49 @@ def check_gap(bus, dev_id, opts):
     check(len(r) == 1 and r[0].id == dev_id, "§7 the next whole ping is answered")
 
 
+def read_pos(bus, dev_id):
+    r = bus.exchange(kmbus.read(dev_id, 0x46), 1, timeout=0.5, quiet=True)
+    if len(r) != 1 or len(r[0].params) not in (2, 4):
+        return None
+    return int.from_bytes(r[0].params, "little", signed=True)
+
+
+def check_move(bus, dev_id):
+    """§5.4: torque on, 0x65 to +45.0 deg in 500 ms; 0x46 read until it
+    arrives within 0.5 deg (wall-clock time, so the bound is loose), then
+    0x66 back to 0 at 180 deg/s, torque off."""
+    bus.exchange(kmbus.write(dev_id, 0x64, b"\x02"), 0, timeout=0.1)
+    start = read_pos(bus, dev_id)
+    t0 = time.monotonic()
+    bus.exchange(kmbus.write(dev_id, 0x65, (450).to_bytes(2, "little", signed=True)
+                             + (500).to_bytes(2, "little")), 0, timeout=0.02)
+    arrived, pos, seen = None, None, []
+    while time.monotonic() - t0 < 3.0:
+        pos = read_pos(bus, dev_id)
+        if pos is not None:
+            seen.append(pos)
+            if arrived is None and 445 <= pos <= 455:
+                arrived = time.monotonic() - t0
+        if arrived is not None and time.monotonic() - t0 > arrived + 0.3:
+            break
+    check(start is not None and abs(start) <= 5 and arrived is not None and 445 <= pos <= 455
+          and max(seen) <= 455,
+          "§5.4 0x65 +45.0 deg in 500 ms: 0x46 from %s to %s, within 0.5 deg after %s ms (wall clock)"
+          % (start, pos, None if arrived is None else round(arrived * 1000)))
+    check(arrived < 1.5, "§5.4 ... in about the requested time (under 1.5 s of wall clock)")
+    t0 = time.monotonic()
+    bus.exchange(kmbus.write(dev_id, 0x66, (0).to_bytes(2, "little") + (180).to_bytes(2, "little")),
+                 0, timeout=0.02)
+    arrived = None
+    while time.monotonic() - t0 < 3.0 and arrived is None:
+        pos = read_pos(bus, dev_id)
+        if pos is not None and -5 <= pos <= 5:
+            arrived = time.monotonic() - t0
+    check(arrived is not None, "§5.4 0x66 back to 0 at 180 deg/s: arrived after %s ms"
+          % (None if arrived is None else round(arrived * 1000)))
+    bus.exchange(kmbus.write(dev_id, 0x64, b"\x00"), 0, timeout=0.1)
+
+
 def smoke(backend, opts):
     bus = Bus(backend, [1], opts)
     try:
@@ -162,6 +208,7 @@ def smoke(backend, opts):
         r = bus.exchange(kmbus.encode_command(1, 0x7F, 0x01), 1)
         check(len(r) == 1 and r[0].cmd == 0x7F and r[0].params == b"\x00",
               "extension read 0x7F 0x01: user data loaded from flash at boot")
+        check_move(bus, 1)
         if backend == "host-sim":
             check_burst(bus, 1, 40)
             check_burst(bus, 1, 4096 // len(kmbus.ping(1)))

@@ -270,6 +270,53 @@ static void test_servo_mode_clamp(void **state)
     assert_int_equal(km_servo_mode_clamp(&p, -32768), -1350);
 }
 
+/* Extremes from the wire stay defined (the sanitizer build of this test,
+ * and the fuzz_servo target, would trip on an overflow): the widest i16
+ * targets in 1 ms, speed limits up to 65535 deg/s, streams at any
+ * interval, far positions and gains at their maximum in the loop. */
+static void test_extremes_stay_bounded(void **state)
+{
+    (void)state;
+    static const int32_t targets[] = {-32768, 32767, 0, 1, -1};
+    static const uint32_t times[] = {1, 2, 3, 4, 65535};
+    static const int32_t vlims[] = {1, 10000, 65535 * DPS};
+    for (unsigned a = 0; a < 5; a++) {
+        for (unsigned b = 0; b < 5; b++) {
+            for (unsigned c = 0; c < 3; c++) {
+                km_profile_t p;
+                km_profile_reset(&p, targets[(a + 1u) % 5u]);
+                km_profile_move_time(&p, targets[a], times[b], vlims[c]);
+                for (int i = 0; i < 50; i++) {
+                    (void)km_profile_step(&p, 1000);
+                }
+                km_profile_stream(&p, targets[b], times[b] * 1000u, vlims[c]);
+                (void)km_profile_step(&p, 4000000000u);
+                km_profile_stream(&p, targets[a], 0, vlims[c]);
+                (void)km_profile_step(&p, 1000);
+                km_profile_move(&p, targets[b], vlims[c], 2000000000);
+                (void)km_profile_step(&p, 1000);
+                assert_true(p.vel <= p.vmax && p.vel >= -p.vmax);
+            }
+        }
+    }
+    km_profile_t far;
+    km_profile_reset(&far, INT32_MAX);
+    assert_int_equal(km_profile_pos_ddeg(&far), KM_PROFILE_DDEG_MAX);
+    km_control_gains_t g;
+    memset(&g, 0xFF, sizeof g);
+    km_position_loop_t l;
+    km_position_loop_init(&l);
+    static const int32_t pos[] = {INT32_MIN, INT32_MAX, 0};
+    for (unsigned i = 0; i < 3; i++) {
+        for (unsigned j = 0; j < 3; j++) {
+            km_position_loop_in_t in = {.setpoint_u = pos[i], .setpoint_ddps = pos[j], .position = pos[j],
+                                        .speed_ddps = pos[i], .pwm_max = 1000, .integrate = true};
+            const int32_t out = km_position_loop_step(&l, &g, &in, i == 0 ? 0xFFFFFFFFu : 1000u);
+            assert_true(out >= -1000 && out <= 1000);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -281,6 +328,7 @@ int main(void)
         cmocka_unit_test(test_output_direction_limit_modes),
         cmocka_unit_test(test_speed_fast_estimator),
         cmocka_unit_test(test_servo_mode_clamp),
+        cmocka_unit_test(test_extremes_stay_bounded),
     };
     return cmocka_run_group_tests_name("control modules", tests, NULL, NULL);
 }

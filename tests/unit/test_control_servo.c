@@ -117,6 +117,9 @@ static void test_s5_4_move_table_overshoot_bound(void **state)
             fail_msg("move %u: overshoot %d (0.1 deg), end %d ms", i, over, w.end_ms);
         }
         near(kr_pos(&r), t[i].to, FINAL_DDEG);
+        print_message("move %2u: %s %5d -> %5d (%4u): ended %4d ms, overshoot %d x 0.1 deg, peak PWM %d\n", i,
+                      t[i].kind == KM_REQ_MOVE_TIME ? "0x65" : "0x66", t[i].from, t[i].to, t[i].param, w.end_ms,
+                      over > 0 ? over : 0, w.max_abs_pwm);
         if (t[i].kind == KM_REQ_MOVE_TIME && t[i].param != 0) {
             if (w.end_ms < t[i].param - 20 || w.end_ms > t[i].param + 40) {
                 fail_msg("move %u: ended at %d ms, asked %u", i, w.end_ms, t[i].param);
@@ -169,7 +172,8 @@ static void speed_limited_move(km_request_kind_t kind, int16_t target, uint16_t 
         max_47 = s47 > max_47 ? s47 : max_47;
         max_plant = v > max_plant ? v : max_plant;
     }
-    print_message("kind %d: set-point %d, 0x47 %d, plant %d\n", kind, max_sp, max_47, max_plant);
+    print_message("0x5D = 90, request kind %d: set-point max %d u/s, 0x47 max %d deg/s, shaft max %d m deg/s\n",
+                  kind, max_sp, max_47, max_plant);
     assert_true(max_sp <= 90 * KM_PROFILE_UPS_PER_DPS);
     assert_true(max_47 <= 94);
     assert_true(max_plant <= 103500);
@@ -378,6 +382,8 @@ static void stream(uint32_t period_ms, int32_t step_ddeg, uint32_t n)
         }
     }
     const int32_t want = step_ddeg * 100000 / (int32_t)period_ms; /* m deg/s */
+    print_message("stream %u ms x %d (%d m deg/s): shaft %d..%d m deg/s after 300 ms, lag %d x 0.1 deg\n",
+                  period_ms, step_ddeg, want, vmin, vmax, tgt - kr_pos(&r));
     if (vmin < want - want / 20 || vmax > want + want / 20) {
         fail_msg("stream %u ms x %d: speed %d..%d m deg/s, stream %d", period_ms, step_ddeg, vmin, vmax, want);
     }
