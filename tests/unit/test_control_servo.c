@@ -340,6 +340,31 @@ static void test_s5_4_stop_free_and_brake(void **state)
     assert_false(r.live.running);
 }
 
+/* 0x4C deviation = reported position - target in force, while moving and
+ * holding; 0 with the torque off. Zero offsets written while holding keep
+ * the target in 0x46's frame, so the shaft moves by the change (§5.1 0x17:
+ * "writing while holding position makes the servo jump"). */
+static void test_s5_3_deviation_and_offset_jump(void **state)
+{
+    (void)state;
+    on_at(0);
+    assert_true(kr_move(&r, KM_REQ_MOVE_TIME, -600, 800));
+    kr_run(&r, 300);
+    assert_int_equal(r.live.deviation, kr_pos(&r) - (-600));
+    assert_true(r.live.deviation > 100);
+    run_watch(1500);
+    near(r.live.deviation, 0, FINAL_DDEG);
+    r.params.zero_offset2 = 50; /* +5.0 deg: 0x46 reads 5 deg more at once */
+    kr_tick(&r);
+    near(r.live.deviation, 50, FINAL_DDEG);
+    kr_run(&r, 1000);
+    near(kr_pos(&r), -600, FINAL_DDEG);                            /* the target, in 0x46's frame */
+    near(km_plant_position_ddeg(&r.plant), -650, FINAL_DDEG);      /* the shaft moved 5 deg */
+    assert_true(kr_torque(&r, 0));
+    kr_tick(&r);
+    assert_int_equal(r.live.deviation, 0);
+}
+
 /* Holding: against an external torque of 0.6 N.m (30 % of stall) the
  * shaft ends within 0.2 deg of the held position (the integrator takes the
  * load up), and returns there when the torque goes. */
@@ -420,6 +445,7 @@ int main(void)
         cmocka_unit_test(test_s5_1_zero_offsets_apply_to_targets),
         cmocka_unit_test(test_s5_4_armed_turns_on_at_rotation),
         cmocka_unit_test(test_s5_4_stop_free_and_brake),
+        cmocka_unit_test(test_s5_3_deviation_and_offset_jump),
         cmocka_unit_test(test_hold_against_load),
         cmocka_unit_test(test_s5_4_interpolation_50hz),
         cmocka_unit_test(test_s5_4_interpolation_100hz),
