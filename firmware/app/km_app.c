@@ -236,9 +236,23 @@ static void prv_control_tick(uint32_t now)
 
 /* ---- what the dispatcher calls --------------------------------------- */
 
+/* DESIGN.md "The servo <-> control seam": a flash erase stalls the CPU
+ * (22-40 ms on the G0) while the bridge keeps its last PWM and no control
+ * tick runs. Store work therefore runs only with the bridge free or braked:
+ * a commit asked for while driving brakes first (the next tick drives
+ * again), and idle-time compaction waits until the bridge is not driving
+ * (a commit compacts by itself when it must). */
+static bool prv_bridge_driving(void)
+{
+    return s_control.bridge.mode == KM_BRIDGE_PWM;
+}
+
 static bool prv_ops_commit(void *ctx, const uint8_t *addrs, const uint32_t *values, uint8_t n)
 {
     (void)ctx;
+    if (prv_bridge_driving()) {
+        km_hal_motor_brake();
+    }
     return km_app_userdata_commit(addrs, values, n);
 }
 
@@ -335,7 +349,7 @@ void km_app_poll(void)
         s_next_tick += s_tick_period;
         prv_control_tick(now);
         km_hal_watchdog_kick();
-    } else if (!km_app_userdata_maintain()) {
+    } else if (prv_bridge_driving() || !km_app_userdata_maintain()) {
         /* Check and sleep under the lock: WFI still wakes on an interrupt
          * that became pending after the check (a byte, the answer timer,
          * TX done, the 1 ms wake-up). */

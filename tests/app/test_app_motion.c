@@ -154,11 +154,42 @@ static void test_s5_4_move_refused_torque_off(void **state)
     assert_int_equal(read_reg(0x46, &len), 100);
 }
 
+/* DESIGN.md "The servo <-> control seam": a commit (here 0x12, persisted)
+ * while the bridge drives brakes it first, as a flash erase would stall the
+ * CPU with the last PWM on the bridge; the next tick drives again and the
+ * move still arrives. */
+static void test_commit_while_driving_brakes_first(void **state)
+{
+    (void)state;
+    kf_power_on();
+    kf_use_plant(0);
+    run_ms(20);
+    const uint8_t on[2] = {0x64, 0x02};
+    send(0, 0x03, on, 2);
+    run_ms(5);
+    const uint8_t move[5] = {0x65, 0x84, 0x03, 0xE8, 0x03}; /* 90.0 deg, 1000 ms */
+    send(0, 0x03, move, 5);
+    run_ms(300);
+    assert_int_equal(kf_world.motor_mode, 2);
+    const unsigned brakes = kf_world.motor_brakes;
+    const uint8_t delay[3] = {0x12, 0x5E, 0x01}; /* 350 us */
+    send(0, 0x03, delay, 3);
+    run_ms(3);
+    assert_int_equal(kf_world.motor_brakes, brakes + 1u);
+    assert_int_equal(kf_world.motor_mode, 2); /* driving again */
+    run_ms(1500);
+    unsigned len;
+    const int32_t pos = read_reg(0x46, &len);
+    assert_true(pos >= 895 && pos <= 905);
+    assert_int_equal(read_reg(0x12, &len), 350);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_s5_4_move_45deg_500ms_over_the_bus),
         cmocka_unit_test(test_s5_4_move_refused_torque_off),
+        cmocka_unit_test(test_commit_while_driving_brakes_first),
     };
     return cmocka_run_group_tests_name("app motion", tests, NULL, NULL);
 }

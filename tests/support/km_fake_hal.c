@@ -488,6 +488,7 @@ void km_hal_motor_free(void)
 void km_hal_motor_brake(void)
 {
     prv_call();
+    kf_world.motor_brakes++;
     kf_world.motor_mode = 1;
     kf_world.motor_pwm = 0;
 }

@@ -79,6 +79,7 @@ typedef struct {
     uint32_t reads_at_boot, reads_at_wdt_start; /* flash reads then: boot order */
     int16_t motor_pwm;
     int motor_mode;              /* 0 free, 1 brake, 2 drive */
+    unsigned motor_brakes;       /* km_hal_motor_brake() calls */
     km_nor_sim_t nor;
     km_flash_t flash;
     bool use_plant;              /* sensors and motor are the plant's */
