@@ -288,6 +288,11 @@ static void m0h_dispatcher(void)
     b[1] = 0xC8;
     b[2] = 0x00;
     m0h_dispatch("write_persisted_0x12_again", M0_ID, 0x03, b, 3, false, true);
+    b[0] = 0x03; /* user-data reset, level 1 (keeps ID, baud, zero offsets) and 2 */
+    b[1] = 0x01;
+    m0h_dispatch("write_userdata_reset_1", M0_ID, 0x03, b, 2, false, true);
+    b[1] = 0x02;
+    m0h_dispatch("write_userdata_reset_2", M0_ID, 0x03, b, 2, false, true);
     b[0] = 0x64; /* torque on (2) */
     b[1] = 0x02;
     m0h_dispatch("write_0x64_torque_on", M0_ID, 0x03, b, 2, false, false);
