@@ -49,8 +49,13 @@ static uint32_t s_tick_period;
 static uint8_t s_tx[KM_FRAME_MAX];
 static uint16_t s_tx_len;
 static volatile bool s_tx_armed;
-static uint32_t s_answer_frame_end;      /* tick of the answered frame's last byte */
-static uint32_t s_answer_delay_us;       /* the delay it asked for */
+static uint32_t s_armed_frame_end;       /* the armed answer's frame end tick */
+static uint32_t s_armed_delay_us;        /* and the delay it asked for */
+/* The answer that started, as the timer interrupt saw it: its own frame end
+ * and delay are copied with its start tick, so a report made late (after a
+ * next answer was armed) never pairs one answer's start with another's frame. */
+static volatile uint32_t s_answer_frame_end;
+static volatile uint32_t s_answer_delay_us;
 static volatile uint32_t s_answer_start; /* tick the answer's first byte was handed to the UART */
 static volatile bool s_answer_started;
 static volatile uint32_t s_tx_refused;   /* answers the UART would not take (diagnostic) */
@@ -73,6 +78,8 @@ static void ISR_answer_due(void *ctx)
     s_tx_armed = false;
     if (km_hal_uart_send(s_tx, s_tx_len)) {
         s_answer_start = km_hal_time_now();
+        s_answer_frame_end = s_armed_frame_end;
+        s_answer_delay_us = s_armed_delay_us;
         s_answer_started = true;
     } else {
         /* Cannot happen while the loop arms only with TX idle; counted so
@@ -108,8 +115,8 @@ static bool prv_try_schedule_answer(void)
     memcpy(s_tx, s_reply.bytes, s_reply.len);
     s_tx_len = s_reply.len;
     s_tx_armed = true;
-    s_answer_frame_end = s_reply_end;
-    s_answer_delay_us = s_reply.delay_us;
+    s_armed_frame_end = s_reply_end;
+    s_armed_delay_us = s_reply.delay_us;
     km_hal_timer_at(s_reply_end + prv_us_to_ticks(s_reply.delay_us), ISR_answer_due, NULL);
     return true;
 }
@@ -131,10 +138,18 @@ __attribute__((weak)) void km_app_answer_started(uint32_t frame_end, uint32_t st
  * would otherwise overwrite the record before it is reported. */
 static void prv_report_answer(void)
 {
-    if (s_answer_started) {
-        s_answer_started = false;
-        km_app_answer_started(s_answer_frame_end, s_answer_start, s_answer_delay_us);
+    if (!s_answer_started) {
+        return;
     }
+    /* One consistent record: the timer interrupt may start the next answer
+     * between two of these reads. */
+    const uint32_t irq = km_hal_irq_lock();
+    const uint32_t frame_end = s_answer_frame_end;
+    const uint32_t start = s_answer_start;
+    const uint32_t delay_us = s_answer_delay_us;
+    s_answer_started = false;
+    km_hal_irq_restore(irq);
+    km_app_answer_started(frame_end, start, delay_us);
 }
 
 static void prv_on_frame(void)
