@@ -137,6 +137,7 @@ int main(void)
         {"STM32G0 2 KiB/8 B x2", {2048u, 8u, 2u, 0xFFu}},
         {"STM32F0 1 KiB/2 B x2", {1024u, 2u, 2u, 0xFFu}},
         {"nRF51   1 KiB/4 B x2", {1024u, 4u, 2u, 0xFFu}},
+        {"STM32G031 2 KiB/8 B x3", {2048u, 8u, 3u, 0xFFu}}, /* as boards/stm32g031 ships */
         {"STM32G0 2 KiB/8 B x4", {2048u, 8u, 4u, 0xFFu}},
     };
     static const char *const modes[] = {"single-register", "4-register", "after a reboot each"};
