@@ -23,23 +23,10 @@ typedef struct {
     unsigned n;
 } wire_t;
 
-/* A command frame F9 FF id len cmd body cs into out; returns its size. */
-static unsigned frame(uint8_t *out, uint8_t id, uint8_t cmd, const uint8_t *body, unsigned n)
-{
-    out[0] = 0xF9;
-    out[1] = 0xFF;
-    out[2] = id;
-    out[3] = (uint8_t)(n + 2u);
-    out[4] = cmd;
-    memcpy(&out[5], body, n);
-    out[5 + n] = kt_sum(&out[2], n + 3u);
-    return n + 6u;
-}
-
 static void send_frame(uint8_t id, uint8_t cmd, const uint8_t *body, unsigned n)
 {
     uint8_t f[300];
-    kf_send_at(kf_world.now, f, frame(f, id, cmd, body, n));
+    kf_send_at(kf_world.now, f, kt_command(f, id, cmd, body, n));
 }
 
 static void take(wire_t *w)
@@ -340,7 +327,7 @@ static void test_s3_tx_buffer_never_overwritten_while_sending(void **state)
     const uint8_t ping[] = {0xF9, 0xFF, 0x00, 0x02, 0x01, 0xFC};
     uint8_t read[8];
     const uint8_t adr = 0x0A;
-    const unsigned rn = frame(read, 0x00, 0x02, &adr, 1);
+    const unsigned rn = kt_command(read, 0x00, 0x02, &adr, 1);
     unsigned answers = 0;
     for (uint32_t off = 0; off < 200u; off++) {
         const uint32_t t0 = kf_world.now;

@@ -12,19 +12,12 @@
 
 #include "km_app.h"
 #include "km_fake_hal.h"
-#include "km_test_support.h" /* kt_sum: the §2 checksum written out for tests */
+#include "km_test_support.h" /* kt_command: a §2 frame built from the rule */
 
 static void send(uint8_t id, uint8_t cmd, const uint8_t *body, unsigned n)
 {
     uint8_t f[64];
-    f[0] = 0xF9;
-    f[1] = 0xFF;
-    f[2] = id;
-    f[3] = (uint8_t)(n + 2u);
-    f[4] = cmd;
-    memcpy(&f[5], body, n);
-    f[5 + n] = kt_sum(&f[2], n + 3u);
-    kf_send_at(kf_world.now, f, n + 6u);
+    kf_send_at(kf_world.now, f, kt_command(f, id, cmd, body, n));
 }
 
 static void run_ms(uint32_t ms)

@@ -223,17 +223,32 @@ static inline void kt_frame(km_frame_t *f, uint8_t id, uint8_t cmd, const uint8_
     }
 }
 
-/* Expected response frame F9 F5 id len cmd body cs, built from §2. */
-static inline unsigned kt_response(uint8_t *out, uint8_t id, uint8_t cmd, const uint8_t *body, unsigned n)
+/* A §2 frame F9 <hdr1> id len cmd body cs into out; returns its size. */
+static inline unsigned kt_build_frame(uint8_t *out, uint8_t hdr1, uint8_t id, uint8_t cmd,
+                                      const uint8_t *body, unsigned n)
 {
     out[0] = 0xF9;
-    out[1] = 0xF5;
+    out[1] = hdr1;
     out[2] = id;
     out[3] = (uint8_t)(n + 2u);
     out[4] = cmd;
-    memcpy(&out[5], body, n);
+    if (n) {
+        memcpy(&out[5], body, n);
+    }
     out[5 + n] = kt_sum(&out[2], n + 3u);
     return n + 6u;
+}
+
+/* Expected response frame F9 F5 id len cmd body cs, built from §2. */
+static inline unsigned kt_response(uint8_t *out, uint8_t id, uint8_t cmd, const uint8_t *body, unsigned n)
+{
+    return kt_build_frame(out, 0xF5, id, cmd, body, n);
+}
+
+/* A command frame F9 FF id len cmd body cs, as a master sends it. */
+static inline unsigned kt_command(uint8_t *out, uint8_t id, uint8_t cmd, const uint8_t *body, unsigned n)
+{
+    return kt_build_frame(out, 0xFF, id, cmd, body, n);
 }
 
 /* ---- fixture ---------------------------------------------------------------- */
