@@ -33,31 +33,17 @@ extern const uint32_t m0_mix_frames;
 extern const uint32_t m0_mix_responses;
 extern const uint8_t m0_mix[];
 
-/* The markers and the validation loops, in assembly so that their length
- * is known to the instruction. m0_begin and m0_end are one `bx lr` each;
- * kv_loop1000 (not harness: it counts inclusive) is ldr + 1,000 x
- * (subs, bne) + bx = 2,002 instructions. */
+/* The markers (m0_markers.c) and a validation loop in assembly, so that
+ * its length is known to the instruction: kv_loop1000 (not harness: it
+ * counts inclusive) is ldr + 1,000 x (subs, bne) + bx = 2,002
+ * instructions. */
 void m0_begin(void);
 void m0_end(void);
+void m0_region_empty(void);
+void m0_region_loop1000(void);
 void kv_loop1000(void);
 __asm__(".syntax unified\n"
         ".thumb\n"
-        ".section .text.m0_begin,\"ax\",%progbits\n"
-        ".balign 2\n"
-        ".global m0_begin\n"
-        ".thumb_func\n"
-        ".type m0_begin, %function\n"
-        "m0_begin:\n"
-        "  bx lr\n"
-        ".size m0_begin, .-m0_begin\n"
-        ".section .text.m0_end,\"ax\",%progbits\n"
-        ".balign 2\n"
-        ".global m0_end\n"
-        ".thumb_func\n"
-        ".type m0_end, %function\n"
-        "m0_end:\n"
-        "  bx lr\n"
-        ".size m0_end, .-m0_end\n"
         ".section .text.kv_loop1000,\"ax\",%progbits\n"
         ".balign 4\n"
         ".global kv_loop1000\n"
@@ -106,19 +92,12 @@ static void m0h_info(const char *name, uint32_t v)
 
 static void m0h_validate(void)
 {
+    /* Whole in assembly (m0_markers.c), so that no compiler schedules
+     * anything into them: an empty region, and ldr + 1,000 x (subs, bne). */
     m0h_region("empty");
-    m0_begin();
-    m0_end();
-    /* ldr + 1,000 x (subs, bne): 2,001 instructions inline (the assembler
-     * puts the literal at the end of this function's section). */
+    m0_region_empty();
     m0h_region("loop1000_inline");
-    m0_begin();
-    __asm__ volatile(".syntax unified\n"
-                     "ldr r0, =1000\n"
-                     "1: subs r0, r0, #1\n"
-                     "bne 1b\n"
-                     ".syntax divided\n" ::: "r0", "cc", "memory");
-    m0_end();
+    m0_region_loop1000();
     /* The same loop as a function: 2,002 instructions inclusive (its bx),
      * which checks that the harness exclusion counts a callee whole. */
     m0h_region("loop1000_call");
