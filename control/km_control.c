@@ -8,6 +8,7 @@ void km_control_init(km_control_t *c, const km_control_params_t *p)
 {
     memset(c, 0, sizeof *c);
     km_servo_mode_init(&c->servo, p);
+    km_motor_mode_init(&c->motor);
     km_position_loop_init(&c->loop);
     km_speed_window_init(&c->speed);
     /* §5.1 0x11 bit 0: the power-on output until the first tick says otherwise */
@@ -23,11 +24,31 @@ bool km_control_request(km_control_t *c, const km_request_t *req, const km_contr
     case KM_REQ_MOVE_TIME:
     case KM_REQ_MOVE_SPEED:
     case KM_REQ_SERVO_ADVANCED:
-    case KM_REQ_INTERPOLATE:
-        return km_servo_mode_request(&c->servo, req, p, c->position);
+    case KM_REQ_INTERPOLATE: {
+        /* a servo command (or torque switch) takes the shaft back from the
+         * motor: servo mode restarts from where the shaft is */
+        if (c->motor.active && c->servo.ts == 2u) {
+            km_servo_mode_rebase(&c->servo, c->position);
+        }
+        const bool ok = km_servo_mode_request(&c->servo, req, p, c->position);
+        if (ok) {
+            km_motor_mode_release(&c->motor);
+        }
+        return ok;
+    }
+    case KM_REQ_MOTOR_TORQUE:
+    case KM_REQ_MOTOR_SPEED:
+    case KM_REQ_MOTOR_ADVANCED:
+        /* the variant and 0x5A rules are the dispatcher's; a motor command
+         * ends a servo-mode hold or move (km_motor_mode.h) */
+        if (!km_motor_mode_request(&c->motor, req, p, c->position)) {
+            return false;
+        }
+        c->servo.running = false;
+        c->servo.streaming = false;
+        return true;
     default:
-        /* motor mode, zeroing, protection clear: later issues; accepted as
-         * before, nothing moves */
+        /* zeroing, protection clear: later issues; accepted as before */
         return true;
     }
 }
@@ -57,27 +78,38 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     km_servo_mode_out_t sm;
     km_servo_mode_step(&c->servo, p, pos, dt_us, &sm);
 
-    /* 3. position loop, 4. output */
     int32_t limit = p->torque_limit < p->max_torque ? p->torque_limit : p->max_torque;
-    if (sm.pwm_cap < limit) {
-        limit = sm.pwm_cap;
-    }
-    int32_t pwm = 0;
-    if (sm.bridge == KM_BRIDGE_PWM) {
-        if (sm.reset_loop) {
-            km_position_loop_init(&c->loop);
+    if (c->motor.active) {
+        /* 2b. motor mode owns the bridge (servo mode's output is unused);
+         * 0x5A = 1 (servo only) stops it. Output limited by 0x5B. */
+        if (p->control_mode == 1u && c->motor.running) {
+            km_motor_mode_stop(&c->motor, p->idle_brake ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE);
         }
-        const km_position_loop_in_t li = {
-            .setpoint_u = sm.setpoint_u,
-            .setpoint_ddps = sm.setpoint_ddps,
-            .position = pos,
-            .speed_ddps = speed_ddps,
-            .pwm_max = limit,
-            .integrate = sm.holding,
-        };
-        pwm = km_position_loop_step(&c->loop, &p->gains, &li, dt_us);
+        km_bridge_mode_t mode;
+        const int32_t mpwm = km_motor_mode_step(&c->motor, p, pos, speed_ddps, dt_us, &mode);
+        c->bridge = km_output_bridge(mode, mpwm, limit, p->reverse);
+    } else {
+        /* 3. position loop, 4. output */
+        if (sm.pwm_cap < limit) {
+            limit = sm.pwm_cap;
+        }
+        int32_t pwm = 0;
+        if (sm.bridge == KM_BRIDGE_PWM) {
+            if (sm.reset_loop) {
+                km_position_loop_init(&c->loop);
+            }
+            const km_position_loop_in_t li = {
+                .setpoint_u = sm.setpoint_u,
+                .setpoint_ddps = sm.setpoint_ddps,
+                .position = pos,
+                .speed_ddps = speed_ddps,
+                .pwm_max = limit,
+                .integrate = sm.holding,
+            };
+            pwm = km_position_loop_step(&c->loop, &p->gains, &li, dt_us);
+        }
+        c->bridge = km_output_bridge(sm.bridge, pwm, limit, p->reverse);
     }
-    c->bridge = km_output_bridge(sm.bridge, pwm, limit, p->reverse);
 
     memset(live, 0, sizeof *live);
     live->position = pos;
@@ -86,9 +118,9 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     live->pwm = km_output_pwm_reported(&c->bridge);
     live->temperature = in->temperature_c10 / 10;
     live->voltage = in->voltage_mv;
-    live->deviation = km_servo_mode_deviation(&c->servo, pos);
-    live->rotation_ms = c->servo.rotation_ms;
-    live->running = c->servo.running;
+    live->deviation = c->motor.active ? 0 : km_servo_mode_deviation(&c->servo, pos);
+    live->rotation_ms = c->motor.active ? c->motor.rotation_ms : c->servo.rotation_ms;
+    live->running = c->motor.active ? c->motor.running : c->servo.running;
     live->protecting = c->servo.ts == 5u;
     live->hw_faults = in->faults;
     *bridge = c->bridge;

@@ -10,8 +10,9 @@
  *   3. position loop (km_position_loop) when the torque is on;
  *   4. output (km_output): PWM limit 0x5B (and a move's own cap), direction
  *      back to the sensor's frame, bridge mode.
- * Motor mode (0x6E..0x70) and the protection supervisor are later issues:
- * motor requests are accepted and counted, nothing moves. Only this header
+ * Motor mode (0x6E..0x70, km_motor_mode) replaces steps 2-3 while it owns
+ * the bridge (hand-over rules in km_motor_mode.h). The protection
+ * supervisor is a later issue. Only this header
  * and km_servo_io.h are the interface; the modules are internals. */
 #ifndef KM_CONTROL_H
 #define KM_CONTROL_H
@@ -21,6 +22,7 @@
 
 #include "km_hal_sensors.h"
 #include "km_output.h"
+#include "km_motor_mode.h"
 #include "km_position_loop.h"
 #include "km_servo_io.h"
 #include "km_servo_mode.h"
@@ -30,6 +32,7 @@
 
 typedef struct {
     km_servo_mode_t servo;
+    km_motor_mode_t motor;
     km_position_loop_t loop;
     km_speed_window_t speed;     /* 0x47 */
     km_speed_fast_t fast;        /* the loop's damping input */

@@ -158,6 +158,15 @@ bool km_servo_mode_request(km_servo_mode_t *m, const km_request_t *req, const km
     return true;
 }
 
+void km_servo_mode_rebase(km_servo_mode_t *m, int32_t position)
+{
+    km_profile_reset(&m->profile, position);
+    m->target = position;
+    m->running = false;
+    m->streaming = false;
+    m->reset_loop = true;
+}
+
 void km_servo_mode_protect(km_servo_mode_t *m)
 {
     prv_stop(m, TS_PROTECTING);

@@ -81,6 +81,10 @@ bool km_servo_mode_request(km_servo_mode_t *m, const km_request_t *req, const km
 void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_t position, uint32_t dt_us,
                         km_servo_mode_out_t *out);
 
+/* Motor mode handed the shaft back: the target in force and the profile
+ * restart from `position` (0x64 keeps its value). */
+void km_servo_mode_rebase(km_servo_mode_t *m, int32_t position);
+
 /* Hook for the protection supervisor: 0x64 = 5, motion stops, output free. */
 void km_servo_mode_protect(km_servo_mode_t *m);
 

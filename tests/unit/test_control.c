@@ -156,8 +156,9 @@ static void test_s5_4_torque_switch_bridge_mode(void **state)
 }
 
 /* Rotation requests with the torque off (0x64 = 0, 1) are refused and
- * leave the bridge as it is; motor-mode requests (a later slice) are
- * accepted and counted, and move nothing. */
+ * leave the bridge as it is; motor-mode requests are accepted and counted
+ * and run whatever 0x64 is (§5.4: motor mode does not need the servo-mode
+ * torque switch; test_control_motor.c has the rest). */
 static void test_motion_refused_torque_off_motor_counted(void **state)
 {
     (void)state;
@@ -182,7 +183,8 @@ static void test_motion_refused_torque_off_motor_counted(void **state)
     assert_true(km_control_request(&c, &req, &cfg));
     assert_int_equal(c.requests, 3);
     (void)step(&in, &cfg, 1000);
-    assert_int_equal(c.bridge.mode, KM_BRIDGE_BRAKE);
+    assert_int_equal(c.bridge.mode, KM_BRIDGE_PWM);
+    assert_int_equal(c.bridge.pwm, -500);
 }
 
 /* Runs `ticks` ticks of `dt_us`, the sensor moving `per_tick` 0.1 deg each;

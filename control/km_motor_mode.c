@@ -1,0 +1,141 @@
+/* Motor mode: constant PWM, constant speed, counted runs (see
+ * km_motor_mode.h for the rules). */
+#include "km_motor_mode.h"
+
+#include <string.h>
+
+void km_motor_mode_init(km_motor_mode_t *m)
+{
+    memset(m, 0, sizeof *m);
+    m->stop_bridge = KM_BRIDGE_FREE;
+}
+
+void km_motor_mode_release(km_motor_mode_t *m)
+{
+    m->active = false;
+    m->running = false;
+}
+
+void km_motor_mode_stop(km_motor_mode_t *m, km_bridge_mode_t bridge)
+{
+    m->running = false;
+    m->stop_bridge = bridge;
+}
+
+/* Speed set-point cut to 0x5D (0x15 when 0x5D is 0). */
+static int32_t prv_speed(const km_control_params_t *p, int32_t dps)
+{
+    int32_t lim = p->speed_limit_dps ? p->speed_limit_dps : p->max_speed_dps;
+    if (lim == 0) {
+        lim = p->gains.fastest_dps;
+    }
+    lim = lim > 20000 ? 20000 : lim; /* keeps the loop's products in 32 bits */
+    return dps > lim ? lim : (dps < -lim ? -lim : dps);
+}
+
+static void prv_start(km_motor_mode_t *m, bool speed_mode, int32_t value, km_bridge_mode_t stop_bridge)
+{
+    m->active = true;
+    m->stop_bridge = stop_bridge;
+    m->count_kind = 0;
+    if (speed_mode != m->speed_mode || !m->running) {
+        m->i_acc = 0;
+    }
+    m->speed_mode = speed_mode;
+    m->pwm = speed_mode ? 0 : value;
+    m->speed_dps = speed_mode ? value : 0;
+    m->running = value != 0;
+    m->rotation_ms = 0;
+    m->rotation_rem_us = 0;
+}
+
+bool km_motor_mode_request(km_motor_mode_t *m, const km_request_t *req, const km_control_params_t *p,
+                           int32_t position)
+{
+    const km_bridge_mode_t idle = p->idle_brake ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE;
+    switch (req->kind) {
+    case KM_REQ_MOTOR_TORQUE: {
+        const int32_t v = req->u.i16;
+        prv_start(m, false, v > 1000 ? 1000 : (v < -1000 ? -1000 : v), idle);
+        return true;
+    }
+    case KM_REQ_MOTOR_SPEED:
+        prv_start(m, true, prv_speed(p, req->u.i16), idle);
+        return true;
+    case KM_REQ_MOTOR_ADVANCED: {
+        const uint8_t c = req->u.adv.control;
+        const km_bridge_mode_t after = (c & 0x02u) ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE;
+        if (c & 0x80u) {
+            m->active = true;
+            km_motor_mode_stop(m, after);
+            return true;
+        }
+        const uint8_t p1_kind = (uint8_t)((c >> 4) & 3u);
+        const bool speed_mode = ((c >> 2) & 3u) == 1u;
+        int32_t v = (int32_t)req->u.adv.p2;
+        v = speed_mode ? prv_speed(p, v) : (v > 1000 ? 1000 : v);
+        if (c & 0x01u) {
+            v = -v;
+        }
+        prv_start(m, speed_mode, v, after);
+        const uint32_t p1 = req->u.adv.p1;
+        m->count_kind = p1_kind;
+        m->start_pos = position;
+        m->remain_us = p1_kind == 1u ? p1 * 100u : 0u; /* kept in ms: 0.1 s units */
+        m->travel = p1_kind == 2u ? (int32_t)p1 * 10 : (int32_t)p1 * 360; /* 1 deg, 0.1 turn */
+        if (p1_kind != 0u && p1 == 0u) {
+            m->running = false; /* a run of nothing ends at once */
+        }
+        return true;
+    }
+    default:
+        return false;
+    }
+}
+
+int32_t km_motor_mode_step(km_motor_mode_t *m, const km_control_params_t *p, int32_t position,
+                           int32_t speed_ddps, uint32_t dt_us, km_bridge_mode_t *mode)
+{
+    if (!m->running) {
+        *mode = m->stop_bridge;
+        return 0;
+    }
+    /* 0x4D and the counted run */
+    m->rotation_rem_us += dt_us;
+    const uint32_t ms = m->rotation_rem_us / 1000u;
+    m->rotation_rem_us -= ms * 1000u;
+    m->rotation_ms += ms;
+    if (m->count_kind == 1u) {
+        m->remain_us = m->remain_us > ms ? m->remain_us - ms : 0u;
+        if (m->remain_us == 0u) {
+            km_motor_mode_stop(m, m->stop_bridge);
+        }
+    } else if (m->count_kind >= 2u) {
+        const int32_t moved = position - m->start_pos;
+        if ((moved >= 0 ? moved : -moved) >= m->travel) {
+            km_motor_mode_stop(m, m->stop_bridge);
+        }
+    }
+    if (!m->running) {
+        *mode = m->stop_bridge;
+        return 0;
+    }
+    *mode = KM_BRIDGE_PWM;
+    if (!m->speed_mode) {
+        return m->pwm;
+    }
+    /* speed loop, 0.1 deg/s */
+    const km_control_gains_t *g = &p->gains;
+    const int32_t sp = m->speed_dps;
+    int32_t err = sp * 10 - speed_ddps;
+    err = err > 20000 ? 20000 : (err < -20000 ? -20000 : err);
+    const uint32_t dt = dt_us > 2000u ? 2000u : dt_us;
+    m->i_acc += (KM_MOTOR_KI_Q8 * err / 1000) * (int32_t)dt / 10; /* PWM x 256000 */
+    const int32_t imax = (int32_t)(g->i_max_pwm > 1000u ? 1000u : g->i_max_pwm) * 256000;
+    m->i_acc = m->i_acc > imax ? imax : (m->i_acc < -imax ? -imax : m->i_acc);
+    int32_t pwm = (int32_t)g->kv_q8 * sp / 256;
+    pwm += sp > 0 ? (int32_t)g->friction_pwm : (sp < 0 ? -(int32_t)g->friction_pwm : 0);
+    pwm += (int32_t)g->kd_q8 * err / 2560;
+    pwm += m->i_acc / 256000;
+    return pwm > 1000 ? 1000 : (pwm < -1000 ? -1000 : pwm);
+}
