@@ -81,7 +81,7 @@ bool km_motor_mode_request(km_motor_mode_t *m, const km_request_t *req, const km
         const uint32_t p1 = req->u.adv.p1;
         m->count_kind = p1_kind;
         m->start_pos = position;
-        m->remain_us = p1_kind == 1u ? p1 * 100u : 0u; /* kept in ms: 0.1 s units */
+        m->remain_ms = p1_kind == 1u ? p1 * 100u : 0u; /* 0.1 s units */
         m->travel = p1_kind == 2u ? (int32_t)p1 * 10 : (int32_t)p1 * 360; /* 1 deg, 0.1 turn */
         if (p1_kind != 0u && p1 == 0u) {
             m->running = false; /* a run of nothing ends at once */
@@ -106,8 +106,8 @@ int32_t km_motor_mode_step(km_motor_mode_t *m, const km_control_params_t *p, int
     m->rotation_rem_us -= ms * 1000u;
     m->rotation_ms += ms;
     if (m->count_kind == 1u) {
-        m->remain_us = m->remain_us > ms ? m->remain_us - ms : 0u;
-        if (m->remain_us == 0u) {
+        m->remain_ms = m->remain_ms > ms ? m->remain_ms - ms : 0u;
+        if (m->remain_ms == 0u) {
             km_motor_mode_stop(m, m->stop_bridge);
         }
     } else if (m->count_kind >= 2u) {

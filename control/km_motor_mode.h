@@ -33,7 +33,8 @@
  * the measured position, as if just switched on, so relative targets count
  * from where the motor left the shaft. A torque switch write (0..3) also
  * ends the motor (2 then holds where the shaft is). 0x5A = 1 written while
- * the motor runs stops it with the idle output. Pure fixed point: no
+ * the motor runs stops it with the idle output. The protection supervisor
+ * (a later issue) must stop the motor too: km_motor_mode_stop(free). Pure fixed point: no
  * float, no 64-bit divide. */
 #ifndef KM_MOTOR_MODE_H
 #define KM_MOTOR_MODE_H
@@ -53,7 +54,7 @@ typedef struct {
     int32_t pwm;            /* constant PWM, master's frame */
     int32_t speed_dps;      /* speed set-point, master's frame */
     uint8_t count_kind;     /* 0 none, 1 time, 2/3 travel */
-    uint32_t remain_us;     /* time left (kind 1) */
+    uint32_t remain_ms;     /* time left (kind 1), ms */
     int32_t start_pos;      /* 0.1 deg, kinds 2/3 */
     int32_t travel;         /* 0.1 deg to go, kinds 2/3 */
     km_bridge_mode_t stop_bridge; /* output once stopped */
