@@ -2,7 +2,7 @@
  * -> parser -> dispatcher -> typed request -> control at the app's 1 kHz
  * tick -> the bridge of the fake board -> the servo plant (sim/plant,
  * kf_use_plant) -> sensors -> 0x46 read back over the bus. PROTOCOL.md
- * §5.3 0x46/0x4D, §5.4 0x64/0x65/0x66, §4 bit 7. */
+ * §5.3 0x46/0x4D, §5.4 0x64/0x65/0x66/0x6E/0x70, §4 bit 7. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -177,12 +177,54 @@ static void test_commit_while_driving_brakes_first(void **state)
     assert_int_equal(read_reg(0x12, &len), 350);
 }
 
+/* §5.4 0x6E over the bus (pot product, torque left armed: motor mode is
+ * not gated by 0x64): PWM +400 turns the plant forward with bit 7 set, 0
+ * stops it (idle output brake, bit 7 clear, the shaft at rest); then 0x70
+ * runs -400 for 0.3 s and frees: 0x4D reads 300 +-2 ms. */
+static void test_s5_4_motor_pwm_over_the_bus(void **state)
+{
+    (void)state;
+    kf_power_on();
+    kf_use_plant(-900);
+    run_ms(20);
+    unsigned len;
+    const int32_t p0 = read_reg(0x46, &len);
+    const uint8_t pwm[3] = {0x6E, 0x90, 0x01}; /* +400 */
+    send(0, 0x03, pwm, 3);
+    run_ms(300);
+    assert_true(ping_status() & 0x80);
+    assert_int_equal(kf_world.motor_mode, 2);
+    const int32_t p1 = read_reg(0x46, &len);
+    print_message("0x6E +400: %d -> %d x0.1 deg in ~300 ms\n", (int)p0, (int)p1);
+    assert_true(p1 > p0 + 200);
+    const uint8_t stop[3] = {0x6E, 0x00, 0x00};
+    send(0, 0x03, stop, 3);
+    run_ms(200);
+    assert_int_equal(ping_status() & 0x80, 0);
+    assert_int_equal(kf_world.motor_mode, 1); /* brake: 0x11 bit 1 */
+    const int32_t p2 = read_reg(0x46, &len);
+    run_ms(100);
+    assert_int_equal(read_reg(0x46, &len), p2);
+
+    const uint8_t timed[6] = {0x70, 0x11, 0x03, 0x00, 0x90, 0x01}; /* 0.3 s, PWM 400 reverse, then free */
+    send(0, 0x03, timed, 6);
+    run_ms(150);
+    assert_true(ping_status() & 0x80);
+    run_ms(300);
+    assert_int_equal(ping_status() & 0xC0, 0);
+    assert_int_equal(kf_world.motor_mode, 0);
+    assert_true(read_reg(0x46, &len) < p2 - 200);
+    const int32_t rot = read_reg(0x4D, &len);
+    assert_true(rot >= 298 && rot <= 302);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_s5_4_move_45deg_500ms_over_the_bus),
         cmocka_unit_test(test_s5_4_move_refused_torque_off),
         cmocka_unit_test(test_commit_while_driving_brakes_first),
+        cmocka_unit_test(test_s5_4_motor_pwm_over_the_bus),
     };
     return cmocka_run_group_tests_name("app motion", tests, NULL, NULL);
 }
