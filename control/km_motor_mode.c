@@ -111,8 +111,10 @@ int32_t km_motor_mode_step(km_motor_mode_t *m, const km_control_params_t *p, int
             km_motor_mode_stop(m, m->stop_bridge);
         }
     } else if (m->count_kind >= 2u) {
-        const int32_t moved = position - m->start_pos;
-        if ((moved >= 0 ? moved : -moved) >= m->travel) {
+        /* modular distance: defined across the int32 wrap of a long run */
+        uint32_t moved = (uint32_t)position - (uint32_t)m->start_pos;
+        moved = moved > 0x80000000u ? 0u - moved : moved;
+        if (moved >= (uint32_t)m->travel) {
             km_motor_mode_stop(m, m->stop_bridge);
         }
     }
@@ -127,7 +129,8 @@ int32_t km_motor_mode_step(km_motor_mode_t *m, const km_control_params_t *p, int
     /* speed loop, 0.1 deg/s */
     const km_control_gains_t *g = &p->gains;
     const int32_t sp = m->speed_dps;
-    int32_t err = sp * 10 - speed_ddps;
+    const int32_t v = speed_ddps > 1000000 ? 1000000 : (speed_ddps < -1000000 ? -1000000 : speed_ddps);
+    int32_t err = sp * 10 - v;
     err = err > 20000 ? 20000 : (err < -20000 ? -20000 : err);
     const uint32_t dt = dt_us > 2000u ? 2000u : dt_us;
     m->i_acc += (KM_MOTOR_KI_Q8 * err / 1000) * (int32_t)dt / 10; /* PWM x 256000 */

@@ -361,6 +361,40 @@ static void test_s6_pot_refuses_encoder_motor_commands(void **state)
     assert_int_equal(fx.fake.requests[n].kind, KM_REQ_MOTOR_ADVANCED);
 }
 
+/* Control stays defined for any value that reaches it (the dispatcher
+ * validates first; checked under UBSan too): every 0x70 control byte with
+ * extreme p1/p2, extreme 0x6E/0x6F values, extreme gains; the bridge PWM
+ * stays within +-1000. */
+static void test_s5_4_motor_any_value_defined(void **state)
+{
+    (void)state;
+    rig_encoder();
+    r.params.gains.kv_q8 = UINT16_MAX;
+    r.params.gains.kd_q8 = UINT16_MAX;
+    r.params.gains.i_max_pwm = UINT16_MAX;
+    r.params.gains.friction_pwm = UINT16_MAX;
+    r.params.speed_limit_dps = UINT16_MAX;
+    const int16_t v16[] = {INT16_MIN, -1001, -1, 0, 1, 1000, INT16_MAX};
+    for (unsigned i = 0; i < sizeof v16 / sizeof v16[0]; i++) {
+        assert_true(motor_i16(KM_REQ_MOTOR_TORQUE, v16[i]));
+        kr_run(&r, 3);
+        assert_true(iabs(r.bridge.pwm) <= 1000);
+        assert_true(motor_i16(KM_REQ_MOTOR_SPEED, v16[i]));
+        kr_run(&r, 3);
+        assert_true(iabs(r.bridge.pwm) <= 1000);
+    }
+    const uint16_t p[] = {0, 1, UINT16_MAX};
+    for (unsigned c = 0; c < 256u; c++) {
+        for (unsigned a = 0; a < 3u; a++) {
+            for (unsigned b = 0; b < 3u; b++) {
+                assert_true(motor_adv((uint8_t)c, p[a], p[b]));
+                kr_run(&r, 2);
+                assert_true(iabs(r.bridge.pwm) <= 1000);
+            }
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -374,6 +408,7 @@ int main(void)
         cmocka_unit_test(test_s5_4_0x70_angle_and_turns),
         cmocka_unit_test(test_s5_4_motor_direction_bit),
         cmocka_unit_test(test_s5_4_0x5A_auto_hand_over),
+        cmocka_unit_test(test_s5_4_motor_any_value_defined),
         cmocka_unit_test(test_s5_4_0x5A_rule_in_dispatcher),
         cmocka_unit_test(test_s6_pot_refuses_encoder_motor_commands),
     };
