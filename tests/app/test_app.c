@@ -234,6 +234,18 @@ static void test_s4_failed_write_survives_a_read_level0(void **state)
     exchange("F9 FF 00 02 01 FC", 5, "F9 F5 00 02 00 FD");
 }
 
+/* ---- 9: 0x83 naming an address it does not allow (§4: bit 5) ------------- */
+
+static void test_s4_multi_id_unsupported_address_is_bit5(void **state)
+{
+    (void)state;
+    boot();
+    exchange("F9 FF 00 04 03 0F 05 E4", 5, NULL); /* ID 5 */
+    exchange("F9 FF FE 07 83 13 02 05 00 00 5D", 5, NULL);
+    exchange("F9 FF 05 02 01 F7", 5, "F9 F5 05 02 20 D8");
+    exchange("F9 FF 05 02 01 F7", 5, "F9 F5 05 02 00 F8");
+}
+
 /* ---- 8: the gap (docs/protocol-decisions.md "Inter-byte gap") --------------- */
 
 /* With the delivery floor at 0 (a real UART), a frame whose bytes stop for
@@ -391,6 +403,7 @@ int main(void)
         cmocka_unit_test(test_s4_bad_checksum_for_our_id_reported_once),
         cmocka_unit_test(test_s4_good_write_after_checksum_error_level1),
         cmocka_unit_test(test_s4_failed_write_survives_a_read_level0),
+        cmocka_unit_test(test_s4_multi_id_unsupported_address_is_bit5),
         cmocka_unit_test(test_s7_gap_real_rule),
         cmocka_unit_test(test_s7_gap_delivery_floor),
         cmocka_unit_test(test_wdt_started_before_store_mount),
