@@ -11,7 +11,16 @@
  * handed over only when the host runs this process, and a stall longer than
  * the real gap would drop a frame that was whole on the wire. 0 gives the
  * real rule, for tests on a quiet host. A restart re-executes with the same
- * arguments, so the option survives it. */
+ * arguments, so the option survives it.
+ *
+ * --product pot|encoder: the product emulated (boards/sim-common/
+ * km_sim_product.c): "KM-SIM-P135" potentiometer (default) or
+ * "KM-SIM-ENCODER" multi-turn, on a plant without end stops. It survives a
+ * restart (same arguments). The plant is process memory, so a restart
+ * (0x02, a new process image) starts it again at rest at 0: the encoder
+ * product then reports a multi-turn position of 0 (plus its zero offsets),
+ * whatever it had turned before, as an encoder servo whose turn count is not
+ * kept through a reset; the shaft does not keep turning across it. */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -20,6 +29,7 @@
 #include "hs_flash.h"
 #include "hs_io.h"
 #include "km_app.h"
+#include "km_sim_product.h"
 
 void hs_system_set_argv(char **argv);
 void hs_board_set_flash(const km_flash_t *flash);
@@ -28,9 +38,13 @@ static int prv_usage(const char *argv0)
 {
     fprintf(stderr,
             "usage: %s (--listen HOST:PORT | --pty) --flash FILE [--baud N] [--gap-floor-us N]\n"
+            "          [--product pot|encoder]\n"
             "  --gap-floor-us N  least silence inside a frame that drops it, in us, when it\n"
             "                    exceeds the parser's max(10 byte times, 1 ms); default %u\n"
             "                    (host scheduling stalls); 0 = the real rule\n"
+            "  --product P       pot (default, KM-SIM-P135) or encoder (KM-SIM-ENCODER,\n"
+            "                    multi-turn); a restart re-executes with it and starts\n"
+            "                    the plant again at 0, so the encoder reads 0 after it\n"
             "  --baud N          accepted, ignored: the line rate is the servo's register 0x10\n",
             argv0, HS_GAP_FLOOR_DEFAULT_US);
     return 2;
@@ -66,6 +80,15 @@ int main(int argc, char **argv)
                 return prv_usage(argv[0]);
             }
             hs_uart_set_gap_floor_us(us);
+        } else if (strcmp(argv[i], "--product") == 0 && i + 1 < argc) {
+            const char *p = argv[++i];
+            if (strcmp(p, "pot") == 0) {
+                km_sim_product_select(KM_SIM_PRODUCT_POT);
+            } else if (strcmp(p, "encoder") == 0) {
+                km_sim_product_select(KM_SIM_PRODUCT_ENCODER);
+            } else {
+                return prv_usage(argv[0]);
+            }
         } else if (strcmp(argv[i], "--pty") == 0) {
             use_pty = 1;
         } else {

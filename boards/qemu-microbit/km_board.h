@@ -30,6 +30,11 @@ typedef struct {
 /* The last command given through km_hal_motor.h. */
 km_board_motor_cmd_t km_board_motor_command(void);
 
+/* The product option word at 0x20000008 (README.md "Run-time options"):
+ * 0 = potentiometer product, 1 = encoder product; 0 when the options are
+ * unset (magic not written). boards/sim-common/main.c passes it on. */
+uint32_t km_board_option_product(void);
+
 /* Replace the readings km_hal_sensors_read() returns. */
 void km_board_sensors_publish(const km_sensors_t *readings);
 

@@ -9,6 +9,7 @@
  * pin the TX path drives, and RX would be stopped while it transmits. */
 #include <stddef.h>
 
+#include "km_board.h"
 #include "km_hal_system.h"
 #include "km_hal_time.h"
 #include "km_hal_uart.h"
@@ -25,6 +26,7 @@
  * line, so tools/servo-bus writes these words before the CPU starts with
  *   -device loader,addr=0x20000000,data=0x4B4D4746,data-len=4
  *   -device loader,addr=0x20000004,data=<floor us>,data-len=4
+ *   -device loader,addr=0x20000008,data=<product: 0 pot, 1 encoder>,data-len=4
  * QEMU re-applies loader data at every system reset, so the values hold
  * across a 0x02 restart too. On a real part, or with no loader, the magic
  * does not match (RAM is zero in QEMU, garbage on silicon) and the default
@@ -35,6 +37,7 @@
 typedef struct {
     uint32_t magic;
     uint32_t gap_floor_us;
+    uint32_t product; /* km_board_option_product() */
 } prv_config_t;
 
 __attribute__((section(".km_config"), used)) static volatile prv_config_t s_config;
@@ -132,6 +135,16 @@ uint32_t km_hal_uart_gap_floor_us(void)
         return PRV_GAP_FLOOR_DEFAULT_US;
     }
     return s_config.gap_floor_us;
+}
+
+/* Not a UART option, but it lives in the same words (one RAM block the
+ * linker script places at 0x20000000); the board's main reads it. */
+uint32_t km_board_option_product(void)
+{
+    if (s_config.magic != PRV_CONFIG_MAGIC) {
+        return 0u;
+    }
+    return s_config.product;
 }
 
 /* TXDRDY means the byte has left the shift register, so after the last one

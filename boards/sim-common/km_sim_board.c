@@ -6,6 +6,7 @@
 #include "km_hal_sensors.h"
 #include "km_hal_time.h"
 #include "km_plant.h"
+#include "km_app.h"
 
 /* A read after a long pause (debugger, host suspended) advances the plant by
  * at most this much, so one step never integrates minutes at once. */
@@ -15,6 +16,11 @@ static km_plant_t s_plant;
 static km_plant_input_t s_input = {.bridge = KM_PLANT_COAST, .pwm = 0, .ext_torque_unm = 0};
 static uint32_t s_last_tick;
 static uint32_t s_us_per_tick_q16;
+static bool s_encoder;
+/* The encoder product's plant: the default motor with no pot and no end
+ * stops, as the control tests build it (tests/unit/test_control_motor.c).
+ * The plant keeps a pointer, so it lives here. */
+static km_plant_config_t s_encoder_config;
 
 void km_hal_motor_init(void)
 {
@@ -47,7 +53,19 @@ void km_hal_motor_brake(void)
 
 void km_hal_sensors_init(void)
 {
-    (void)km_plant_init(&s_plant, &km_plant_default_config);
+    /* The plant is RAM: every boot (a 0x02 restart included) starts it at
+     * rest at 0, so a multi-turn position reads 0 after a restart (plus the
+     * zero offsets), as an encoder servo without a battery-backed turn
+     * counter does; a pot servo reads its (simulated) shaft, also 0. */
+    s_encoder = km_board_product()->variant == KM_VARIANT_ENCODER;
+    if (s_encoder) {
+        s_encoder_config = km_plant_default_config;
+        s_encoder_config.pot_travel_ddeg = 0;
+        s_encoder_config.endstop_ddeg = 0;
+        (void)km_plant_init(&s_plant, &s_encoder_config);
+    } else {
+        (void)km_plant_init(&s_plant, &km_plant_default_config);
+    }
     s_us_per_tick_q16 = (uint32_t)((1000000ull << 16) / km_hal_time_tick_hz());
     s_last_tick = km_hal_time_now();
 }
@@ -61,7 +79,7 @@ void km_hal_sensors_read(km_sensors_t *out)
     }
     s_last_tick = now;
     km_plant_step(&s_plant, &s_input, dt_us);
-    out->position = km_plant_position_ddeg(&s_plant);
+    out->position = s_encoder ? km_plant_turns_ddeg(&s_plant) : km_plant_position_ddeg(&s_plant);
     out->current_ma = km_plant_current_ma(&s_plant);
     out->voltage_mv = km_plant_voltage_mv(&s_plant);
     out->temperature_c10 = km_plant_temp_dc(&s_plant);

@@ -1,7 +1,12 @@
-/* The product the simulated boards emulate: a potentiometer servo with
- * +-135 deg travel on a 2S Li-ion supply (7.4 V), matching the plant's
- * default parameters (sim/plant/km_plant_default.c). */
+/* The products the simulated boards emulate, on a 2S Li-ion supply (7.4 V)
+ * and the plant's default motor (sim/plant/km_plant_default.c):
+ *  - "KM-SIM-P135", the default: a potentiometer servo, +-135 deg travel;
+ *  - "KM-SIM-ENCODER": a multi-turn encoder servo (0x6F, 0x70 turns), travel
+ *    +-3200.0 deg, no angle limits, on a plant without end stops or pot
+ *    (km_sim_board.c). Chosen before the app starts with
+ *    km_sim_product_select(): host-sim --product, the QEMU option word. */
 #include "km_app.h"
+#include "km_sim_product.h"
 
 /* Position-loop gains and profile limits: the defaults were tuned on the
  * simulated plant of this servo class (docs/tuning.md says how). */
@@ -31,7 +36,39 @@ static const km_product_t s_product = {
     .gains = &s_gains,
 };
 
+/* Same motor, gearbox and supply as the pot product, so the same gains and
+ * speed/current figures; what differs is the variant (§6) and the limits. */
+static const km_product_t s_product_encoder = {
+    .model = "KM-SIM-ENCODER",
+    .firmware_version = 0x00100100u,
+    .variant = KM_VARIANT_ENCODER,
+    .max_current_ma = 2000,
+    .max_speed_dps = 360,
+    .zero_offset1 = 0,
+    .angle_min = 0,               /* 0 = no angle limit (multi-turn) */
+    .angle_max = 0,
+    .voltage_high_v = 9,
+    .voltage_low_v = 6,
+    .current_threshold_ma = 1500,
+    .baud_min_100 = 96,
+    .baud_max_100 = 10000,
+    .current_max_ma = 3000,
+    .speed_max_dps = 720,
+    .travel_min = -32000,         /* +-3200.0 deg: the widest 0x19/0x1A carry (i16) */
+    .travel_max = 32000,
+    .zero_offset2_max = 1800,     /* +-180 deg: an encoder's zero can be anywhere */
+    .voltage_max_v = 20,
+    .gains = &s_gains,
+};
+
+static km_sim_variant_t s_selected = KM_SIM_PRODUCT_POT;
+
+void km_sim_product_select(km_sim_variant_t which)
+{
+    s_selected = which;
+}
+
 const km_product_t *km_board_product(void)
 {
-    return &s_product;
+    return s_selected == KM_SIM_PRODUCT_ENCODER ? &s_product_encoder : &s_product;
 }
