@@ -242,10 +242,29 @@ class GapFloorOption(unittest.TestCase):
         self.assertNotIn("--gap-floor-us", sb.servo_argv("host-sim", "/img", 7001, "/f", None))
         qemu = sb.servo_argv("qemu", "/img.elf", 7001, "/f", None, 1500)
         loaders = [qemu[i + 1] for i, a in enumerate(qemu) if a == "-device"]
-        # magic, then the value, at the linker-placed words (nrf51822.ld .km_config)
+        # magic, then the values, at the linker-placed words (nrf51822.ld
+        # .km_config): with the magic every word is in force, so the product
+        # word is written too (0 = pot)
         self.assertEqual(loaders, ["loader,addr=0x20000000,data=0x4b4d4746,data-len=4",
-                                   "loader,addr=0x20000004,data=0x000005dc,data-len=4"])
+                                   "loader,addr=0x20000004,data=0x000005dc,data-len=4",
+                                   "loader,addr=0x20000008,data=0x00000000,data-len=4"])
         self.assertNotIn("-device", sb.servo_argv("qemu", "/img.elf", 7001, "/f", None))
+
+    def test_product_option(self):
+        sb = load_launcher_module()
+        host = sb.servo_argv("host-sim", "/img", 7001, "/f", None, None, "encoder")
+        self.assertEqual(host[-2:], ["--product", "encoder"])
+        self.assertNotIn("--product", sb.servo_argv("host-sim", "/img", 7001, "/f", None, 0))
+        qemu = sb.servo_argv("qemu", "/img.elf", 7001, "/f", None, None, "encoder")
+        loaders = [qemu[i + 1] for i, a in enumerate(qemu) if a == "-device"]
+        # product alone: the gap floor word gets the servos' default (20000)
+        self.assertEqual(loaders, ["loader,addr=0x20000000,data=0x4b4d4746,data-len=4",
+                                   "loader,addr=0x20000004,data=0x00004e20,data-len=4",
+                                   "loader,addr=0x20000008,data=0x00000001,data-len=4"])
+        r = subprocess.run([sys.executable, LAUNCHER, "--ids", "1", "--port", "0",
+                            "--backend", "host-sim", "--image", FAKE, "--product", "stepper"],
+                           capture_output=True, text=True, timeout=10)
+        self.assertEqual(r.returncode, 2)
 
     def test_build_dir_option_and_environment(self):
         sb = load_launcher_module()
