@@ -6,6 +6,10 @@
 # RUN_SERIAL: the emulators' timing should not compete with the other tests
 # for two cores.
 #
+# encoder: the encoder product (servo-bus --product encoder: model name,
+# 0x6F turns past 360 deg, stops on 0, restart reads 0) and the pot
+# product's refusal of 0x6F, about 3 s per backend.
+#
 # host-sim runs with --gap-floor-us 0, the parser's real inter-byte gap rule
 # (its UART paces bytes at line rate and holds its clock for a late byte, so
 # no floor is needed for frames that reach it whole); QEMU keeps the boards'
@@ -17,7 +21,7 @@ if(KM_PYTHON3_BUS)
     if(backend STREQUAL "host-sim")
       set(gap_args --gap-floor-us 0)
     endif()
-    foreach(which smoke bus)
+    foreach(which smoke bus encoder)
       string(REPLACE "-" "_" tname "${backend}_${which}")
       add_test(NAME bus_${tname}
         COMMAND ${KM_PYTHON3_BUS} ${CMAKE_SOURCE_DIR}/tests/bus/bus_check.py ${which} --backend ${backend} ${gap_args})

@@ -4,6 +4,10 @@
   bus_check.py smoke --backend qemu      one servo: PROTOCOL.md §3 basics
   bus_check.py bus   --backend qemu      three servos: super ID, broadcast,
                                          other servos' responses on the wire
+  bus_check.py encoder --backend host-sim  the encoder product (--product
+                                         encoder to servo-bus): model name,
+                                         0x6F turns it past 360 deg, 0 stops
+                                         it; then the pot product refuses 0x6F
   [--gap-floor-us N]  passed to tools/servo-bus (tests/bus.cmake: 0 for host-sim)
   [--build-dir DIR]   the backend's build tree (default: servo-bus's, which
                       also reads KM_BUILD_QEMU / KM_BUILD_HOST_SIM)
@@ -51,6 +55,8 @@ class Bus:
             argv += ["--gap-floor-us", str(opts.gap_floor_us)]
         if opts.build_dir:
             argv += ["--build-dir", opts.build_dir]
+        if getattr(opts, "product", None):
+            argv += ["--product", opts.product]
         self.proc = subprocess.Popen(argv, stdout=subprocess.PIPE, text=True)
         line = self.proc.stdout.readline().strip()
         if not line.startswith("ready "):
@@ -254,14 +260,78 @@ def bus_test(backend, opts):
         bus.close()
 
 
+def motor_speed(bus, dev_id, dps):
+    return bus.exchange(kmbus.write(dev_id, 0x6F, dps.to_bytes(2, "little", signed=True)), 0,
+                        timeout=0.05)
+
+
+def encoder(backend, opts):
+    """§6 both variants: the encoder product (servo-bus --product encoder)
+    names itself, takes 0x6F and turns past one revolution (no end stops,
+    0x46 multi-turn), stops on 0x6F 0; the pot product refuses 0x6F with
+    status bit 6 and does not move. Wall clock: about 3 s in all."""
+    opts.product = "encoder"
+    bus = Bus(backend, [1], opts)
+    try:
+        r = bus.exchange(kmbus.read(1, 0x0A), 1)
+        check(len(r) == 1 and r[0].params.rstrip(b"\0") == b"KM-SIM-ENCODER",
+              "§5.1 0x0A names the encoder product KM-SIM-ENCODER (%r)"
+              % (r[0].params if r else None))
+        start = read_pos(bus, 1)
+        motor_speed(bus, 1, 360)
+        r = bus.exchange(kmbus.ping(1), 1)
+        check(len(r) == 1 and not r[0].status & 0x40, "§5.4 0x6F 360 deg/s accepted: status bit 6 clear (%s)"
+              % (hex(r[0].status) if r else None))
+        seen = []
+        passed = wait_pos(bus, 1, 3700, 2 ** 31 - 1, 3.0, seen)
+        check(start is not None and abs(start) <= 5 and passed is not None
+              and all(b >= a for a, b in zip(seen, seen[1:])),
+              "§5.4 0x6F: 0x46 from %s increases steadily past 360.0 deg (370.0 after %s ms, "
+              "wall clock; last read %s)" % (start, None if passed is None else round(passed * 1000),
+                                              seen[-1] if seen else None))
+        motor_speed(bus, 1, 0)
+        time.sleep(0.3)
+        a = read_pos(bus, 1)
+        time.sleep(0.2)
+        b = read_pos(bus, 1)
+        check(a is not None and a == b and a >= 3700,
+              "§5.4 0x6F 0 stops it: 0x46 %s then %s 200 ms later" % (a, b))
+        # The plant is RAM (process memory on host-sim): a restart starts it
+        # again at rest at 0, and the multi-turn count with it.
+        check(bus.exchange(kmbus.write(1, 0x02, bytes.fromhex("E1E2E3E4")), 0, timeout=0.3) == [],
+              "§3 restart: no answer")
+        check(wait_ping(bus, 1), "answers again after the restart")
+        pos = read_pos(bus, 1)
+        check(pos is not None and abs(pos) <= 5,
+              "after a restart the multi-turn position reads %s: the simulated shaft starts at 0 "
+              "(its turn count is RAM, not kept)" % pos)
+    finally:
+        bus.close()
+    opts.product = "pot"
+    bus = Bus(backend, [1], opts)
+    try:
+        r = bus.exchange(kmbus.read(1, 0x0A), 1)
+        check(len(r) == 1 and r[0].params.rstrip(b"\0") == b"KM-SIM-P135",
+              "§5.1 0x0A names the pot product KM-SIM-P135")
+        motor_speed(bus, 1, 360)
+        r = bus.exchange(kmbus.ping(1), 1)
+        check(len(r) == 1 and r[0].status & 0x40, "§6 the pot product refuses 0x6F: the next ping has "
+              "status bit 6 (%s)" % (hex(r[0].status) if r else None))
+        time.sleep(0.3)
+        pos = read_pos(bus, 1)
+        check(pos is not None and abs(pos) <= 5, "§6 ... and nothing moves: 0x46 %s" % pos)
+    finally:
+        bus.close()
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("which", choices=["smoke", "bus"])
+    ap.add_argument("which", choices=["smoke", "bus", "encoder"])
     ap.add_argument("--backend", choices=["qemu", "host-sim"], required=True)
     ap.add_argument("--gap-floor-us", type=int, help="passed to tools/servo-bus")
     ap.add_argument("--build-dir", help="passed to tools/servo-bus")
     a = ap.parse_args()
-    (smoke if a.which == "smoke" else bus_test)(a.backend, a)
+    {"smoke": smoke, "bus": bus_test, "encoder": encoder}[a.which](a.backend, a)
     print("%s %s: all checks passed" % (a.backend, a.which))
 
 
