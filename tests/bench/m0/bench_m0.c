@@ -88,6 +88,18 @@ static void m0h_info(const char *name, uint32_t v)
     km_semihost_write0("\n");
 }
 
+/* A line "desc LABEL TEXT": what region LABEL measures, for the table of
+ * tools/bench-m0 (control_tick_* regions are listed by it without a change
+ * to the tool). */
+static void m0h_desc(const char *label, const char *text)
+{
+    km_semihost_write0("desc ");
+    km_semihost_write0(label);
+    km_semihost_write0(" ");
+    km_semihost_write0(text);
+    km_semihost_write0("\n");
+}
+
 /* ---- validation: loops of known length ------------------------------- */
 
 static void m0h_validate(void)
@@ -338,6 +350,21 @@ static void m0h_control(void)
         }
     }
     m0h_check("control_moving", live.running);
+
+    /* Motor mode (0x6E, constant PWM 50 %): the open-loop path of the tick. */
+    const uint8_t pwm[3] = {0x6E, 0xF4, 0x01};
+    m0h_dispatch("write_0x6E_motor", M0_ID, 0x03, pwm, 3, false, false);
+    m0h_desc("control_tick_motor_pwm", "motor mode, constant PWM 500 (0x6E)");
+    for (unsigned t = 0; t < 10; t++) {
+        m0h_region("control_tick_motor_pwm");
+        const km_control_params_t *params = m0h_params();
+        m0_begin();
+        km_control_step(&s_control, &in, params, 1000u, &live, &bridge);
+        m0_end();
+        km_servo_set_live(&s_servo, &live);
+        in.position += 5;
+    }
+    m0h_check("control_motor_running", bridge.mode == KM_BRIDGE_PWM && bridge.pwm != 0);
 }
 
 int main(void)
