@@ -15,8 +15,10 @@
 Starts tools/servo-bus (which runs the built images), waits for its `ready`
 line, then acts as the bus master. Exits non-zero on the first mismatch.
 
-Both backends: the servo moves (torque on, 0x65 to +45.0 deg in 500 ms,
-0x46 read until it arrives, 0x66 back, torque off).
+Both backends, smoke and bus: the servo moves (torque on, 0x65 to +45.0 deg
+in 500 ms, 0x46 read until it arrives, 0x66 back, 0x70 motor mode for 0.5 s
+that stops by itself, torque off); on the bus, a 0x83 multi-ID 0x65 sends
+all three to their own targets at once and each arrives.
 
 host-sim only (its UART runs at the servo's baud and stamps each byte with
 its wire time, so both are faithful there): a burst far over the servo's
@@ -196,7 +198,68 @@ def check_move(bus, dev_id):
     back = wait_pos(bus, dev_id, -10, 10, 3.0, seen)
     check(back is not None, "§5.4 0x66 back to 0 at 180 deg/s: within 1 deg after %s ms"
           % (None if back is None else round((back + 0.02) * 1000)))
+    check_motor_for_time(bus, dev_id)
     bus.exchange(kmbus.write(dev_id, 0x64, b"\x00"), 0, timeout=0.1)
+    r = bus.exchange(kmbus.read(dev_id, 0x64), 1, timeout=0.5)
+    check(len(r) == 1 and r[0].params == b"\x00", "§5.4 torque off: 0x64 reads 0")
+
+
+def check_motor_for_time(bus, dev_id):
+    """§5.4 0x70 (every variant): run at PWM 500 for 0.5 s, then brake.
+    The shaft turns while it runs (0x46 rises, status bit 7 set) and stops
+    by itself: two reads 200 ms apart agree once the time is up."""
+    start = read_pos(bus, dev_id)
+    control = 0x10 | 0x02  # p1 = time (0.1 s), p2 = PWM, brake after, positive
+    bus.exchange(kmbus.write(dev_id, 0x70, bytes([control]) + (5).to_bytes(2, "little")
+                             + (500).to_bytes(2, "little")), 0, timeout=0.02)
+    time.sleep(0.2)
+    mid = read_pos(bus, dev_id)
+    r = bus.exchange(kmbus.read(dev_id, 0x01), 1, timeout=0.5)
+    running = len(r) == 1 and r[0].params[:1] and r[0].params[0] & 0x80
+    check(start is not None and mid is not None and mid > start + 50 and running,
+          "§5.4 0x70 PWM 500 for 0.5 s: running (status %s), 0x46 from %s to %s after 200 ms "
+          "(wall clock)" % (r[0].params.hex() if r else None, start, mid))
+    time.sleep(1.0)
+    a = read_pos(bus, dev_id)
+    time.sleep(0.2)
+    b = read_pos(bus, dev_id)
+    r = bus.exchange(kmbus.read(dev_id, 0x01), 1, timeout=0.5)
+    stopped = len(r) == 1 and r[0].params[:1] and not r[0].params[0] & 0x80
+    check(a is not None and a == b and a > mid and stopped,
+          "§5.4 0x70 ... stops by itself after its time: 0x46 %s then %s 200 ms later, "
+          "status bit 7 clear (%s)" % (a, b, r[0].params.hex() if r else None))
+
+
+def check_multi_move(bus, ids):
+    """§4.2 + §5.4 on a bus: 0x83 turns all torques on, a second 0x83 sends
+    each servo its own 0x65 target (one frame, all start together); every
+    servo arrives at its own target, read back by 0x46; then 0x83 back to 0
+    and torque off by broadcast."""
+    targets = {i: t for i, t in zip(ids, (300, -300, 600))}
+
+    def multi(addr, items):
+        k = len(next(iter(items.values())))
+        body = bytes([k]) + b"".join(bytes([i]) + d for i, d in items.items())
+        return kmbus.encode_command(kmbus.ID_BROADCAST, kmbus.MULTI_WRITE, addr, body)
+
+    bus.exchange(multi(0x64, {i: b"\x02" for i in ids}), 0, timeout=0.1)
+    bus.exchange(multi(0x65, {i: t.to_bytes(2, "little", signed=True) + (500).to_bytes(2, "little")
+                              for i, t in targets.items()}), 0, timeout=0.02)
+    arrived = {}
+    for i, t in targets.items():
+        seen = []
+        if wait_pos(bus, i, t - 10, t + 10, 3.0, seen) is not None:
+            arrived[i] = seen[-1]
+    check(len(arrived) == len(ids),
+          "§4.2 0x83 of 0x65 (+30.0, -30.0, +60.0 deg in 500 ms): each servo arrived within "
+          "1 deg of its own target: %s" % arrived)
+    bus.exchange(multi(0x66, {i: (0).to_bytes(2, "little") + (180).to_bytes(2, "little") for i in ids}),
+                 0, timeout=0.02)
+    back = [i for i in ids if wait_pos(bus, i, -10, 10, 3.0, []) is not None]
+    check(back == ids, "§4.2 0x83 of 0x66 back to 0: %s of %s arrived" % (back, ids))
+    bus.exchange(kmbus.write(kmbus.ID_BROADCAST, 0x64, b"\x00"), 0, timeout=0.3)
+    r = bus.exchange(kmbus.read(kmbus.ID_SUPER, 0x64), len(ids))
+    check([f.params for f in r] == [b"\x00"] * len(ids), "§5.4 broadcast torque off: every 0x64 reads 0")
 
 
 def smoke(backend, opts):
@@ -252,6 +315,8 @@ def bus_test(backend, opts):
         check(bus.exchange(fake, 0, timeout=0.8) == [], "§2 a response frame with F9 FF inside is skipped whole")
         r = bus.exchange(kmbus.ping(1), 1)
         check(len(r) == 1 and r[0].id == 1 and r[0].status == 0, "servo 1 still answers, status clean")
+        check_move(bus, 2)
+        check_multi_move(bus, ids)
         if backend == "host-sim":
             # the other two servos hear the burst and all 40 answers too
             check_burst(bus, 2, 40)
