@@ -296,6 +296,41 @@ int32_t km_plant_turns_ddeg(const km_plant_t *p)
     return prv_pos_rounded(p);
 }
 
+uint16_t km_plant_encoder_counts(const km_plant_t *p)
+{
+    /* The angle within one turn, [0, 3600) x 0.1 deg, to the nearest count. */
+    int32_t within = p->pos_ddeg % 3600;
+    if (within < 0) {
+        within += 3600;
+    }
+    const uint32_t c = ((uint32_t)within * KM_PLANT_ENCODER_COUNTS + 1800u) / 3600u;
+    return (uint16_t)(c % KM_PLANT_ENCODER_COUNTS);
+}
+
+void km_plant_get_physics(const km_plant_t *p, km_plant_physics_t *out)
+{
+    out->pos_ddeg = p->pos_ddeg;
+    out->pos_rem_ndeg = p->pos_rem_ndeg;
+    out->speed_mdps = p->speed_mdps;
+    out->temp_uc = p->temp_uc;
+    out->supply_mv = p->supply_mv;
+    out->ambient_uc = p->ambient_uc;
+    out->faults = p->faults;
+}
+
+void km_plant_set_physics(km_plant_t *p, const km_plant_physics_t *in)
+{
+    p->pos_ddeg = in->pos_ddeg;
+    p->pos_rem_ndeg = prv_clamp32(in->pos_rem_ndeg, -(NDEG_PER_DDEG - 1), NDEG_PER_DDEG - 1);
+    p->speed_mdps = in->speed_mdps;
+    p->temp_uc = in->temp_uc;
+    km_plant_set_supply_mv(p, in->supply_mv);
+    p->ambient_uc = in->ambient_uc;
+    p->faults = in->faults;
+    p->current_ma = 0;
+    p->supply_ma = 0;
+}
+
 int32_t km_plant_speed_mdps(const km_plant_t *p)
 {
     return p->speed_mdps;

@@ -40,6 +40,9 @@
 
 /* Potentiometer ADC full scale (12-bit, as on servo MCUs). */
 #define KM_PLANT_POT_ADC_MAX 4095u
+/* Counts per turn of the encoder product's single-turn absolute encoder
+ * (12-bit, as common magnetic angle sensors). */
+#define KM_PLANT_ENCODER_COUNTS 4096u
 
 typedef enum {
     KM_PLANT_DRIVE = 0, /* PWM drive, in.pwm sets duty and direction */
@@ -114,6 +117,25 @@ typedef struct {
     uint32_t time_us_part;   /* µs part of time_ms */
 } km_plant_t;
 
+/* What a restart of the servo's MCU leaves as it is: the shaft (position,
+ * speed), the winding's heat and the environment. The current is not kept:
+ * the bridge is off across a reset and the winding's electrical time
+ * constant is far below a boot. */
+typedef struct {
+    int32_t pos_ddeg;
+    int32_t pos_rem_ndeg;
+    int32_t speed_mdps;
+    int32_t temp_uc;
+    int32_t supply_mv;
+    int32_t ambient_uc;
+    uint32_t faults;
+} km_plant_physics_t;
+
+void km_plant_get_physics(const km_plant_t *p, km_plant_physics_t *out);
+/* Restores what km_plant_get_physics gave (values out of range are clamped
+ * as the setters clamp them). */
+void km_plant_set_physics(km_plant_t *p, const km_plant_physics_t *in);
+
 /* Set up a plant at rest at position 0, ambient temperature, full supply.
  * Returns false (plant unusable) if cfg is NULL or its parameters are invalid. */
 bool km_plant_init(km_plant_t *p, const km_plant_config_t *cfg);
@@ -130,7 +152,8 @@ void km_plant_set_faults(km_plant_t *p, uint32_t faults); /* KM_PLANT_FAULT_* ma
 /* Readings (what the board's sensors would report). */
 int16_t km_plant_position_ddeg(const km_plant_t *p);  /* potentiometer, 0.1°, clamped to ±pot travel */
 uint16_t km_plant_pot_adc(const km_plant_t *p);       /* same as 12-bit ADC counts, 0 = -travel, 4095 = +travel */
-int32_t km_plant_turns_ddeg(const km_plant_t *p);     /* multi-turn "encoder" position, 0.1°, unclamped */
+int32_t km_plant_turns_ddeg(const km_plant_t *p);     /* multi-turn shaft position, 0.1°, unclamped */
+uint16_t km_plant_encoder_counts(const km_plant_t *p); /* single-turn absolute encoder, 0..KM_PLANT_ENCODER_COUNTS-1 */
 int32_t km_plant_speed_dps(const km_plant_t *p);      /* output speed, °/s (rounded) */
 int32_t km_plant_speed_mdps(const km_plant_t *p);     /* output speed, m°/s */
 int32_t km_plant_current_ma(const km_plant_t *p);     /* motor current, mA, signed; a shunt reads its magnitude */
