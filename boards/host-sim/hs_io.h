@@ -16,6 +16,8 @@ bool hs_uart_open_pty(void);
  * take them over there (returns false on a first start). */
 void hs_uart_prepare_exec(void);
 bool hs_uart_adopt(void);
+/* The simulated plant's physics to the re-executed image (hs_plant_keep.c). */
+void hs_plant_prepare_exec(void);
 
 /* --gap-floor-us: what km_hal_uart_gap_floor_us() reports (default
  * HS_GAP_FLOOR_DEFAULT_US). */

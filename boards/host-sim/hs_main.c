@@ -16,11 +16,14 @@
  * --product pot|encoder: the product emulated (boards/sim-common/
  * km_sim_product.c): "KM-SIM-P135" potentiometer (default) or
  * "KM-SIM-ENCODER" multi-turn, on a plant without end stops. It survives a
- * restart (same arguments). The plant is process memory, so a restart
- * (0x02, a new process image) starts it again at rest at 0: the encoder
- * product then reports a multi-turn position of 0 (plus its zero offsets),
- * whatever it had turned before, as an encoder servo whose turn count is not
- * kept through a reset; the shaft does not keep turning across it. */
+ * restart (same arguments). The plant is physics, not MCU state: a restart
+ * (0x02, a new process image) hands it over in the environment
+ * (hs_plant_keep.c), so the shaft stays where it was. The encoder product
+ * reads a single-turn absolute encoder and counts turns in RAM
+ * (control/km_turn_counter.h), so after a restart its 0x46 is the angle
+ * within one turn, [0, 360.0) deg, as on an encoder servo without a
+ * battery-backed turn counter. A process started by hand is a power-on:
+ * the shaft at rest at 0. */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -43,8 +46,8 @@ static int prv_usage(const char *argv0)
             "                    exceeds the parser's max(10 byte times, 1 ms); default %u\n"
             "                    (host scheduling stalls); 0 = the real rule\n"
             "  --product P       pot (default, KM-SIM-P135) or encoder (KM-SIM-ENCODER,\n"
-            "                    multi-turn); a restart re-executes with it and starts\n"
-            "                    the plant again at 0, so the encoder reads 0 after it\n"
+            "                    multi-turn); a restart keeps it and the shaft where it\n"
+            "                    is; the encoder then reads its angle within one turn\n"
             "  --baud N          accepted, ignored: the line rate is the servo's register 0x10\n",
             argv0, HS_GAP_FLOOR_DEFAULT_US);
     return 2;

@@ -57,6 +57,7 @@ _Noreturn static void prv_restart(km_reset_cause_t cause)
     setenv(PRV_CAUSE_ENV, buf, 1);
     fflush(NULL);
     hs_uart_prepare_exec();
+    hs_plant_prepare_exec();
     execv("/proc/self/exe", s_argv);
     perror("host-sim: restart failed");
     exit(3);

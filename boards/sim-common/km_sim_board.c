@@ -7,6 +7,8 @@
 #include "km_hal_time.h"
 #include "km_plant.h"
 #include "km_app.h"
+#include "km_sim_board.h"
+#include "km_turn_counter.h"
 
 /* A read after a long pause (debugger, host suspended) advances the plant by
  * at most this much, so one step never integrates minutes at once. */
@@ -17,6 +19,7 @@ static km_plant_input_t s_input = {.bridge = KM_PLANT_COAST, .pwm = 0, .ext_torq
 static uint32_t s_last_tick;
 static uint32_t s_us_per_tick_q16;
 static bool s_encoder;
+static km_turn_counter_t s_turns; /* the encoder product's multi-turn count */
 /* The encoder product's plant: the default motor with no pot and no end
  * stops, as the control tests build it (tests/unit/test_control_motor.c).
  * The plant keeps a pointer, so it lives here. */
@@ -53,10 +56,12 @@ void km_hal_motor_brake(void)
 
 void km_hal_sensors_init(void)
 {
-    /* The plant is RAM: every boot (a 0x02 restart included) starts it at
-     * rest at 0, so a multi-turn position reads 0 after a restart (plus the
-     * zero offsets), as an encoder servo without a battery-backed turn
-     * counter does; a pot servo reads its (simulated) shaft, also 0. */
+    /* The plant is physics: at power-on it starts at rest at 0; after a
+     * restart the board hands back the shaft as the last boot left it. A
+     * pot servo reads its shaft as it is; the encoder product reads a
+     * single-turn absolute encoder and counts turns in RAM, so after a
+     * restart its 0x46 is the angle within one turn, [0, 360.0) deg, before
+     * the zero offsets (PROTOCOL.md §5.3, §6; docs/protocol-decisions.md). */
     s_encoder = km_board_product()->variant == KM_VARIANT_ENCODER;
     if (s_encoder) {
         s_encoder_config = km_plant_default_config;
@@ -66,6 +71,11 @@ void km_hal_sensors_init(void)
     } else {
         (void)km_plant_init(&s_plant, &km_plant_default_config);
     }
+    km_plant_physics_t kept;
+    if (km_sim_board_recall(&kept)) {
+        km_plant_set_physics(&s_plant, &kept);
+    }
+    km_turn_counter_init(&s_turns, (uint16_t)KM_PLANT_ENCODER_COUNTS, km_plant_encoder_counts(&s_plant));
     s_us_per_tick_q16 = (uint32_t)((1000000ull << 16) / km_hal_time_tick_hz());
     s_last_tick = km_hal_time_now();
 }
@@ -79,7 +89,11 @@ void km_hal_sensors_read(km_sensors_t *out)
     }
     s_last_tick = now;
     km_plant_step(&s_plant, &s_input, dt_us);
-    out->position = s_encoder ? km_plant_turns_ddeg(&s_plant) : km_plant_position_ddeg(&s_plant);
+    km_plant_physics_t physics;
+    km_plant_get_physics(&s_plant, &physics);
+    km_sim_board_keep(&physics);
+    out->position = s_encoder ? km_turn_counter_update(&s_turns, km_plant_encoder_counts(&s_plant))
+                              : km_plant_position_ddeg(&s_plant);
     out->current_ma = km_plant_current_ma(&s_plant);
     out->voltage_mv = km_plant_voltage_mv(&s_plant);
     out->temperature_c10 = km_plant_temp_dc(&s_plant);
@@ -90,3 +104,4 @@ km_plant_t *km_sim_board_plant(void)
 {
     return &s_plant;
 }
+

@@ -2,8 +2,20 @@
 #ifndef KM_SIM_BOARD_H
 #define KM_SIM_BOARD_H
 
+#include <stdbool.h>
+
 #include "km_plant.h"
 
 km_plant_t *km_sim_board_plant(void);
+
+/* The shaft, its heat and the environment are physics, not MCU state: a
+ * restart of the firmware leaves them as they are. Each simulated board
+ * carries them across its restart (QEMU: .noinit RAM; host-sim: the
+ * re-exec's environment) by providing these two:
+ *   keep:   called after every plant step with the physics now;
+ *   recall: at boot, what the last keep before this boot's restart held;
+ *           false at power-on (a fresh plant at rest at 0). */
+void km_sim_board_keep(const km_plant_physics_t *ph);
+bool km_sim_board_recall(km_plant_physics_t *out);
 
 #endif

@@ -7,7 +7,8 @@
   bus_check.py encoder --backend host-sim  the encoder product (--product
                                          encoder to servo-bus): model name,
                                          0x6F turns it past 360 deg, 0 stops
-                                         it; then the pot product refuses 0x6F
+                                         it, a restart reads the angle within
+                                         one turn; the pot product refuses 0x6F
   [--gap-floor-us N]  passed to tools/servo-bus (tests/bus.cmake: 0 for host-sim)
   [--build-dir DIR]   the backend's build tree (default: servo-bus's, which
                       also reads KM_BUILD_QEMU / KM_BUILD_HOST_SIM)
@@ -361,15 +362,17 @@ def encoder(backend, opts):
         b = read_pos(bus, 1)
         check(a is not None and a == b and a >= 3700,
               "§5.4 0x6F 0 stops it: 0x46 %s then %s 200 ms later" % (a, b))
-        # The plant is RAM (process memory on host-sim): a restart starts it
-        # again at rest at 0, and the multi-turn count with it.
+        # The shaft is physics: a restart of the MCU leaves it where it is.
+        # The encoder is absolute within one turn and the turn count is RAM,
+        # so after the restart 0x46 is the angle within one turn.
         check(bus.exchange(kmbus.write(1, 0x02, bytes.fromhex("E1E2E3E4")), 0, timeout=0.3) == [],
               "§3 restart: no answer")
         check(wait_ping(bus, 1), "answers again after the restart")
         pos = read_pos(bus, 1)
-        check(pos is not None and abs(pos) <= 5,
-              "after a restart the multi-turn position reads %s: the simulated shaft starts at 0 "
-              "(its turn count is RAM, not kept)" % pos)
+        check(pos is not None and abs(pos - a % 3600) <= 1,
+              "§6 after a restart the multi-turn position reads %s: the shaft stayed at %.1f deg, "
+              "read as its angle within one turn (%.1f deg; the turn count is RAM)"
+              % (pos, a / 10, (a % 3600) / 10))
     finally:
         bus.close()
     opts.product = "pot"

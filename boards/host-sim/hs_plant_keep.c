@@ -1,0 +1,56 @@
+/* host-sim: the simulated plant's physics across a restart (km_sim_board.h).
+ * A restart re-executes the program, so the last physics kept are handed to
+ * the next image in the environment (KM_HS_PLANT), as the reset cause and
+ * the bus descriptors are; a process started by hand has no such variable
+ * and starts a fresh plant (a power-on). */
+#define _GNU_SOURCE /* setenv, unsetenv */
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "hs_io.h"
+#include "km_sim_board.h"
+
+#define PRV_PLANT_ENV "KM_HS_PLANT"
+
+static km_plant_physics_t s_kept;
+static bool s_have;
+
+void km_sim_board_keep(const km_plant_physics_t *ph)
+{
+    s_kept = *ph;
+    s_have = true;
+}
+
+void hs_plant_prepare_exec(void)
+{
+    if (!s_have) {
+        return;
+    }
+    char buf[160];
+    snprintf(buf, sizeof buf, "%" PRId32 " %" PRId32 " %" PRId32 " %" PRId32 " %" PRId32 " %" PRId32 " %" PRIu32,
+             s_kept.pos_ddeg, s_kept.pos_rem_ndeg, s_kept.speed_mdps, s_kept.temp_uc, s_kept.supply_mv,
+             s_kept.ambient_uc, s_kept.faults);
+    setenv(PRV_PLANT_ENV, buf, 1);
+}
+
+bool km_sim_board_recall(km_plant_physics_t *out)
+{
+    const char *v = getenv(PRV_PLANT_ENV);
+    if (v == NULL) {
+        return false;
+    }
+    km_plant_physics_t ph;
+    memset(&ph, 0, sizeof ph);
+    const int n = sscanf(v, "%" SCNd32 " %" SCNd32 " %" SCNd32 " %" SCNd32 " %" SCNd32 " %" SCNd32 " %" SCNu32,
+                         &ph.pos_ddeg, &ph.pos_rem_ndeg, &ph.speed_mdps, &ph.temp_uc, &ph.supply_mv,
+                         &ph.ambient_uc, &ph.faults);
+    unsetenv(PRV_PLANT_ENV); /* nothing started from here inherits it */
+    if (n != 7) {
+        fprintf(stderr, "host-sim: ignoring a malformed %s: a fresh plant\n", PRV_PLANT_ENV);
+        return false;
+    }
+    *out = ph;
+    return true;
+}
