@@ -182,6 +182,10 @@ static bool prv_run(const prv_scenario_t *sc, prv_figures_t *f)
     const int32_t d = target - start;
     const int32_t sgn = d < 0 ? -1 : 1;
     const int32_t dabs = prv_abs(d);
+    if (dabs == 0) {
+        prv_broken(sc, "the shaft is already at the target: no step to measure");
+        return false;
+    }
     int32_t t10 = -1, t90 = -1, last_out = 0, over = 0;
     uint32_t stop = MAX_MS;
     bool started = false;
