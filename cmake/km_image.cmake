@@ -6,7 +6,15 @@
 # Emits <name>.elf (the target, named <name>), <name>.bin, <name>.hex and
 # <name>.map next to it, and prints arm-none-eabi-size after each link.
 # CPU and libc flags come from the board's board.cmake, not from here.
+#
+# Every image is then checked by tools/image-check (no heap linked; static
+# worst-case stack against the linker script's reserve; on boards whose
+# config names RAM roots, the flash-busy interrupt paths all in RAM), with
+# the board's boards/<board>/image-check.json as the written-down
+# assumptions. A failed check fails the build, and keeps failing it: the
+# stamp file is only written when every check passes.
 include_guard(GLOBAL)
+find_package(Python3 COMPONENTS Interpreter REQUIRED)
 
 function(km_add_image)
   cmake_parse_arguments(IMG "" "NAME;LINKER_SCRIPT" "SOURCES;LIBS;DEFINES" ${ARGN})
@@ -29,4 +37,21 @@ function(km_add_image)
     BYPRODUCTS ${out}.bin ${out}.hex ${out}.map
     COMMENT "${IMG_NAME}: .bin, .hex, .map and size"
     VERBATIM)
+
+  set(check_cfg ${KM_BOARD_DIR}/image-check.json)
+  set(check_args)
+  set(check_deps)
+  if(EXISTS ${check_cfg})
+    set(check_args --config ${check_cfg})
+    set(check_deps ${check_cfg})
+  endif()
+  add_custom_command(OUTPUT ${out}.check
+    COMMAND ${Python3_EXECUTABLE} ${CMAKE_SOURCE_DIR}/tools/image-check
+            $<TARGET_FILE:${IMG_NAME}> ${check_args} --su-root ${CMAKE_BINARY_DIR}
+            --stamp ${out}.check
+    DEPENDS ${IMG_NAME} ${CMAKE_SOURCE_DIR}/tools/image-check ${CMAKE_SOURCE_DIR}/tools/kmelf.py
+            ${check_deps}
+    COMMENT "${IMG_NAME}: heap, stack and flash-busy checks (tools/image-check)"
+    VERBATIM)
+  add_custom_target(${IMG_NAME}-check ALL DEPENDS ${out}.check)
 endfunction()
