@@ -1,0 +1,162 @@
+/* Protection supervisor: the four state machines, their timers and the
+ * action of the highest active protection (contract in km_protect.h). */
+#include "km_protect.h"
+
+#include <string.h>
+
+#define PRV_N 4u
+#define PRV_US_PER_100MS 100000u
+
+/* §5.2 priority, highest first: voltage > temperature > current > stall. */
+static const uint8_t s_priority[PRV_N] = {KM_PROT_VOLTAGE, KM_PROT_TEMPERATURE, KM_PROT_CURRENT, KM_PROT_STALL};
+
+static uint8_t prv_index(uint8_t bit)
+{
+    return bit == KM_PROT_VOLTAGE ? 0u : bit == KM_PROT_CURRENT ? 1u : bit == KM_PROT_TEMPERATURE ? 2u : 3u;
+}
+
+static int32_t prv_abs(int32_t v)
+{
+    return v < 0 ? -v : v;
+}
+
+void km_protect_init(km_protect_t *s)
+{
+    memset(s, 0, sizeof *s);
+}
+
+uint32_t km_protect_detect_us(const km_control_params_t *p, uint8_t bit)
+{
+    uint32_t t;
+    if (bit == KM_PROT_CURRENT) {
+        t = (uint32_t)p->current_time_100ms * PRV_US_PER_100MS;
+    } else if (bit == KM_PROT_STALL) {
+        t = (uint32_t)p->stall_time_100ms * PRV_US_PER_100MS;
+    } else {
+        t = KM_PROTECT_FIXED_TIME_US;
+    }
+    return t;
+}
+
+/* Is the excursion of each protection present? Temperature uses its
+ * release threshold once tripped; stall needs the shaft to stay put. */
+static uint8_t prv_excursions(km_protect_t *s, const km_protect_in_t *in, const km_control_params_t *p)
+{
+    uint8_t over = 0;
+    const int32_t high_mv = (int32_t)p->voltage_high_v * 1000;
+    const int32_t low_mv = (int32_t)p->voltage_low_v * 1000;
+    if ((p->voltage_high_v != 0u && in->voltage_mv > high_mv) ||
+        (p->voltage_low_v != 0u && in->voltage_mv < low_mv)) {
+        over |= KM_PROT_VOLTAGE;
+    }
+
+    int32_t temp_limit_c10 = (int32_t)p->temp_trip_c * 10;
+    if ((s->active & KM_PROT_TEMPERATURE) != 0u) {
+        temp_limit_c10 -= (int32_t)p->temp_hysteresis_c * 10;
+    }
+    if (in->temperature_c10 >= temp_limit_c10) {
+        over |= KM_PROT_TEMPERATURE;
+    }
+
+    if (prv_abs(in->current_ma) > (int32_t)p->current_trip_ma) {
+        over |= KM_PROT_CURRENT;
+    }
+
+    if (prv_abs(in->drive_pwm) >= (int32_t)p->stall_pwm && p->stall_pwm != 0u) {
+        if (!s->stall_anchored || prv_abs(in->position - s->stall_anchor) > KM_PROTECT_STALL_WINDOW) {
+            /* first driven tick, or it moved on: timing starts again here */
+            s->stall_anchor = in->position;
+            if (s->stall_anchored) {
+                s->timer_us[3] = 0u;
+            }
+            s->stall_anchored = true;
+        }
+        over |= KM_PROT_STALL;
+    } else {
+        s->stall_anchored = false;
+    }
+    return over;
+}
+
+static uint8_t prv_action_bits(const km_control_params_t *p, uint8_t bit)
+{
+    return (uint8_t)((p->prot_state >> (2u * prv_index(bit))) & 3u);
+}
+
+km_prot_action_t km_protect_step(km_protect_t *s, const km_protect_in_t *in, const km_control_params_t *p,
+                                 uint32_t dt_us, km_protect_events_t *ev)
+{
+    ev->tripped = 0;
+    ev->released = 0;
+
+    /* A disabled protection is released at once and not watched. */
+    const uint8_t enabled = (uint8_t)(p->prot_enable & KM_PROT_ALL);
+    if ((s->active & (uint8_t)~enabled) != 0u) {
+        ev->released |= (uint8_t)(s->active & (uint8_t)~enabled);
+        s->active &= enabled;
+    }
+
+    const uint8_t over = (uint8_t)(prv_excursions(s, in, p) & enabled);
+    s->over = over;
+    for (uint8_t i = 0; i < PRV_N; i++) {
+        const uint8_t bit = (uint8_t)(1u << i);
+        if ((enabled & bit) == 0u) {
+            s->timer_us[i] = 0u;
+            continue;
+        }
+        const uint32_t t_detect = km_protect_detect_us(p, bit);
+        if ((over & bit) != 0u) {
+            const uint32_t up = s->timer_us[i] + dt_us;
+            s->timer_us[i] = up > t_detect ? t_detect : up;
+            if ((s->active & bit) == 0u && s->timer_us[i] >= t_detect) {
+                s->active |= bit;
+                ev->tripped |= bit;
+            }
+        } else {
+            s->timer_us[i] = s->timer_us[i] > dt_us ? s->timer_us[i] - dt_us : 0u;
+            if ((s->active & bit) != 0u && s->timer_us[i] == 0u && (p->prot_release & bit) == 0u) {
+                s->active &= (uint8_t)~bit; /* automatic release: absent for T */
+                ev->released |= bit;
+            }
+        }
+    }
+
+    for (uint8_t k = 0; k < PRV_N; k++) {
+        const uint8_t bit = s_priority[k];
+        if ((s->active & bit) == 0u) {
+            continue;
+        }
+        const uint8_t a = prv_action_bits(p, bit);
+        if (a == 0u) {
+            return KM_PROT_ACT_FREE;
+        }
+        if (a == 1u || !in->servo_mode || bit == KM_PROT_VOLTAGE || bit == KM_PROT_TEMPERATURE) {
+            return KM_PROT_ACT_BRAKE;
+        }
+        return KM_PROT_ACT_HOLD;
+    }
+    return KM_PROT_ACT_NONE;
+}
+
+bool km_protect_clear(km_protect_t *s, uint8_t mask)
+{
+    mask &= KM_PROT_ALL;
+    if ((s->active & mask & s->over) != 0u) {
+        return false;
+    }
+    for (uint8_t i = 0; i < PRV_N; i++) {
+        if ((s->active & mask & (1u << i)) != 0u) {
+            s->timer_us[i] = 0u;
+        }
+    }
+    s->active &= (uint8_t)~mask;
+    return true;
+}
+
+km_prot_state_t km_protect_state(const km_protect_t *s, uint8_t bit)
+{
+    if ((s->active & bit) != 0u) {
+        return KM_PROT_TRIPPED;
+    }
+    return s->timer_us[prv_index(bit)] != 0u ? KM_PROT_PENDING : KM_PROT_NORMAL;
+}
