@@ -125,7 +125,7 @@ class Image:
                 continue
             if cur is None:
                 continue
-            m = re.match(r"^\s+([0-9a-f]+):\s+(\S+)\s*(.*)$", line)
+            m = re.match(r"^\s*([0-9a-f]+):\s+(\S+)\s*(.*)$", line)
             if not m:
                 continue
             addr, op, args = int(m.group(1), 16), m.group(2), m.group(3)
@@ -206,8 +206,11 @@ class Image:
             elif i.op == "mov" and i.args.replace(" ", "").startswith("pc,"):
                 f.indirect.append(i)
             dest = i.args.split(",")[0].strip()
+            src = i.args.split(",")[-1].strip()
             if i.lit is not None:
                 last_lit[dest] = ("lit", i.lit)
+            elif i.op == "mov" and src in last_lit:
+                last_lit[dest] = last_lit[src]  # a linker veneer: "ldr r0, =fn; mov ip, r0"
             else:
                 last_lit.pop(dest, None)
 

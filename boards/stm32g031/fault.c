@@ -72,7 +72,8 @@ void g0_stack_paint(void)
     }
 }
 
-bool g0_stack_guard_intact(void)
+/* From RAM: SysTick calls it every millisecond, flash erases included. */
+G0_RAMFUNC(g0_stack_guard_intact) bool g0_stack_guard_intact(void)
 {
     uint32_t diff = 0u;
     for (const volatile uint32_t *p = __stack_limit; p < __stack_guard_end; p++) {

@@ -3,21 +3,24 @@
  *
  * The G031 has one bank, and the code runs from it: while a program (~85 µs)
  * or a page erase (~22 ms, 40 ms max) is under way, every instruction fetch
- * and vector fetch from flash stalls the CPU. Interrupts are therefore late,
- * not lost, except that UART bytes arriving during an erase overrun the
- * receiver. The store erases ahead of time while the bus is idle (it
- * compacts into a spare page before it needs one), and an answer that falls
- * due during an erase leaves late. Interrupts are masked only around the
- * two-word write of one double word, which must reach the controller
- * back to back. */
+ * and vector fetch from flash stalls the CPU. So everything from the write
+ * that starts an operation to the end of its busy wait is one RAM function
+ * (prv_run), and the interrupts that serve the bus (USART1, the answer
+ * timer, SysTick) run from RAM through a RAM vector table: a byte that
+ * arrives during an erase is received and stamped, and an answer that falls
+ * due is sent, on time (docs/flash-busy.md; tools/image-check proves the
+ * placement after every link). Interrupts are masked only around the
+ * two-word write of one double word, which must reach the controller back
+ * to back. */
 #include "km_board.h"
 
 #include <stdbool.h>
 #include <string.h>
 
+#include "g0_core.h"
 #include "g0_regs.h"
 #include "g0_vectors.h"
-#include "km_hal_system.h"
+#include "km_cortex_m.h"
 
 extern const uint8_t __km_store_start[];
 extern const uint8_t __km_store_size[]; /* linker symbol: its address is the size */
@@ -39,7 +42,9 @@ static uint32_t prv_region_size(void)
     return (uint32_t)(uintptr_t)__km_store_size;
 }
 
-static bool prv_wait_idle(void)
+/* Inlined into prv_begin (flash) and prv_run (RAM) alike: it only reads
+ * FLASH_SR, a register, which stays readable while the array is busy. */
+static inline __attribute__((always_inline)) bool prv_wait_idle(void)
 {
     for (uint32_t i = 0u; i < BUSY_SPINS; i++) {
         if ((FLASH_SR & (FLASH_SR_BSY1 | FLASH_SR_CFGBSY)) == 0u) {
@@ -47,6 +52,25 @@ static bool prv_wait_idle(void)
         }
     }
     return false;
+}
+
+/* Starts one operation and waits for its end, all from RAM (see the top of
+ * the file). Erase (dst == 0): CR = cr, then STRT (§3.3.7). Program: CR =
+ * cr (PG), then the two words, the second of which starts it (§3.3.8);
+ * masked between them so no interrupt separates the pair. Returns whether
+ * BSY cleared within the bound. */
+G0_RAMFUNC(prv_run) static bool prv_run(uint32_t cr, volatile uint32_t *dst, uint32_t w0, uint32_t w1)
+{
+    FLASH_CR = cr;
+    if (dst == 0) {
+        FLASH_CR = cr | FLASH_CR_STRT;
+    } else {
+        uint32_t key = km_cortex_irq_lock();
+        dst[0] = w0;
+        dst[1] = w1;
+        km_cortex_irq_restore(key);
+    }
+    return prv_wait_idle();
 }
 
 /* Unlock with the KEYR sequence (§3.3.6); clear stale flags (rc_w1). */
@@ -63,11 +87,10 @@ static bool prv_begin(void)
     return (FLASH_CR & FLASH_CR_LOCK) == 0u;
 }
 
-/* Wait for the end, check EOP and the error flags, drop the operation bits
- * and lock again. */
-static bool prv_end(void)
+/* After prv_run: check EOP and the error flags, drop the operation bits and
+ * lock again. */
+static bool prv_end(bool idle)
 {
-    bool idle = prv_wait_idle();
     uint32_t sr = FLASH_SR;
     FLASH_SR = FLASH_SR_ERRORS | FLASH_SR_EOP;
     FLASH_CR = FLASH_CR_LOCK;
@@ -86,9 +109,9 @@ static km_flash_result_t prv_erase(void *ctx, uint32_t page)
         return KM_FLASH_ERR_ERASE;
     }
     /* §3.3.7 page erase: PER + PNB, then STRT. */
-    FLASH_CR = FLASH_CR_EOPIE | FLASH_CR_PER | ((pnb << FLASH_CR_PNB_SHIFT) & FLASH_CR_PNB_MASK);
-    FLASH_CR |= FLASH_CR_STRT;
-    return prv_end() ? KM_FLASH_OK : KM_FLASH_ERR_ERASE;
+    bool idle = prv_run(FLASH_CR_EOPIE | FLASH_CR_PER | ((pnb << FLASH_CR_PNB_SHIFT) & FLASH_CR_PNB_MASK),
+                        0, 0u, 0u);
+    return prv_end(idle) ? KM_FLASH_OK : KM_FLASH_ERR_ERASE;
 }
 
 static bool prv_range_ok(uint32_t offset, uint32_t len)
@@ -126,14 +149,10 @@ static km_flash_result_t prv_program(void *ctx, uint32_t offset, const void *dat
             FLASH_CR = FLASH_CR_LOCK;
             return KM_FLASH_ERR_PROGRAM;
         }
-        FLASH_CR = FLASH_CR_EOPIE | FLASH_CR_PG; /* §3.3.8 */
-        uint32_t key = km_hal_irq_lock();
-        dst[0] = word[0];
-        dst[1] = word[1]; /* the second word starts the operation */
-        km_hal_irq_restore(key);
+        bool idle = prv_run(FLASH_CR_EOPIE | FLASH_CR_PG, dst, word[0], word[1]);
         /* Read back: a cell that does not hold what we wrote (supply dip,
          * worn page) is a program error, not a silent corruption. */
-        if (!prv_end() || dst[0] != word[0] || dst[1] != word[1]) {
+        if (!prv_end(idle) || dst[0] != word[0] || dst[1] != word[1]) {
             return KM_FLASH_ERR_PROGRAM;
         }
     }

@@ -13,6 +13,13 @@
 #define SCB_AIRCR_VECTKEY      (0x05FAu << 16)
 #define SCB_AIRCR_SYSRESETREQ  (1u << 2)
 #define SCB_SHPR3 G0_REG(0xE000ED20u)     /* bits 31:24 SysTick priority */
+#define SCB_VTOR  G0_REG(0xE000ED08u)     /* vector table offset (M0+ has it, M0 does not) */
+
+/* A function that must run from RAM because it runs while flash is busy
+ * (docs/flash-busy.md): its own section .ramfunc.<name>, which the linker
+ * script places in RAM and --gc-sections can still drop. noinline: a RAM
+ * function inlined into a flash caller would run from flash. */
+#define G0_RAMFUNC(name) __attribute__((section(".ramfunc." #name), noinline))
 
 /* SysTick (ARMv6-M B3.3): 24-bit down counter on the core clock. */
 #define SYST_CSR  G0_REG(0xE000E010u)

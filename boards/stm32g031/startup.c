@@ -4,13 +4,23 @@
  * start-up (no constructors are used, no heap exists). HardFault and every
  * vector nothing should raise end in fault.c's handler: bridge free, fault
  * record, immediate reset. The stack sits at the bottom of SRAM
- * (stm32g031.ld), below .data and .bss. */
+ * (stm32g031.ld), below .data and .bss.
+ *
+ * Before anything else the reset handler copies .ramfunc (the code that
+ * must run while flash is busy) and the vector table to RAM and points
+ * VTOR at the copy: during a page erase (up to 40 ms) a vector fetch from
+ * flash would stall the core as an instruction fetch does, and the bus
+ * UART would overrun (docs/flash-busy.md). Handlers placed in .ramfunc
+ * already have RAM addresses in the flash table, so the copy is verbatim. */
 #include <stdint.h>
 
 #include "fault.h"
+#include "g0_core.h"
 #include "g0_vectors.h"
 
 extern uint32_t _sidata, _sdata, _edata, _sbss, _ebss, _estack;
+extern uint32_t _siramfunc, _sramfunc, _eramfunc;
+extern uint32_t __ram_vectors[];
 extern int main(void);
 
 
@@ -99,7 +109,20 @@ static const prv_vector_table_t s_vectors = {
 
 void Reset_Handler(void)
 {
-    uint32_t *src = &_sidata;
+    const uint32_t *vec = (const uint32_t *)&s_vectors;
+    for (uint32_t i = 0u; i < sizeof s_vectors / sizeof(uint32_t); i++) {
+        __ram_vectors[i] = vec[i];
+    }
+    uint32_t *src = &_siramfunc;
+    for (uint32_t *dst = &_sramfunc; dst < &_eramfunc;) {
+        *dst++ = *src++;
+    }
+    /* The table and code are in SRAM before the first interrupt can use
+     * them: DSB completes the stores, ISB refetches after the VTOR write. */
+    __asm volatile("dsb" ::: "memory");
+    SCB_VTOR = (uint32_t)(uintptr_t)__ram_vectors;
+    __asm volatile("dsb\n\tisb" ::: "memory");
+    src = &_sidata;
     for (uint32_t *dst = &_sdata; dst < &_edata;) {
         *dst++ = *src++;
     }

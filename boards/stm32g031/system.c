@@ -53,7 +53,9 @@ void km_hal_system_init(void)
     SYST_CSR = SYST_CSR_CLKSOURCE | SYST_CSR_TICKINT | SYST_CSR_ENABLE;
 }
 
-void SysTick_Handler(void)
+/* From RAM: it also fires while a flash erase stalls the flash (its fault
+ * branch may stay in flash: it resets the MCU anyway). */
+G0_RAMFUNC(SysTick_Handler) void SysTick_Handler(void)
 {
     /* Waking the CPU from WFI is the main job. It also looks at the stack
      * guard band once per millisecond (32 words, ~2 us at 64 MHz): a stack

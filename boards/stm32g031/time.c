@@ -1,10 +1,15 @@
 /* km_hal_time on TIM2, the G031's 32-bit timer (RM0444 §22): prescaler 63
  * turns the 64 MHz timer clock into a 1 MHz free-running count that wraps at
- * 2^32 like the contract's tick. Compare channel 1 is the one-shot timer. */
+ * 2^32 like the contract's tick. Compare channel 1 is the one-shot timer.
+ * Its interrupt and the tick read (the UART interrupt stamps each byte
+ * with it) run from RAM: the answer goes out on time while flash is busy
+ * (docs/flash-busy.md). */
 #include "km_hal_time.h"
 
 #include "board_clock.h"
+#include "g0_core.h"
 #include "g0_regs.h"
+#include "km_cortex_m.h"
 #include "g0_vectors.h"
 #include "km_hal_system.h"
 
@@ -32,7 +37,7 @@ void km_hal_time_init(void)
     g0_nvic_enable(G0_IRQ_TIM2, 1u);
 }
 
-uint32_t km_hal_time_now(void)
+G0_RAMFUNC(km_hal_time_now) uint32_t km_hal_time_now(void)
 {
     return TIM_CNT(TIM2_BASE_R);
 }
@@ -64,11 +69,11 @@ void km_hal_timer_cancel(void)
     km_hal_irq_restore(key);
 }
 
-void TIM2_IRQHandler(void)
+G0_RAMFUNC(TIM2_IRQHandler) void TIM2_IRQHandler(void)
 {
     /* One shot: take and disarm under the lock, call outside it, so the
      * handler (or the UART interrupt) may re-arm. */
-    uint32_t key = km_hal_irq_lock();
+    uint32_t key = km_cortex_irq_lock();
     km_timer_handler_t handler = 0;
     void *ctx = s_ctx;
     if ((TIM_SR(TIM2_BASE_R) & TIM_SR_CC1IF) != 0u) {
@@ -79,7 +84,7 @@ void TIM2_IRQHandler(void)
             s_handler = 0;
         }
     }
-    km_hal_irq_restore(key);
+    km_cortex_irq_restore(key);
     if (handler != 0) {
         handler(ctx);
     }

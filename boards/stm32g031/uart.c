@@ -3,12 +3,19 @@
  * receiver hears our own transmission; we clear RE for the length of a send
  * and set it again at TC, so the echo never reaches the parser and costs no
  * interrupts. An optional RS-485 DE pin is raised before the first byte and
- * dropped at TC (after the last stop bit). */
+ * dropped at TC (after the last stop bit).
+ *
+ * The interrupt handler and km_hal_uart_send (the answer timer's interrupt
+ * starts the answer with it) run from RAM, so the bus keeps being served
+ * while a flash erase stalls every fetch from flash (docs/flash-busy.md).
+ * They take the PRIMASK lock inline for the same reason. */
 #include "km_hal_uart.h"
 
 #include "board_clock.h"
 #include "board_pins.h"
+#include "g0_core.h"
 #include "g0_gpio.h"
+#include "km_cortex_m.h"
 #include "g0_vectors.h"
 #include "km_hal_system.h"
 #include "km_hal_time.h"
@@ -71,14 +78,14 @@ bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx)
     return true;
 }
 
-bool km_hal_uart_send(const uint8_t *data, uint16_t len)
+G0_RAMFUNC(km_hal_uart_send) bool km_hal_uart_send(const uint8_t *data, uint16_t len)
 {
     if (len == 0u) {
         return true;
     }
-    uint32_t key = km_hal_irq_lock();
+    uint32_t key = km_cortex_irq_lock();
     if (s_tx_busy) {
-        km_hal_irq_restore(key);
+        km_cortex_irq_restore(key);
         return false;
     }
     s_tx_busy = true;
@@ -87,7 +94,7 @@ bool km_hal_uart_send(const uint8_t *data, uint16_t len)
     s_tx_next = 0u;
     prv_de(true);
     USART1_CR1 = (USART1_CR1 & ~(USART_CR1_RE | USART_CR1_RXNEIE)) | USART_CR1_TXEIE;
-    km_hal_irq_restore(key);
+    km_cortex_irq_restore(key);
     return true;
 }
 
@@ -143,7 +150,7 @@ static void prv_tx(uint32_t isr, uint32_t cr1)
     }
 }
 
-void USART1_IRQHandler(void)
+G0_RAMFUNC(USART1_IRQHandler) void USART1_IRQHandler(void)
 {
     uint32_t isr = USART1_ISR;
     uint32_t cr1 = USART1_CR1;
