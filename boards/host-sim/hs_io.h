@@ -18,6 +18,9 @@ void hs_uart_prepare_exec(void);
 bool hs_uart_adopt(void);
 /* The simulated plant's physics to the re-executed image (hs_plant_keep.c). */
 void hs_plant_prepare_exec(void);
+/* --scenario FILE (hs_scenario.c); false, with the reason on stderr, if the
+ * file cannot be read or is malformed. */
+bool hs_scenario_load(const char *path);
 
 /* --gap-floor-us: what km_hal_uart_gap_floor_us() reports (default
  * HS_GAP_FLOOR_DEFAULT_US). */

@@ -41,13 +41,16 @@ static int prv_usage(const char *argv0)
 {
     fprintf(stderr,
             "usage: %s (--listen HOST:PORT | --pty) --flash FILE [--baud N] [--gap-floor-us N]\n"
-            "          [--product pot|encoder]\n"
+            "          [--product pot|encoder] [--scenario FILE]\n"
             "  --gap-floor-us N  least silence inside a frame that drops it, in us, when it\n"
             "                    exceeds the parser's max(10 byte times, 1 ms); default %u\n"
             "                    (host scheduling stalls); 0 = the real rule\n"
             "  --product P       pot (default, KM-SIM-P135) or encoder (KM-SIM-ENCODER,\n"
             "                    multi-turn); a restart keeps it and the shaft where it\n"
             "                    is; the encoder then reads its angle within one turn\n"
+            "  --scenario FILE   a bench scenario played on the plant's clock: lines\n"
+            "                    T_MS KEY VALUE, keys supply_mv, ambient_dc (0.1 degC),\n"
+            "                    load_mnm (mN*m), faults (1 pot, 2 motor, 4 NTC open)\n"
             "  --baud N          accepted, ignored: the line rate is the servo's register 0x10\n",
             argv0, HS_GAP_FLOOR_DEFAULT_US);
     return 2;
@@ -91,6 +94,10 @@ int main(int argc, char **argv)
                 km_sim_product_select(KM_SIM_PRODUCT_ENCODER);
             } else {
                 return prv_usage(argv[0]);
+            }
+        } else if (strcmp(argv[i], "--scenario") == 0 && i + 1 < argc) {
+            if (!hs_scenario_load(argv[++i])) {
+                return 2;
             }
         } else if (strcmp(argv[i], "--pty") == 0) {
             use_pty = 1;

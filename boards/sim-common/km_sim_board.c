@@ -20,6 +20,7 @@ static uint32_t s_last_tick;
 static uint32_t s_us_per_tick_q16;
 static bool s_encoder;
 static km_turn_counter_t s_turns; /* the encoder product's multi-turn count */
+static km_scn_player_t s_scenario;
 /* The encoder product's plant: the default motor with no pot and no end
  * stops, as the control tests build it (tests/unit/test_control_motor.c).
  * The plant keeps a pointer, so it lives here. */
@@ -75,6 +76,10 @@ void km_hal_sensors_init(void)
     if (km_sim_board_recall(&kept)) {
         km_plant_set_physics(&s_plant, &kept);
     }
+    uint32_t n = 0;
+    const km_scn_event_t *ev = km_sim_board_scenario(&n);
+    km_scn_start(&s_scenario, ev, n);
+    km_scn_play(&s_scenario, &s_plant, &s_input); /* what was due before a restart, at once */
     km_turn_counter_init(&s_turns, (uint16_t)KM_PLANT_ENCODER_COUNTS, km_plant_encoder_counts(&s_plant));
     s_us_per_tick_q16 = (uint32_t)((1000000ull << 16) / km_hal_time_tick_hz());
     s_last_tick = km_hal_time_now();
@@ -89,6 +94,7 @@ void km_hal_sensors_read(km_sensors_t *out)
     }
     s_last_tick = now;
     km_plant_step(&s_plant, &s_input, dt_us);
+    km_scn_play(&s_scenario, &s_plant, &s_input);
     km_plant_physics_t physics;
     km_plant_get_physics(&s_plant, &physics);
     km_sim_board_keep(&physics);

@@ -5,6 +5,7 @@
 #include <stdbool.h>
 
 #include "km_plant.h"
+#include "km_sim_scenario.h"
 
 km_plant_t *km_sim_board_plant(void);
 
@@ -17,5 +18,9 @@ km_plant_t *km_sim_board_plant(void);
  *           false at power-on (a fresh plant at rest at 0). */
 void km_sim_board_keep(const km_plant_physics_t *ph);
 bool km_sim_board_recall(km_plant_physics_t *out);
+
+/* Provided by each simulated board: the scenario to play (km_sim_scenario.h),
+ * NULL with *n = 0 when there is none. */
+const km_scn_event_t *km_sim_board_scenario(uint32_t *n);
 
 #endif

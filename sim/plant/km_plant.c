@@ -316,6 +316,7 @@ void km_plant_get_physics(const km_plant_t *p, km_plant_physics_t *out)
     out->supply_mv = p->supply_mv;
     out->ambient_uc = p->ambient_uc;
     out->faults = p->faults;
+    out->time_ms = p->time_ms;
 }
 
 void km_plant_set_physics(km_plant_t *p, const km_plant_physics_t *in)
@@ -327,6 +328,8 @@ void km_plant_set_physics(km_plant_t *p, const km_plant_physics_t *in)
     km_plant_set_supply_mv(p, in->supply_mv);
     p->ambient_uc = in->ambient_uc;
     p->faults = in->faults;
+    p->time_ms = in->time_ms;
+    p->time_us_part = 0;
     p->current_ma = 0;
     p->supply_ma = 0;
 }
@@ -379,4 +382,9 @@ bool km_plant_at_endstop(const km_plant_t *p)
 {
     int32_t es = p->cfg->endstop_ddeg;
     return es > 0 && p->pos_rem_ndeg == 0 && (p->pos_ddeg == es || p->pos_ddeg == -es);
+}
+
+uint32_t km_plant_time_ms(const km_plant_t *p)
+{
+    return p->time_ms;
 }

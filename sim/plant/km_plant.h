@@ -120,7 +120,8 @@ typedef struct {
 /* What a restart of the servo's MCU leaves as it is: the shaft (position,
  * speed), the winding's heat and the environment. The current is not kept:
  * the bridge is off across a reset and the winding's electrical time
- * constant is far below a boot. */
+ * constant is far below a boot. The plant's clock (km_plant_time_ms) goes
+ * on, so a scenario timed on it is not restarted by a restart. */
 typedef struct {
     int32_t pos_ddeg;
     int32_t pos_rem_ndeg;
@@ -129,6 +130,7 @@ typedef struct {
     int32_t supply_mv;
     int32_t ambient_uc;
     uint32_t faults;
+    uint32_t time_ms;      /* the simulated world's clock goes on too */
 } km_plant_physics_t;
 
 void km_plant_get_physics(const km_plant_t *p, km_plant_physics_t *out);
@@ -161,6 +163,7 @@ int32_t km_plant_supply_ma(const km_plant_t *p);      /* supply current, mA */
 int32_t km_plant_voltage_mv(const km_plant_t *p);     /* supply terminal voltage, mV */
 int32_t km_plant_temp_dc(const km_plant_t *p);        /* winding temperature, 0.1 °C (rounded) */
 int32_t km_plant_temp_c(const km_plant_t *p);         /* winding temperature, °C (rounded) */
+uint32_t km_plant_time_ms(const km_plant_t *p);       /* simulated time since km_plant_init, ms */
 bool km_plant_at_endstop(const km_plant_t *p);        /* shaft resting on a mechanical stop */
 
 #endif /* KM_PLANT_H */

@@ -1,0 +1,93 @@
+/* host-sim: --scenario FILE, the text form of a plant scenario
+ * (boards/sim-common/km_sim_scenario.h has the format), read once at start
+ * (and again by the re-executed image after a restart: same arguments). A
+ * malformed file stops the program with the line and the reason: a bench
+ * script that silently did less than written would mislead. */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "hs_io.h"
+#include "km_sim_board.h"
+
+static km_scn_event_t s_events[KM_SCN_MAX_EVENTS];
+static uint32_t s_count;
+
+static const struct {
+    const char *name;
+    km_scn_key_t key;
+    long lo, hi;
+} s_keys[] = {
+    {"supply_mv", KM_SCN_SUPPLY_MV, 0, 65535},
+    {"ambient_dc", KM_SCN_AMBIENT_DC, -2730, 3000},
+    {"load_mnm", KM_SCN_LOAD_MNM, -100000, 100000},
+    {"faults", KM_SCN_FAULTS, 0, 7},
+};
+
+static bool prv_fail(const char *path, unsigned line, const char *why)
+{
+    fprintf(stderr, "host-sim: %s:%u: %s\n", path, line, why);
+    return false;
+}
+
+bool hs_scenario_load(const char *path)
+{
+    FILE *f = fopen(path, "r");
+    if (f == NULL) {
+        fprintf(stderr, "host-sim: cannot open scenario %s: %s\n", path, strerror(errno));
+        return false;
+    }
+    char text[256];
+    unsigned line = 0;
+    bool ok = true;
+    s_count = 0;
+    while (ok && fgets(text, sizeof text, f) != NULL) {
+        line++;
+        char *hash = strchr(text, '#');
+        if (hash != NULL) {
+            *hash = '\0';
+        }
+        char name[32];
+        unsigned long t_ms;
+        long value;
+        char extra;
+        const int n = sscanf(text, "%lu %31s %li %c", &t_ms, name, &value, &extra);
+        if (n == EOF || (n <= 0 && strspn(text, " \t\r\n") == strlen(text))) {
+            continue; /* blank or comment */
+        }
+        if (n != 3) {
+            ok = prv_fail(path, line, "expected: T_MS KEY VALUE");
+            break;
+        }
+        size_t k = 0;
+        while (k < sizeof s_keys / sizeof s_keys[0] && strcmp(s_keys[k].name, name) != 0) {
+            k++;
+        }
+        if (k == sizeof s_keys / sizeof s_keys[0]) {
+            ok = prv_fail(path, line, "unknown key (supply_mv, ambient_dc, load_mnm, faults)");
+        } else if (value < s_keys[k].lo || value > s_keys[k].hi) {
+            ok = prv_fail(path, line, "value out of range for its key");
+        } else if (t_ms > UINT32_MAX || (s_count > 0 && t_ms < s_events[s_count - 1u].t_ms)) {
+            ok = prv_fail(path, line, "times must not decrease");
+        } else if (s_count == KM_SCN_MAX_EVENTS) {
+            ok = prv_fail(path, line, "more than 64 events");
+        } else {
+            s_events[s_count].t_ms = (uint32_t)t_ms;
+            s_events[s_count].key = (uint32_t)s_keys[k].key;
+            s_events[s_count].value = (int32_t)value;
+            s_count++;
+        }
+    }
+    fclose(f);
+    if (!ok) {
+        s_count = 0;
+    }
+    return ok;
+}
+
+const km_scn_event_t *km_sim_board_scenario(uint32_t *n)
+{
+    *n = s_count;
+    return s_count != 0u ? s_events : NULL;
+}

@@ -1,0 +1,40 @@
+/* QEMU: the plant scenario (boards/sim-common/km_sim_scenario.h) as a table
+ * in RAM at 0x20000040 (nrf51822.ld .km_scenario), which tools/servo-bus
+ * --scenario FILE writes with
+ *   -device loader,file=<table>,addr=0x20000040,force-raw=on
+ * before the CPU starts; QEMU re-applies it at every reset, so a restart
+ * keeps it. Layout, little-endian words: magic 0x4B4D5343 ("KMSC"), count
+ * (<= 64), then count events of 12 bytes (t_ms, key, value). Without the
+ * magic (no loader, or a real part) there is no scenario. The table is
+ * copied once out of the volatile words: it is written behind the
+ * compiler's back. Servo images only. */
+#include <stddef.h>
+
+#include "km_sim_board.h"
+
+#define PRV_SCENARIO_MAGIC 0x4B4D5343u
+
+typedef struct {
+    uint32_t magic;
+    uint32_t count;
+    km_scn_event_t ev[KM_SCN_MAX_EVENTS];
+} prv_table_t;
+
+__attribute__((section(".km_scenario"), used)) static volatile prv_table_t s_table;
+static km_scn_event_t s_events[KM_SCN_MAX_EVENTS];
+
+const km_scn_event_t *km_sim_board_scenario(uint32_t *n)
+{
+    *n = 0;
+    if (s_table.magic != PRV_SCENARIO_MAGIC) {
+        return NULL;
+    }
+    const uint32_t count = s_table.count > KM_SCN_MAX_EVENTS ? KM_SCN_MAX_EVENTS : s_table.count;
+    for (uint32_t i = 0; i < count; i++) {
+        s_events[i].t_ms = s_table.ev[i].t_ms;
+        s_events[i].key = s_table.ev[i].key;
+        s_events[i].value = s_table.ev[i].value;
+    }
+    *n = count;
+    return count != 0u ? s_events : NULL;
+}
