@@ -1,0 +1,62 @@
+/* Power-on self-test and the run-time motor check (contract in
+ * km_selftest.h). */
+#include "km_selftest.h"
+
+#include <string.h>
+
+enum { PRV_POS, PRV_TEMP, PRV_VOLT, PRV_CURR, PRV_N };
+
+static const uint8_t s_bit[PRV_N] = {KM_HW_POSITION, KM_HW_TEMPERATURE, KM_HW_VOLTAGE, KM_HW_CURRENT};
+
+static int32_t prv_abs(int32_t v)
+{
+    return v < 0 ? -v : v;
+}
+
+void km_selftest_init(km_selftest_t *t)
+{
+    memset(t, 0, sizeof *t);
+}
+
+static void prv_power_on_sample(km_selftest_t *t, const km_sensors_t *in, const km_control_params_t *p)
+{
+    bool bad[PRV_N];
+    bad[PRV_POS] = p->variant == KM_VARIANT_POTENTIOMETER &&
+                   (in->position <= p->travel_min || in->position >= p->travel_max);
+    bad[PRV_TEMP] = in->temperature_c10 < KM_SELFTEST_NTC_OPEN_C10 ||
+                    in->temperature_c10 > KM_SELFTEST_NTC_SHORT_C10;
+    bad[PRV_VOLT] = in->voltage_mv < KM_SELFTEST_SUPPLY_MIN_MV || in->voltage_mv > KM_SELFTEST_SUPPLY_MAX_MV;
+    bad[PRV_CURR] = prv_abs(in->current_ma) > KM_SELFTEST_CURRENT_OFFSET_MA;
+    for (unsigned i = 0; i < PRV_N; i++) {
+        if (bad[i]) {
+            t->fails[i]++;
+        }
+    }
+    t->samples++;
+    if (t->samples == KM_SELFTEST_SAMPLES) {
+        for (unsigned i = 0; i < PRV_N; i++) {
+            if (t->fails[i] > KM_SELFTEST_SAMPLES / 2u) {
+                t->faults |= s_bit[i];
+            }
+        }
+    }
+}
+
+uint8_t km_selftest_step(km_selftest_t *t, const km_sensors_t *in, const km_control_params_t *p,
+                         int32_t drive_pwm, uint32_t dt_us)
+{
+    t->faults |= in->faults; /* what the hal's drivers flag, at any time */
+    if (!km_selftest_done(t)) {
+        prv_power_on_sample(t, in, p);
+    }
+    if (prv_abs(drive_pwm) >= KM_SELFTEST_MOTOR_PWM && prv_abs(in->current_ma) < KM_SELFTEST_MOTOR_MA) {
+        t->motor_open_us += dt_us;
+        if (t->motor_open_us >= KM_SELFTEST_MOTOR_US) {
+            t->faults |= KM_HW_MOTOR;
+            t->motor_open_us = KM_SELFTEST_MOTOR_US;
+        }
+    } else {
+        t->motor_open_us = 0u;
+    }
+    return t->faults;
+}

@@ -1,0 +1,72 @@
+/* Power-on self-test (PROTOCOL.md §5.2 0x35, status bit 4): sensor
+ * plausibility over the first KM_SELFTEST_SAMPLES control ticks after
+ * boot, with the bridge off; and one check that needs the motor driven,
+ * made whenever it is (an open motor lead). Pure, fixed-point.
+ *
+ * A check fails only when more than half of its samples fail, so one noisy
+ * sample never raises a fault. Power-on checks (bits of 0x35):
+ *   5 position sensor  potentiometer product: the reading sits at either
+ *                      end of the product's travel (an open wiper reads a
+ *                      rail; a shaft turned past the electrical travel
+ *                      cannot be told from it and is out of range too);
+ *                      and whatever the hal's sensor driver flags;
+ *   2 temperature      below -30.0 degC (an open NTC) or above 150.0 degC
+ *                      (a shorted one);
+ *   3 voltage sensor   supply reads below 2.0 V (the MCU runs, so the
+ *                      divider or its ADC input is broken) or above 40.0 V;
+ *   4 current sensor   more than 200 mA with the bridge off (offset);
+ * At run time:
+ *   6 motor            |PWM| >= 300 with |current| < 10 mA for 500 ms: a
+ *                      driven motor that draws nothing is an open lead.
+ * Bits 1 (memory: the store found damage) and 0 (crystal) come from the
+ * app and the board; bit 7 from the hal. The dispatcher latches every bit
+ * until restart and refuses motion while any is set (§5.2). */
+#ifndef KM_SELFTEST_H
+#define KM_SELFTEST_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "km_hal_sensors.h"
+#include "km_servo_io.h"
+
+#define KM_HW_CRYSTAL 0x01u
+#define KM_HW_MEMORY 0x02u
+#define KM_HW_TEMPERATURE 0x04u
+#define KM_HW_VOLTAGE 0x08u
+#define KM_HW_CURRENT 0x10u
+#define KM_HW_POSITION 0x20u
+#define KM_HW_MOTOR 0x40u
+#define KM_HW_OTHER 0x80u
+
+#define KM_SELFTEST_SAMPLES 16u          /* ticks of the power-on check */
+#define KM_SELFTEST_NTC_OPEN_C10 (-300)
+#define KM_SELFTEST_NTC_SHORT_C10 1500
+#define KM_SELFTEST_SUPPLY_MIN_MV 2000
+#define KM_SELFTEST_SUPPLY_MAX_MV 40000
+#define KM_SELFTEST_CURRENT_OFFSET_MA 200
+#define KM_SELFTEST_MOTOR_PWM 300
+#define KM_SELFTEST_MOTOR_MA 10
+#define KM_SELFTEST_MOTOR_US 500000u
+
+typedef struct {
+    uint8_t samples;          /* power-on samples taken */
+    uint8_t fails[5];         /* per power-on check: samples that failed */
+    uint8_t faults;           /* 0x35 bits found so far (latched) */
+    uint32_t motor_open_us;   /* driven without current, continuous */
+} km_selftest_t;
+
+void km_selftest_init(km_selftest_t *t);
+
+/* One tick. `drive_pwm` is the PWM the bridge drove during the tick
+ * (0 when free or braked). Returns the 0x35 bits found so far. */
+uint8_t km_selftest_step(km_selftest_t *t, const km_sensors_t *in, const km_control_params_t *p,
+                         int32_t drive_pwm, uint32_t dt_us);
+
+/* The power-on checks have all their samples. */
+static inline bool km_selftest_done(const km_selftest_t *t)
+{
+    return t->samples >= KM_SELFTEST_SAMPLES;
+}
+
+#endif

@@ -1,0 +1,172 @@
+/* control/km_selftest.c against the plant's injectable faults (PROTOCOL.md
+ * §5.2 0x35, status bit 4): each sensor fault found by the power-on
+ * samples, none on a sound plant, one noisy sample never a fault, an open
+ * motor lead found when driven. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include "km_plant_rig.h"
+#include "km_selftest.h"
+
+#define TICK_US 1000u
+
+/* Runs the power-on samples on a plant with `faults`, at `pos` and `amb`. */
+static uint8_t power_on(uint32_t faults, int32_t pos, int16_t ambient_dc, int32_t supply_mv)
+{
+    kr_rig_t r;
+    kr_init_at(&r, &km_plant_default_config, pos);
+    km_plant_set_faults(&r.plant, faults);
+    km_plant_set_ambient_dc(&r.plant, ambient_dc);
+    km_plant_set_supply_mv(&r.plant, supply_mv);
+    km_plant_input_t coast = {.bridge = KM_PLANT_COAST, .pwm = 0, .ext_torque_unm = 0};
+    km_plant_step(&r.plant, &coast, 5000000u); /* let the winding take the ambient */
+    km_selftest_t t;
+    km_selftest_init(&t);
+    uint8_t f = 0;
+    for (unsigned i = 0; i < KM_SELFTEST_SAMPLES; i++) {
+        km_sensors_t s;
+        kr_sensors(&r, &s);
+        assert_false(km_selftest_done(&t));
+        f = km_selftest_step(&t, &s, &r.params, 0, TICK_US);
+        km_plant_step(&r.plant, &coast, TICK_US);
+    }
+    assert_true(km_selftest_done(&t));
+    return f;
+}
+
+/* §5.2 0x35: a sound servo at rest passes every power-on check. */
+static void test_s5_2_sound_plant_no_fault(void **state)
+{
+    (void)state;
+    assert_int_equal(power_on(0, 0, 250, 7400), 0);
+    assert_int_equal(power_on(0, 1300, 250, 7400), 0);
+    assert_int_equal(power_on(0, -1300, -200, 6000), 0);
+}
+
+/* §5.2 0x35 bit 5: an open wiper reads the rail. */
+static void test_s5_2_pot_open_is_position_fault(void **state)
+{
+    (void)state;
+    assert_int_equal(power_on(KM_PLANT_FAULT_POT_OPEN, 0, 250, 7400), KM_HW_POSITION);
+    assert_int_equal(power_on(0, 1400, 250, 7400), KM_HW_POSITION); /* past the travel: out of range */
+}
+
+/* §5.2 0x35 bit 2: an open NTC reads -40.0 degC. */
+static void test_s5_2_ntc_open_is_temperature_fault(void **state)
+{
+    (void)state;
+    assert_int_equal(power_on(KM_PLANT_FAULT_TEMP_OPEN, 0, 250, 7400), KM_HW_TEMPERATURE);
+}
+
+/* §5.2 0x35 bit 3: a supply reading below 2.0 V while the MCU runs. */
+static void test_s5_2_supply_sense_fault(void **state)
+{
+    (void)state;
+    assert_int_equal(power_on(0, 0, 250, 1000), KM_HW_VOLTAGE);
+}
+
+/* An encoder product has no travel rail: no position fault at any angle. */
+static void test_encoder_no_rail_check(void **state)
+{
+    (void)state;
+    km_selftest_t t;
+    km_selftest_init(&t);
+    km_control_params_t p;
+    kr_default_params(&p);
+    p.variant = KM_VARIANT_ENCODER;
+    km_sensors_t s = {.position = 1350, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250, .faults = 0};
+    for (unsigned i = 0; i < KM_SELFTEST_SAMPLES; i++) {
+        (void)km_selftest_step(&t, &s, &p, 0, TICK_US);
+    }
+    assert_int_equal(t.faults, 0);
+}
+
+/* One bad sample in 16 (or 8 of 16) is not a fault; 9 of 16 is. */
+static void test_noise_majority_rule(void **state)
+{
+    (void)state;
+    const unsigned bad_counts[] = {1, 8, 9, 16};
+    const uint8_t want[] = {0, 0, KM_HW_CURRENT | KM_HW_TEMPERATURE, KM_HW_CURRENT | KM_HW_TEMPERATURE};
+    for (size_t k = 0; k < 4; k++) {
+        km_selftest_t t;
+        km_selftest_init(&t);
+        km_control_params_t p;
+        kr_default_params(&p);
+        for (unsigned i = 0; i < KM_SELFTEST_SAMPLES; i++) {
+            km_sensors_t s = {.position = 0, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250,
+                              .faults = 0};
+            if (i < bad_counts[k]) {
+                s.current_ma = -900;
+                s.temperature_c10 = 2000;
+            }
+            (void)km_selftest_step(&t, &s, &p, 0, TICK_US);
+        }
+        assert_int_equal(t.faults, want[k]);
+    }
+}
+
+/* §5.2 0x35 bit 6: driving an open motor lead (no current) for 500 ms; a
+ * sound motor driven the same way draws current and is not flagged. */
+static void test_s5_2_motor_open_found_when_driven(void **state)
+{
+    (void)state;
+    for (int open = 0; open <= 1; open++) {
+        kr_rig_t r;
+        kr_init(&r);
+        km_plant_set_faults(&r.plant, open ? KM_PLANT_FAULT_MOTOR_OPEN : 0u);
+        km_selftest_t t;
+        km_selftest_init(&t);
+        const km_plant_input_t drive = {.bridge = KM_PLANT_DRIVE, .pwm = 500, .ext_torque_unm = 0};
+        uint32_t found_ms = 0;
+        for (uint32_t ms = 1; ms <= 2000; ms++) {
+            km_plant_step(&r.plant, &drive, TICK_US);
+            km_sensors_t s;
+            kr_sensors(&r, &s);
+            if (km_plant_position_ddeg(&r.plant) >= 1300) {
+                km_plant_set_position_ddeg(&r.plant, 0); /* stay inside the travel, keep driving */
+            }
+            const uint8_t f = km_selftest_step(&t, &s, &r.params, 500, TICK_US);
+            if (found_ms == 0u && (f & KM_HW_MOTOR) != 0u) {
+                found_ms = ms;
+            }
+        }
+        if (open) {
+            assert_int_equal(found_ms, 500);
+        } else {
+            assert_int_equal(found_ms, 0);
+        }
+    }
+}
+
+/* Whatever the hal's drivers flag (bit 7 "other", say) is taken at once. */
+static void test_hal_flags_taken(void **state)
+{
+    (void)state;
+    km_selftest_t t;
+    km_selftest_init(&t);
+    km_control_params_t p;
+    kr_default_params(&p);
+    km_sensors_t s = {.position = 0, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250,
+                      .faults = KM_HW_OTHER};
+    assert_int_equal(km_selftest_step(&t, &s, &p, 0, TICK_US), KM_HW_OTHER);
+    s.faults = 0;
+    assert_int_equal(km_selftest_step(&t, &s, &p, 0, TICK_US), KM_HW_OTHER); /* latched */
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_s5_2_sound_plant_no_fault),
+        cmocka_unit_test(test_s5_2_pot_open_is_position_fault),
+        cmocka_unit_test(test_s5_2_ntc_open_is_temperature_fault),
+        cmocka_unit_test(test_s5_2_supply_sense_fault),
+        cmocka_unit_test(test_encoder_no_rail_check),
+        cmocka_unit_test(test_noise_majority_rule),
+        cmocka_unit_test(test_s5_2_motor_open_found_when_driven),
+        cmocka_unit_test(test_hal_flags_taken),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
