@@ -74,10 +74,6 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     c->position = pos;
     c->have_position = true;
 
-    /* 2. servo mode */
-    km_servo_mode_out_t sm;
-    km_servo_mode_step(&c->servo, p, pos, dt_us, &sm);
-
     int32_t limit = p->torque_limit < p->max_torque ? p->torque_limit : p->max_torque;
     if (c->motor.active) {
         /* 2b. motor mode owns the bridge (servo mode's output is unused);
@@ -89,6 +85,11 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
         const int32_t mpwm = km_motor_mode_step(&c->motor, p, pos, speed_ddps, dt_us, &mode);
         c->bridge = km_output_bridge(mode, mpwm, limit, p->reverse);
     } else {
+        /* 2. servo mode. Not stepped while the motor owns the bridge: its
+         * output would be unused, and the hand-back (km_control_request)
+         * restarts it from where the shaft is (rebase or torque on). */
+        km_servo_mode_out_t sm;
+        km_servo_mode_step(&c->servo, p, pos, dt_us, &sm);
         /* 3. position loop, 4. output */
         if (sm.pwm_cap < limit) {
             limit = sm.pwm_cap;
@@ -111,7 +112,7 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
         c->bridge = km_output_bridge(sm.bridge, pwm, limit, p->reverse);
     }
 
-    memset(live, 0, sizeof *live);
+    /* every field assigned (no memset: it is a byte loop on the M0) */
     live->position = pos;
     live->speed = speed_dps;
     live->current = in->current_ma;
@@ -122,6 +123,7 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     live->rotation_ms = c->motor.active ? c->motor.rotation_ms : c->servo.rotation_ms;
     live->running = c->motor.active ? c->motor.running : c->servo.running;
     live->protecting = c->servo.ts == 5u;
+    live->protections = 0u; /* the protection supervisor's: a later issue */
     live->hw_faults = in->faults;
     *bridge = c->bridge;
 }

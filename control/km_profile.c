@@ -1,10 +1,13 @@
 /* Trajectory generator (see km_profile.h): time-optimal moves under speed
  * and acceleration bounds, moves in a given time, and constant-speed
- * stream segments. 32-bit arithmetic except one 64-bit product and its
- * square root (shifts and compares: no 64-bit divide on the M0). */
+ * stream segments. 32-bit arithmetic (one 32 x 32 -> 64 product and its
+ * square root in two words: no 64-bit divide on the M0); the tick's
+ * divisions by 1000 are reciprocal multiplies (km_fixdiv.h). */
 #include "km_profile.h"
 
 #include <string.h>
+
+#include "km_fixdiv.h"
 
 #define STEP_MAX_US 1000u /* longer ticks are integrated in pieces */
 #define ACCEL_MAX 1000000 /* u/s per ms = 100,000 deg/s^2: keeps accel x dt in 32 bits */
@@ -37,7 +40,34 @@ static int32_t prv_speed_for(int32_t d, int32_t ms, int32_t vmax)
     return v < vmax ? v : vmax;
 }
 
-/* floor(sqrt(x)), bit by bit. */
+/* floor(sqrt(hi:lo)) for hi:lo < 2^56, two bits a step in 32-bit words:
+ * the remainder stays <= 2 x root < 2^29, so nothing here is 64-bit (the
+ * 64-bit version below costs ~1,100 instructions on the M0, this ~350). */
+static uint32_t prv_isqrt56(uint32_t hi, uint32_t lo)
+{
+    uint32_t root = 0, rem = 0;
+    unsigned n = 32; /* two-bit digits left */
+    while (n > 4u && (hi >> 24) == 0u) { /* leading zero digits: root 0, rem 0 */
+        hi = (hi << 8) | (lo >> 24);
+        lo <<= 8;
+        n -= 4u;
+    }
+    for (; n > 0u; n--) {
+        rem = (rem << 2) | (hi >> 30);
+        hi = (hi << 2) | (lo >> 30);
+        lo <<= 2;
+        const uint32_t t = (root << 2) | 1u;
+        root <<= 1;
+        if (rem >= t) {
+            rem -= t;
+            root |= 1u;
+        }
+    }
+    return root;
+}
+
+/* floor(sqrt(x)), bit by bit: for the speeds above 2^28 u/s (26,843 deg/s)
+ * that only a 0x5D near its maximum allows. */
 static uint32_t prv_isqrt64(uint64_t x)
 {
     uint64_t r = 0;
@@ -116,15 +146,47 @@ void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_u
     p->done = false;
 }
 
-/* pos += vel * dt / 1e6 exactly, remainder carried (dt <= 1000). */
+/* pos += vel * dt / 1e6 exactly, remainder carried (dt <= 1000). The
+ * remainder is normalised by compares: |pos_rem| < 3e6 before it, so this
+ * is C's / and % by 1e6 without a divide. */
 static void prv_advance(km_profile_t *p, uint32_t dt_us)
 {
-    const int32_t q = p->vel / 1000, r = p->vel % 1000;
-    const int32_t qd = q * (int32_t)dt_us; /* |q| < 2^21, dt <= 1000 */
-    p->pos += qd / 1000;
-    p->pos_rem += (qd % 1000) * 1000 + r * (int32_t)dt_us;
-    p->pos += p->pos_rem / 1000000;
-    p->pos_rem %= 1000000;
+    const int32_t q = km_sdiv1000(p->vel), r = p->vel - q * 1000;
+    if (dt_us == 1000u) { /* the tick: q x 1000 / 1000 = q, no remainder */
+        p->pos += q;
+        p->pos_rem += r * 1000;
+    } else {
+        const int32_t qd = q * (int32_t)dt_us; /* |q| < 2^21, dt <= 1000 */
+        const int32_t qq = km_sdiv1000(qd);
+        p->pos += qq;
+        p->pos_rem += (qd - qq * 1000) * 1000 + r * (int32_t)dt_us;
+    }
+    while (p->pos_rem >= 1000000) {
+        p->pos++;
+        p->pos_rem -= 1000000;
+    }
+    while (p->pos_rem <= -1000000) {
+        p->pos--;
+        p->pos_rem += 1000000;
+    }
+}
+
+/* The braking-curve speed min(floor(sqrt(k x d)), vmax); k x d is compared
+ * with vmax^2 first, so a move away from its braking phase (speeding up,
+ * cruising) takes no square root at all. */
+static int32_t prv_brake_speed(uint32_t k, uint32_t d, int32_t vmax)
+{
+    const uint32_t hi = km_umulhi(k, d), lo = k * d;
+    const uint32_t v = (uint32_t)vmax;
+    const uint32_t vh = km_umulhi(v, v), vl = v * v;
+    if (hi > vh || (hi == vh && lo >= vl)) {
+        return vmax;
+    }
+    /* below vmax^2: the root is below vmax */
+    if (v < (1u << 28)) {
+        return (int32_t)prv_isqrt56(hi, lo);
+    }
+    return (int32_t)prv_isqrt64(((uint64_t)hi << 32) | lo);
 }
 
 /* One piece of at most STEP_MAX_US. */
@@ -144,20 +206,19 @@ static void prv_step(km_profile_t *p, uint32_t dt_us)
     }
     /* speed change allowed this piece: accel (u/s per ms) x dt, remainder kept */
     int32_t dv = p->accel * (int32_t)dt_us + p->vel_rem;
-    p->vel_rem = dv % 1000;
-    dv /= 1000;
+    const int32_t dvq = km_sdiv1000(dv);
+    p->vel_rem = dv - dvq * 1000;
+    dv = dvq;
     /* the fastest speed that can still brake to a stop on the target from
      * where this piece ends (so the last piece arrives at a crawl, not at
      * the speed of the tick before) */
-    int32_t d = prv_abs(e) - prv_abs(p->vel / 1000) * (int32_t)dt_us / 1000;
+    const int32_t vq = prv_abs(km_sdiv1000(p->vel));
+    int32_t d = prv_abs(e) - (dt_us == 1000u ? vq : km_sdiv1000(vq * (int32_t)dt_us));
     if (d < 0) {
         d = 0;
     }
-    const uint64_t two_a_d = 2u * (uint64_t)(uint32_t)p->accel * 1000u * (uint64_t)(uint32_t)d;
-    int32_t vb = (int32_t)prv_isqrt64(two_a_d);
-    if (vb > p->vmax) {
-        vb = p->vmax;
-    }
+    /* 2 x accel x 1000 < 2^32 (ACCEL_MAX) */
+    const int32_t vb = prv_brake_speed(2000u * (uint32_t)p->accel, (uint32_t)d, p->vmax);
     const int32_t want = e >= 0 ? vb : -vb;
     if (p->vel < want) {
         p->vel = p->vel + dv < want ? p->vel + dv : want;
@@ -168,7 +229,7 @@ static void prv_step(km_profile_t *p, uint32_t dt_us)
     const int32_t left = p->target - p->pos;
     /* arrived (or crossed within one piece): stop on the target */
     if (left == 0 || ((left > 0) != (e > 0) && e != 0) ||
-        (prv_abs(left) <= prv_abs(p->vel) / 1000 + 1 && prv_abs(p->vel) <= dv)) {
+        (prv_abs(left) <= km_sdiv1000(prv_abs(p->vel)) + 1 && prv_abs(p->vel) <= dv)) {
         p->pos = p->target;
         p->pos_rem = 0;
         p->vel = 0;
@@ -195,5 +256,5 @@ int32_t km_profile_pos_ddeg(const km_profile_t *p)
 
 int32_t km_profile_vel_ddps(const km_profile_t *p)
 {
-    return p->vel / 1000;
+    return km_sdiv1000(p->vel);
 }

@@ -180,8 +180,12 @@ int32_t km_servo_mode_deviation(const km_servo_mode_t *m, int32_t position)
 void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_t position, uint32_t dt_us,
                         km_servo_mode_out_t *out)
 {
-    memset(out, 0, sizeof *out);
+    /* every field assigned below (no memset: a byte loop on the M0) */
     out->pwm_cap = m->pwm_cap;
+    out->setpoint_u = 0;
+    out->setpoint_ddps = 0;
+    out->reset_loop = false;
+    out->holding = false;
     if (m->stream_us < KM_STREAM_GAP_US + 1u) {
         m->stream_us += dt_us;
     }

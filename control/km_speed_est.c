@@ -40,20 +40,24 @@ int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
     if (dt_us > 100000u) {
         dt_us = 100000u; /* a stalled tick: the estimate stays finite */
     }
+    /* span: the newest count-1 intervals, from the oldest sample kept. Kept
+     * as a running sum: the new interval comes in and, once the ring is
+     * full, the one that closed the sample being overwritten's successor
+     * (the new oldest) goes out. */
     f->head = (uint8_t)((f->head + 1u) % KM_SPEED_FAST_N);
+    const uint8_t oldest = (uint8_t)((f->head + 1u) % KM_SPEED_FAST_N);
     f->pos[f->head] = position;
     f->dt[f->head] = dt_us; /* time from the sample before */
     if (f->count < KM_SPEED_FAST_N) {
+        if (f->count > 0u) {
+            f->span_us += dt_us; /* a ring with no sample yet has no interval */
+        }
         f->count++;
+    } else {
+        f->span_us = f->span_us + dt_us - f->dt[oldest];
     }
-    /* span: the newest count-1 intervals, from the oldest sample kept */
-    uint32_t span = 0;
-    uint8_t i = f->head;
-    for (uint8_t k = 1; k < f->count; k++) {
-        span += f->dt[i];
-        i = (uint8_t)((i + KM_SPEED_FAST_N - 1u) % KM_SPEED_FAST_N);
-    }
-    f->span_us = span;
+    const uint32_t span = f->span_us;
+    const uint8_t i = (uint8_t)((f->head + KM_SPEED_FAST_N + 1u - f->count) % KM_SPEED_FAST_N);
     int32_t d = position - f->pos[i];
     d = d > 2000 ? 2000 : (d < -2000 ? -2000 : d); /* keeps d x 1e6 in 32 bits */
     f->ddps = span ? (d * 1000000) / (int32_t)span : 0;

@@ -1,0 +1,77 @@
+/* Division by the control tick's constants without a divide: the Cortex-M0
+ * (ARMv6-M) has no divide instruction, and libgcc's __aeabi_idiv costs
+ * 15..100 instructions a call. Each quotient here is a multiply by a
+ * rounded-up reciprocal, M = ceil(2^(32+s) / d), keeping the high word:
+ *     floor(n / d) = (n x M) >> (32 + s)   for every uint32 n,
+ * exact because M x d - 2^(32+s) <= 2^s (Granlund & Montgomery 1994,
+ * theorem 4.2); tests/unit/test_control_fixdiv.c checks that condition for
+ * each constant and compares against C's / and % over the whole ranges the
+ * tick uses. Signed quotients truncate toward zero, as C's / does.
+ * The 32 x 32 -> 64 high word is built from four 16 x 16 products (the M0's
+ * MULS gives only the low 32 bits; __aeabi_lmul would cost ~40). */
+#ifndef KM_FIXDIV_H
+#define KM_FIXDIV_H
+
+#include <stdint.h>
+
+/* High 32 bits of a x b, exact. */
+static inline uint32_t km_umulhi(uint32_t a, uint32_t b)
+{
+    const uint32_t ah = a >> 16, al = a & 0xFFFFu, bh = b >> 16, bl = b & 0xFFFFu;
+    const uint32_t ll = al * bl;
+    const uint32_t m1 = ah * bl + (ll >> 16);          /* < 2^32: (2^16-1)^2 + 2^16 */
+    const uint32_t m2 = al * bh + (m1 & 0xFFFFu);      /* likewise */
+    return ah * bh + (m1 >> 16) + (m2 >> 16);
+}
+
+/* The reciprocals: M = ceil(2^(32+s) / d). */
+#define KM_FIXDIV_M10 0xCCCCCCCDu   /* d = 10, s = 3 */
+#define KM_FIXDIV_M1000 0x10624DD3u /* d = 1000, s = 6 */
+#define KM_FIXDIV_M5 0xCCCCCCCDu    /* d = 5, s = 2 */
+#define KM_FIXDIV_M100 0xA3D70A3Eu  /* d = 100, s = 6 */
+
+static inline uint32_t km_udiv10(uint32_t n)
+{
+    return km_umulhi(n, KM_FIXDIV_M10) >> 3;
+}
+
+static inline uint32_t km_udiv100(uint32_t n)
+{
+    return km_umulhi(n, KM_FIXDIV_M100) >> 6;
+}
+
+static inline uint32_t km_udiv1000(uint32_t n)
+{
+    return km_umulhi(n, KM_FIXDIV_M1000) >> 6;
+}
+
+/* 2560 = 2^9 x 5: floor(floor(n / 2^9) / 5) = floor(n / 2560). */
+static inline uint32_t km_udiv2560(uint32_t n)
+{
+    return km_umulhi(n >> 9, KM_FIXDIV_M5) >> 2;
+}
+
+/* 256000 = 2^8 x 1000. */
+static inline uint32_t km_udiv256000(uint32_t n)
+{
+    return km_udiv1000(n >> 8);
+}
+
+/* Signed, truncating toward zero like C's `/` (n = INT32_MIN included:
+ * its magnitude is formed in uint32). */
+#define KM_FIXDIV_SIGNED(name, udiv)                                          \
+    static inline int32_t name(int32_t n)                                     \
+    {                                                                         \
+        if (n < 0) {                                                          \
+            return -(int32_t)udiv(0u - (uint32_t)n);                          \
+        }                                                                     \
+        return (int32_t)udiv((uint32_t)n);                                    \
+    }
+
+KM_FIXDIV_SIGNED(km_sdiv10, km_udiv10)
+KM_FIXDIV_SIGNED(km_sdiv100, km_udiv100)
+KM_FIXDIV_SIGNED(km_sdiv1000, km_udiv1000)
+KM_FIXDIV_SIGNED(km_sdiv2560, km_udiv2560)
+KM_FIXDIV_SIGNED(km_sdiv256000, km_udiv256000)
+
+#endif

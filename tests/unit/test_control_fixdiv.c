@@ -1,0 +1,310 @@
+/* The control tick's divide-free arithmetic (issue 8: the Cortex-M0 has no
+ * divide instruction) against C's own: control/km_fixdiv.h's reciprocal
+ * quotients, and the profile and speed estimator rewritten with them, step
+ * for step against the division-based code they replaced (kept here as the
+ * reference). Equal results, not bounded errors: every case must match
+ * exactly. The motion they produce is PROTOCOL.md §5.4's (0x65..0x68). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <string.h>
+
+#include "km_fixdiv.h"
+#include "km_profile.h"
+#include "km_speed_est.h"
+
+static uint32_t s_rng = 0x2545F491u;
+
+static uint32_t rnd(void)
+{
+    s_rng ^= s_rng << 13;
+    s_rng ^= s_rng >> 17;
+    s_rng ^= s_rng << 5;
+    return s_rng;
+}
+
+/* Granlund & Montgomery's condition for M = ceil(2^(32+s)/d) to give
+ * floor(n/d) = (n x M) >> (32+s) for every uint32 n: M d - 2^(32+s) <= 2^s. */
+static void test_reciprocals_are_exact_for_all_uint32(void **state)
+{
+    (void)state;
+    static const struct { uint32_t m, d, s; } c[] = {
+        {KM_FIXDIV_M10, 10u, 3u}, {KM_FIXDIV_M1000, 1000u, 6u}, {KM_FIXDIV_M5, 5u, 2u},
+        {KM_FIXDIV_M100, 100u, 6u},
+    };
+    for (unsigned i = 0; i < sizeof c / sizeof c[0]; i++) {
+        const uint64_t p = (uint64_t)1 << (32u + c[i].s);
+        assert_int_equal(c[i].m, (uint32_t)((p + c[i].d - 1u) / c[i].d)); /* the ceiling */
+        const uint64_t e = (uint64_t)c[i].m * c[i].d - p;
+        assert_true(e <= ((uint64_t)1 << c[i].s));
+    }
+}
+
+static void test_umulhi_matches_64_bit_product(void **state)
+{
+    (void)state;
+    static const uint32_t edge[] = {0u, 1u, 0xFFFFu, 0x10000u, 0x7FFFFFFFu, 0x80000000u, 0xFFFFFFFFu,
+                                    KM_FIXDIV_M10, KM_FIXDIV_M1000};
+    for (unsigned i = 0; i < sizeof edge / sizeof edge[0]; i++) {
+        for (unsigned j = 0; j < sizeof edge / sizeof edge[0]; j++) {
+            assert_int_equal(km_umulhi(edge[i], edge[j]), (uint32_t)(((uint64_t)edge[i] * edge[j]) >> 32));
+        }
+    }
+    for (unsigned k = 0; k < 2000000u; k++) {
+        const uint32_t a = rnd(), b = rnd();
+        assert_int_equal(km_umulhi(a, b), (uint32_t)(((uint64_t)a * b) >> 32));
+    }
+}
+
+static void check_sdiv(int32_t n)
+{
+    if (km_sdiv10(n) != n / 10 || km_sdiv100(n) != n / 100 || km_sdiv1000(n) != n / 1000 ||
+        km_sdiv2560(n) != n / 2560 || km_sdiv256000(n) != n / 256000) {
+        fail_msg("n = %d: %d %d %d %d %d", n, km_sdiv10(n), km_sdiv100(n), km_sdiv1000(n),
+                 km_sdiv2560(n), km_sdiv256000(n));
+    }
+}
+
+/* Every n within +-2^23 (past every operand of the tick but the integrator
+ * and the profile's speeds), the edges of int32 and around each multiple
+ * of the divisors there, and random n over all of int32. */
+static void test_signed_quotients_match_c(void **state)
+{
+    (void)state;
+    for (int32_t n = -(1 << 22); n <= (1 << 22); n++) {
+        check_sdiv(n);
+    }
+    check_sdiv(INT32_MIN);
+    check_sdiv(INT32_MIN + 1);
+    check_sdiv(INT32_MAX);
+    check_sdiv(INT32_MAX - 1);
+    static const int32_t d[] = {10, 100, 1000, 2560, 256000};
+    for (unsigned i = 0; i < sizeof d / sizeof d[0]; i++) {
+        for (int32_t q = INT32_MAX / d[i] - 3; q <= INT32_MAX / d[i]; q++) {
+            for (int32_t r = -1; r <= 1; r++) {
+                check_sdiv(q * d[i] + r);
+                check_sdiv(-q * d[i] - r);
+            }
+        }
+    }
+    for (unsigned k = 0; k < 2000000u; k++) {
+        check_sdiv((int32_t)rnd());
+    }
+}
+
+/* ---- the profile as it was (divisions, 64-bit square root) ------------- */
+
+static int32_t ref_abs(int32_t v)
+{
+    return v < 0 ? -v : v;
+}
+
+static uint32_t ref_isqrt64(uint64_t x)
+{
+    uint64_t r = 0;
+    uint64_t bit = (uint64_t)1 << 62;
+    while (bit > x) {
+        bit >>= 2;
+    }
+    while (bit != 0u) {
+        if (x >= r + bit) {
+            x -= r + bit;
+            r = (r >> 1) + bit;
+        } else {
+            r >>= 1;
+        }
+        bit >>= 2;
+    }
+    return (uint32_t)r;
+}
+
+static void ref_advance(km_profile_t *p, uint32_t dt_us)
+{
+    const int32_t q = p->vel / 1000, r = p->vel % 1000;
+    const int32_t qd = q * (int32_t)dt_us;
+    p->pos += qd / 1000;
+    p->pos_rem += (qd % 1000) * 1000 + r * (int32_t)dt_us;
+    p->pos += p->pos_rem / 1000000;
+    p->pos_rem %= 1000000;
+}
+
+static void ref_piece(km_profile_t *p, uint32_t dt_us)
+{
+    const int32_t e = p->target - p->pos;
+    if (p->stream) {
+        ref_advance(p, dt_us);
+        const int32_t left = p->target - p->pos;
+        if (left == 0 || (left > 0) != (e > 0)) {
+            p->pos = p->target;
+            p->pos_rem = 0;
+            p->vel = 0;
+            p->done = true;
+        }
+        return;
+    }
+    int32_t dv = p->accel * (int32_t)dt_us + p->vel_rem;
+    p->vel_rem = dv % 1000;
+    dv /= 1000;
+    int32_t d = ref_abs(e) - ref_abs(p->vel / 1000) * (int32_t)dt_us / 1000;
+    if (d < 0) {
+        d = 0;
+    }
+    const uint64_t two_a_d = 2u * (uint64_t)(uint32_t)p->accel * 1000u * (uint64_t)(uint32_t)d;
+    int32_t vb = (int32_t)ref_isqrt64(two_a_d);
+    if (vb > p->vmax) {
+        vb = p->vmax;
+    }
+    const int32_t want = e >= 0 ? vb : -vb;
+    if (p->vel < want) {
+        p->vel = p->vel + dv < want ? p->vel + dv : want;
+    } else if (p->vel > want) {
+        p->vel = p->vel - dv > want ? p->vel - dv : want;
+    }
+    ref_advance(p, dt_us);
+    const int32_t left = p->target - p->pos;
+    if (left == 0 || ((left > 0) != (e > 0) && e != 0) ||
+        (ref_abs(left) <= ref_abs(p->vel) / 1000 + 1 && ref_abs(p->vel) <= dv)) {
+        p->pos = p->target;
+        p->pos_rem = 0;
+        p->vel = 0;
+        p->vel_rem = 0;
+        p->done = true;
+    }
+}
+
+static bool ref_step(km_profile_t *p, uint32_t dt_us)
+{
+    while (!p->done && dt_us > 0u) {
+        const uint32_t piece = dt_us > 1000u ? 1000u : dt_us;
+        ref_piece(p, piece);
+        dt_us -= piece;
+    }
+    return p->done;
+}
+
+static void expect_same(const km_profile_t *a, const km_profile_t *b, unsigned run, unsigned tick)
+{
+    if (a->pos != b->pos || a->vel != b->vel || a->pos_rem != b->pos_rem || a->vel_rem != b->vel_rem ||
+        a->done != b->done) {
+        fail_msg("run %u tick %u: pos %d/%d vel %d/%d rem %d/%d vrem %d/%d done %d/%d", run, tick,
+                 a->pos, b->pos, a->vel, b->vel, a->pos_rem, b->pos_rem, a->vel_rem, b->vel_rem,
+                 a->done, b->done);
+    }
+    assert_int_equal(km_profile_vel_ddps(a), b->vel / 1000);
+}
+
+/* Random moves (speed, time, stream segments, a new command mid-move) at
+ * 1 ms ticks and at odd tick lengths (pieces below 1 ms, several pieces a
+ * tick), speeds from 1 u/s to past 2^28 u/s (the 64-bit root's range):
+ * the rewritten profile equals the old one at every tick. */
+static void test_profile_equals_division_reference(void **state)
+{
+    (void)state;
+    static const uint32_t dts[] = {1000u, 1000u, 1000u, 250u, 999u, 1001u, 2500u, 17u};
+    for (unsigned run = 0; run < 1200u; run++) {
+        km_profile_t a, b;
+        const int32_t from = (int32_t)(rnd() % 20001u) - 10000;
+        km_profile_reset(&a, from);
+        b = a;
+        const uint32_t dt = dts[run % (sizeof dts / sizeof dts[0])];
+        for (unsigned cmd = 0; cmd < 3u; cmd++) {
+            const int32_t to = (int32_t)(rnd() % 40001u) - 20000;
+            const uint32_t big = rnd() % 8u == 0u;
+            const int32_t vmax = big ? (int32_t)(rnd() % 600000000u) + 1 : (int32_t)(rnd() % 7200000u) + 1;
+            const int32_t accel = (int32_t)(rnd() % (big ? 1000000u : 200000u)) + 1;
+            switch (rnd() % 3u) {
+            case 0:
+                km_profile_move(&a, to, vmax, accel);
+                km_profile_move(&b, to, vmax, accel);
+                break;
+            case 1: {
+                const uint32_t ms = rnd() % 3000u + 1u;
+                km_profile_move_time(&a, to, ms, vmax);
+                km_profile_move_time(&b, to, ms, vmax);
+                break;
+            }
+            default: {
+                const uint32_t us = rnd() % 40000u + 1u;
+                km_profile_stream(&a, to, us, vmax);
+                km_profile_stream(&b, to, us, vmax);
+                break;
+            }
+            }
+            expect_same(&a, &b, run, 0);
+            const unsigned ticks = cmd < 2u ? rnd() % 400u : 20000u;
+            for (unsigned t = 1; t <= ticks; t++) {
+                const bool da = km_profile_step(&a, dt), db = ref_step(&b, dt);
+                assert_int_equal(da, db);
+                expect_same(&a, &b, run, t);
+                if (da) {
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/* ---- the fast speed estimate as it was (the span summed every tick) ---- */
+
+static int32_t ref_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
+{
+    if (dt_us > 100000u) {
+        dt_us = 100000u;
+    }
+    f->head = (uint8_t)((f->head + 1u) % KM_SPEED_FAST_N);
+    f->pos[f->head] = position;
+    f->dt[f->head] = dt_us;
+    if (f->count < KM_SPEED_FAST_N) {
+        f->count++;
+    }
+    uint32_t span = 0;
+    uint8_t i = f->head;
+    for (uint8_t k = 1; k < f->count; k++) {
+        span += f->dt[i];
+        i = (uint8_t)((i + KM_SPEED_FAST_N - 1u) % KM_SPEED_FAST_N);
+    }
+    f->span_us = span;
+    int32_t d = position - f->pos[i];
+    d = d > 2000 ? 2000 : (d < -2000 ? -2000 : d);
+    f->ddps = span ? (d * 1000000) / (int32_t)span : 0;
+    return f->ddps;
+}
+
+/* The running span equals the summed one from init and from a zeroed
+ * ring, with ticks of any length (stalled ones included). */
+static void test_speed_fast_running_span_equals_sum(void **state)
+{
+    (void)state;
+    for (unsigned run = 0; run < 200u; run++) {
+        km_speed_fast_t a, b;
+        int32_t pos = (int32_t)(rnd() % 2001u) - 1000;
+        if (run % 2u) {
+            km_speed_fast_init(&a, pos);
+        } else {
+            memset(&a, 0, sizeof a);
+        }
+        b = a;
+        for (unsigned t = 0; t < 500u; t++) {
+            pos += (int32_t)(rnd() % 61u) - 30;
+            const uint32_t r = rnd() % 16u;
+            const uint32_t dt = r < 12u ? 1000u : (r < 15u ? rnd() % 3000u : rnd() % 300000u);
+            assert_int_equal(km_speed_fast_step(&a, pos, dt), ref_fast_step(&b, pos, dt));
+            assert_int_equal(a.span_us, b.span_us);
+        }
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_reciprocals_are_exact_for_all_uint32),
+        cmocka_unit_test(test_umulhi_matches_64_bit_product),
+        cmocka_unit_test(test_signed_quotients_match_c),
+        cmocka_unit_test(test_profile_equals_division_reference),
+        cmocka_unit_test(test_speed_fast_running_span_equals_sum),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
