@@ -23,6 +23,17 @@ if(KM_QEMU_ARM AND Python3_FOUND)
             ${KM_QEMU_IMAGES}/km-board-test-qemu-microbit.map
             ${KM_QEMU_IMAGES}/km-uart-echo-qemu-microbit.map)
   set_tests_properties(qemu_image_maps PROPERTIES LABELS qemu)
+
+  # Every QEMU image: no heap linked, static worst-case stack within the
+  # linker script's reserve (tools/image-check, also run after each link).
+  set(KM_QEMU_CHECK_BUILD_DIR ${CMAKE_SOURCE_DIR}/build/qemu CACHE PATH
+      "qemu preset build whose images qemu_image_check reads")
+  add_test(NAME qemu_image_check
+    COMMAND ${CMAKE_COMMAND} -DPYTHON=${Python3_EXECUTABLE} -DTOOL=${CMAKE_SOURCE_DIR}/tools/image-check
+            -DCONFIG=${CMAKE_SOURCE_DIR}/boards/qemu-microbit/image-check.json
+            -DIMAGES=${KM_QEMU_CHECK_BUILD_DIR}/boards/qemu-microbit -DSU_ROOT=${KM_QEMU_CHECK_BUILD_DIR}
+            -P ${CMAKE_SOURCE_DIR}/cmake/image_check_all.cmake)
+  set_tests_properties(qemu_image_check PROPERTIES LABELS "qemu;board")
 else()
   message(WARNING "qemu-system-arm or python3 missing: QEMU tests not registered")
 endif()

@@ -19,7 +19,7 @@ _TARGET_RE = re.compile(r"^([0-9a-f]+)\s+<([^>+]+)(\+0x[0-9a-f]+)?>")
 _LIT_RE = re.compile(r"[;@]\s*\(([0-9a-f]+) <")
 # A map's input-section line: " .text.name  0xADDR  0xSIZE  object", the
 # name on its own line when it is long.
-_MAP_SEC_RE = re.compile(r"^ (\.[^\s]+|COMMON)?\s*\n?\s*0x([0-9a-f]+)\s+0x([0-9a-f]+)\s+(\S.*)$", re.M)
+_MAP_SEC_RE = re.compile(r"^ (\.[^\s]+|COMMON)?\s*0x([0-9a-f]+)[ \t]+0x([0-9a-f]+)[ \t]+(\S.*)$", re.M)
 
 
 def run(tool, *args):
