@@ -30,6 +30,16 @@ typedef struct {
     uint32_t end_tick;           /* caller's tick of the frame's last byte */
 } km_frame_t;
 
+/* The same frame as the dispatcher reads it: the body is wherever it
+ * already is (the parser's ring, or a km_frame_t's body), not a copy. */
+typedef struct {
+    uint8_t id;
+    uint8_t cmd;
+    uint8_t body_len;
+    const uint8_t *body;         /* body_len bytes */
+    uint32_t end_tick;
+} km_frame_view_t;
+
 /* The §2 checksum over `n` bytes (ID through last parameter). */
 static inline uint8_t km_checksum(const uint8_t *bytes, uint32_t n)
 {

@@ -1,4 +1,5 @@
-/* Byte-at-a-time frame parser (PROTOCOL.md §2, §7 inter-byte gap).
+/* Frame parser (PROTOCOL.md §2, §7 inter-byte gap), fed a byte or a run of
+ * bytes at a time.
  *
  * Callable from a UART interrupt: no heap, no recursion, and a stated bound
  * on the work per byte (see km_parser.c). It hunts for F9 FF, validates ID,
@@ -30,6 +31,22 @@ typedef struct {
 #define KM_PARSE_CHECKSUM_ERR 0x02u /* see km_parser_take_checksum_error() */
 
 typedef struct {
+    /* The scalars first: on ARMv6-M a load or store reaches a byte field at
+     * offset <= 31, a halfword <= 62 and a word <= 124 from the struct
+     * pointer in one instruction; behind the arrays each would need the
+     * offset built in a register first. */
+    uint8_t head;                   /* ring index of the oldest byte */
+    uint8_t acc;                    /* sum mod 256 of every byte fed */
+    bool pending;                   /* bytes after a delivered frame wait to be judged */
+    bool stale_by_gap;              /* the stale cut was a gap: count a timeout */
+    uint16_t fill;                  /* bytes in window (0..256) */
+    uint16_t need;                  /* bytes the head candidate needs; 0 = re-judge */
+    uint16_t stale;                 /* leading bytes cut off by a gap or overrun */
+    uint32_t last_tick;             /* tick of the newest byte */
+    uint32_t stale_tick;            /* tick of the newest stale byte */
+    uint32_t gap_ticks;             /* inter-byte gap that drops a frame */
+    km_parser_stats_t stats;
+    uint8_t bad_ids[32];            /* bitset: IDs seen on checksum-failed frames */
     /* A 256-byte ring indexed by uint8_t, so wrap-around is free: the bytes
      * not yet resolved, oldest at `head` (a candidate's F9, or bytes still to
      * rescan after a failure). A frame is at most 256 bytes, so one ring
@@ -38,32 +55,46 @@ typedef struct {
     /* psum[i]: sum mod 256 of every byte fed before window[i]; the checksum
      * of any candidate inside the ring is then one subtraction. */
     uint8_t psum[KM_FRAME_MAX];
-    uint8_t head;                   /* ring index of the oldest byte */
-    uint8_t acc;                    /* sum mod 256 of every byte fed */
-    uint16_t fill;                  /* bytes in window (0..256) */
-    uint16_t need;                  /* bytes the head candidate needs; 0 = re-judge */
-    uint16_t stale;                 /* leading bytes cut off by a gap or overrun */
-    bool pending;                   /* bytes after a delivered frame wait to be judged */
-    bool stale_by_gap;              /* the stale cut was a gap: count a timeout */
-    uint32_t last_tick;             /* tick of the newest byte */
-    uint32_t stale_tick;            /* tick of the newest stale byte */
-    uint32_t gap_ticks;             /* inter-byte gap that drops a frame */
-    uint8_t bad_ids[32];            /* bitset: IDs seen on checksum-failed frames */
-    km_parser_stats_t stats;
 } km_parser_t;
+
+/* Where the batch entries hand a frame out: a view. frame.body points into
+ * the caller's bytes (a frame that came whole in one run: judged where it
+ * lies), into the parser's ring (a frame that spanned calls), or into
+ * `spill`, where the body of the rare frame that wraps around the ring's
+ * end is copied so that a view is always one contiguous run. Valid until
+ * the next call on the parser and while the caller's bytes stay put. */
+typedef struct {
+    km_frame_view_t frame;
+    uint8_t spill[KM_BODY_MAX];
+} km_parser_out_t;
 
 void km_parser_init(km_parser_t *p, uint32_t gap_ticks);
 void km_parser_set_gap(km_parser_t *p, uint32_t gap_ticks);
 
 /* One received byte at tick `now`. Returns KM_PARSE_* bits; *out is written
- * only when KM_PARSE_FRAME is set. */
+ * only when KM_PARSE_FRAME is set (a copy: see km_parser_feed_bytes for the
+ * entry the firmware uses). */
 unsigned km_parser_feed(km_parser_t *p, uint8_t byte, uint32_t now, km_frame_t *out);
+
+/* Batch entry: the same as km_parser_feed() on bytes[0], bytes[1], ... with
+ * ticks[0], ticks[1], ..., stopping after the byte on which a frame is
+ * handed out; *used = the bytes consumed (>= 1 when n >= 1), and the result
+ * is every event of those bytes OR-ed (the checksum failures all precede
+ * the frame, as with km_parser_feed). The frame is handed out as a view
+ * (out->frame, see km_parser_out_t): hand it on before releasing `bytes`.
+ * Ticks must not go backwards inside one call (they come from one clock):
+ * the gap rule is then checked once per stretch of bytes, not per byte. */
+unsigned km_parser_feed_bytes(km_parser_t *p, const uint8_t *bytes, const uint32_t *ticks,
+                              uint32_t n, uint32_t *used, km_parser_out_t *out);
 
 /* Time alone: drops a partial frame once the gap has passed in silence
  * (handing out any whole frame found inside it), and hands out a frame found
  * by a resync that an earlier call had no room for. Call it until the result
  * lacks KM_PARSE_FRAME to drain them. */
 unsigned km_parser_poll(km_parser_t *p, uint32_t now, km_frame_t *out);
+
+/* km_parser_poll() handing the frame out as a view, like km_parser_feed_bytes. */
+unsigned km_parser_poll_view(km_parser_t *p, uint32_t now, km_parser_out_t *out);
 
 /* The caller (UART driver) lost bytes: the partial frame is dropped. */
 void km_parser_overrun(km_parser_t *p);
