@@ -28,7 +28,10 @@ function(km_add_image)
   target_link_libraries(${IMG_NAME} PRIVATE ${IMG_LIBS})
   target_compile_definitions(${IMG_NAME} PRIVATE ${IMG_DEFINES})
   target_link_options(${IMG_NAME} PRIVATE
-    -T${IMG_LINKER_SCRIPT} -Wl,-Map=${out}.map -Wl,--cref)
+    -T${IMG_LINKER_SCRIPT} -Wl,-Map=${out}.map -Wl,--cref
+    # Keeps the relocations in the .elf (not in .bin/.hex): image-check
+    # tells a stored function address from a constant that looks like one.
+    -Wl,--emit-relocs)
 
   add_custom_command(TARGET ${IMG_NAME} POST_BUILD
     COMMAND ${CMAKE_OBJCOPY} -O binary $<TARGET_FILE:${IMG_NAME}> ${out}.bin

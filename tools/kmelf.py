@@ -188,6 +188,21 @@ class Image:
         mem = self._memory()
         return self.read_words(a for a in mem if a % 4 == 0)
 
+    def address_words(self):
+        """Words the linker filled in with an absolute address (R_ARM_ABS32,
+        kept in the ELF by --emit-relocs): exactly the stored addresses, no
+        constant that merely looks like one. None if the image has no
+        relocations (linked without --emit-relocs)."""
+        out = run("readelf", "-r", "-W", str(self.elf))
+        sites = set()
+        for line in out.splitlines():
+            parts = line.split()
+            if len(parts) >= 3 and parts[2] == "R_ARM_ABS32":
+                sites.add(int(parts[0], 16))
+        if not sites:
+            return None
+        return self.read_words(sorted(sites))
+
     def _edges(self, f):
         # register -> ("lit", literal address) while it holds a literal
         # (the naked handlers' "ldr rX, =fn; bx rX").
