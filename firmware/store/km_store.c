@@ -10,8 +10,11 @@
  *    back, then programs the confirmation cell K after it and reads that
  *    back; only then is the commit acknowledged. Later commits of the
  *    session append deltas after K in that page;
- *  - a record counts only once its commit cell (last, all zeros) reads
- *    back, so a cut mid-record leaves the previous state. */
+ *  - a snapshot counts only once its commit cell (last, all zeros) reads
+ *    back; a dense delta (8 bytes for one register whose value fits 16
+ *    bits) once its CRC matches. Each record is read back before the next
+ *    is started, so only a page's last delta can be torn: a cut mid-record
+ *    leaves the previous state. */
 #include <string.h>
 
 #include "km_store.h"
@@ -53,28 +56,30 @@ static bool prv_cell(const km_flash_t *f, uint32_t addr, const uint8_t *cell)
            memcmp(back, cell, f->prog_size) == 0;
 }
 
-/* Programs a record one cell at a time: the body, then reads it back, then
- * the commit cell, then reads that back. */
+/* Programs a record one cell at a time and reads it back. A snapshot ends
+ * in a commit cell, programmed only once the body read back good (K after
+ * it then proves the body solid); a dense delta is whole when its CRC
+ * matches, so it is programmed in one pass and then read back. */
 static bool prv_write(km_store_t *s, uint32_t page, uint32_t offset, const uint8_t *rec,
-                      uint32_t size)
+                      uint32_t size, bool commit_cell)
 {
     const km_flash_t *f = s->flash;
     const uint32_t c = f->prog_size;
     const uint32_t base = page * f->page_size + offset;
+    const uint32_t body = commit_cell ? size - c : size;
     uint8_t back[KM_REC_MAX_CELL];
-    for (uint32_t at = 0; at + c < size; at += c) {
+    for (uint32_t at = 0; at < body; at += c) {
         if (f->program(f->ctx, base + at, &rec[at], c) != KM_FLASH_OK) {
             return false;
         }
     }
-    /* Commit cell: only after the whole body is known good. */
-    for (uint32_t chk = 0; chk + c < size; chk += c) {
+    for (uint32_t chk = 0; chk < body; chk += c) {
         if (f->read(f->ctx, base + chk, back, c) != KM_FLASH_OK ||
             memcmp(back, &rec[chk], c) != 0) {
             return false;
         }
     }
-    return prv_cell(f, base + size - c, &rec[size - c]);
+    return !commit_cell || prv_cell(f, base + body, &rec[body]);
 }
 
 /* Writes state as a snapshot of the next generation at the start of
@@ -107,7 +112,7 @@ static bool prv_compact(km_store_t *s, uint32_t target, const uint32_t *state)
         km_rec_encode(buf, &hdr, s->schema, state, km_store_all_keys(s->schema), f->prog_size);
     static const uint8_t k_zero[KM_REC_MAX_CELL] = {0};
     /* K last: a K that reads programmed then proves the snapshot solid. */
-    if (!prv_write(s, target, 0u, buf, size) ||
+    if (!prv_write(s, target, 0u, buf, size, true) ||
         !prv_cell(f, target * f->page_size + size, k_zero)) {
         s->target = (uint8_t)target; /* a retry erases it again */
         return false;
@@ -144,7 +149,7 @@ static km_store_status_t prv_commit_state(km_store_t *s, const uint32_t *next)
         const uint32_t size = km_rec_encode(buf, &hdr, s->schema, next, changed, f->prog_size);
         if (size > f->page_size - s->tail) {
             ok = prv_compact(s, prv_next(s, s->active), next);
-        } else if (prv_write(s, s->active, s->tail, buf, size)) {
+        } else if (prv_write(s, s->active, s->tail, buf, size, false)) {
             s->tail += size;
             ok = true;
         } else {
@@ -211,7 +216,7 @@ bool km_store_maintain(km_store_t *s)
     const km_flash_t *f = s->flash;
     /* Keep room for the largest record so a commit does not wait on an
      * erase. */
-    const uint32_t room = km_rec_size(KM_REC_SNAPSHOT, s->schema->count, f->prog_size);
+    const uint32_t room = km_rec_snapshot_size(s->schema->count, f->prog_size);
     if (f->page_size - s->tail >= room) {
         return false;
     }

@@ -41,14 +41,27 @@ static void prv_defaults(const km_store_schema_t *schema, uint32_t *values)
 
 /* Applies a record's entries whose keys the schema still has (apply false:
  * none, the values of another schema version mean something else). Keys
- * dropped from the schema are ignored. */
+ * dropped from the schema are ignored. Dense deltas name a key by its index
+ * in the page's snapshot (snap_keys, snap_count): the snapshot may predate
+ * a change of the key list. */
 static void prv_apply(const km_store_schema_t *schema, const km_rec_t *rec, uint32_t *values,
-                      bool apply)
+                      bool apply, const uint8_t *snap_keys, uint32_t snap_count)
 {
+    uint32_t at = 0;
     for (uint32_t i = 0; apply && i < rec->count; i++) {
-        const int32_t at = km_store_index(schema, km_rec_key(rec, i));
-        if (at >= 0) {
-            values[at] = km_rec_value(rec, i);
+        uint8_t id;
+        uint32_t v;
+        bool indexed;
+        km_rec_entry(rec, &at, &id, &v, &indexed);
+        if (indexed) {
+            if (id >= snap_count) {
+                continue;
+            }
+            id = snap_keys[id];
+        }
+        const int32_t where = km_store_index(schema, id);
+        if (where >= 0) {
+            values[where] = v;
         }
     }
 }
@@ -73,9 +86,17 @@ static void prv_scan(const km_store_t *s, uint32_t page, prv_page_t *pi, uint32_
     pi->gen = rec.gen;
     pi->version = rec.version;
     pi->hash = rec.hash;
+    uint8_t snap_keys[KM_STORE_MAX_KEYS];
+    const uint32_t snap_count = rec.count;
+    uint32_t at = 0;
+    for (uint32_t i = 0; i < snap_count; i++) {
+        uint32_t v;
+        bool indexed;
+        km_rec_entry(&rec, &at, &snap_keys[i], &v, &indexed);
+    }
     /* Another schema version: the values mean something else. */
     const bool same = (rec.version == s->schema->version);
-    prv_apply(s->schema, &rec, values, same);
+    prv_apply(s->schema, &rec, values, same, snap_keys, snap_count);
     uint32_t off = rec.size;
     /* K is programmed only after the snapshot's commit cell was read back:
      * any K that does not read erased proves the snapshot solid. Deltas
@@ -87,8 +108,8 @@ static void prv_scan(const km_store_t *s, uint32_t page, prv_page_t *pi, uint32_
     }
     off += f->prog_size;
     while (off < f->page_size && km_rec_read(f, page, off, buf, &rec) &&
-           rec.type == KM_REC_DELTA) {
-        prv_apply(s->schema, &rec, values, same);
+           rec.type != KM_REC_SNAPSHOT) {
+        prv_apply(s->schema, &rec, values, same, snap_keys, snap_count);
         off += rec.size;
     }
 }
@@ -110,7 +131,7 @@ static bool prv_geometry_ok(const km_flash_t *f, const km_store_schema_t *schema
         return false;
     }
     /* Room for a snapshot, K and at least a full-state delta after it. */
-    return f->page_size >= 3u * km_rec_size(KM_REC_SNAPSHOT, schema->count, c);
+    return f->page_size >= 3u * km_rec_snapshot_size(schema->count, c);
 }
 
 /* The page the session's first commit erases and writes its snapshot into.

@@ -5,6 +5,9 @@
 
 #include "km_crc32.h"
 
+#define PRV_DENSE_MASK 0xE0u  /* a dense tag is 0b100c_cccc: count - 1 in the low five bits */
+#define PRV_IDX_LEN_SHIFT 5u
+
 static uint32_t prv_round_up(uint32_t n, uint32_t cell)
 {
     return (n + cell - 1u) / cell * cell;
@@ -18,106 +21,215 @@ static void prv_put32(uint8_t *p, uint32_t v)
     p[3] = (uint8_t)(v >> 24);
 }
 
-static uint32_t prv_get32(const uint8_t *p)
+static uint32_t prv_get(const uint8_t *p, uint32_t len)
 {
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) |
-           ((uint32_t)p[3] << 24);
+    uint32_t v = 0;
+    for (uint32_t i = len; i > 0u; i--) {
+        v = (v << 8) | p[i - 1u];
+    }
+    return v;
 }
 
-static uint32_t prv_hdr_size(uint8_t type)
+/* Fewest bytes that hold v (at least one). */
+static uint32_t prv_value_len(uint32_t v)
 {
-    return (type == KM_REC_SNAPSHOT) ? KM_REC_HDR_SNAPSHOT : KM_REC_HDR_DELTA;
+    uint32_t len = 1;
+    while (len < 4u && (v >> (8u * len)) != 0u) {
+        len++;
+    }
+    return len;
 }
 
-uint32_t km_rec_size(uint8_t type, uint32_t count, uint32_t cell)
+uint32_t km_rec_snapshot_size(uint32_t count, uint32_t cell)
 {
-    const uint32_t body = prv_round_up(prv_hdr_size(type) + count * KM_REC_ENTRY + KM_REC_CRC, cell);
-    return body + cell;
+    return prv_round_up(KM_REC_HDR_SNAPSHOT + count * KM_REC_ENTRY + KM_REC_CRC, cell) + cell;
+}
+
+/* Pads buf[at..) with 0xFF to end - 4 and puts the CRC of buf[0..end-4) there. */
+static void prv_seal(uint8_t *buf, uint32_t at, uint32_t end)
+{
+    memset(&buf[at], 0xFF, end - KM_REC_CRC - at);
+    prv_put32(&buf[end - KM_REC_CRC], km_crc32(0u, buf, end - KM_REC_CRC));
 }
 
 uint32_t km_rec_encode(uint8_t *buf, const km_rec_t *rec, const km_store_schema_t *schema,
                        const uint32_t *values, uint32_t keys_mask, uint32_t cell)
 {
+    const bool snap = (rec->type == KM_REC_SNAPSHOT);
     uint32_t count = 0;
-    uint32_t at = prv_hdr_size(rec->type);
+    uint32_t at = snap ? KM_REC_HDR_SNAPSHOT : 1u;
     for (uint32_t i = 0; i < schema->count; i++) {
-        if ((keys_mask & (1u << i)) != 0u) {
+        if ((keys_mask & (1u << i)) == 0u) {
+            continue;
+        }
+        if (snap) {
             buf[at] = schema->keys[i].key;
             prv_put32(&buf[at + 1u], values[i]);
             at += KM_REC_ENTRY;
-            count++;
+        } else {
+            const uint32_t len = prv_value_len(values[i]);
+            buf[at] = (uint8_t)(i | ((len - 1u) << PRV_IDX_LEN_SHIFT));
+            prv_put32(&buf[at + 1u], values[i]); /* the bytes past len are overwritten next */
+            at += 1u + len;
         }
+        count++;
     }
-    const uint32_t size = km_rec_size(rec->type, count, cell);
-    const uint32_t crc_at = size - cell - KM_REC_CRC;
-    buf[0] = rec->type;
+    if (!snap) {
+        /* count >= 1: a delta carries at least one change. */
+        buf[0] = (uint8_t)(KM_REC_DELTA | (count - 1u));
+        const uint32_t size = prv_round_up(at + KM_REC_CRC, cell);
+        prv_seal(buf, at, size);
+        return size;
+    }
+    const uint32_t size = km_rec_snapshot_size(count, cell);
+    buf[0] = KM_REC_SNAPSHOT;
     buf[1] = (uint8_t)count;
-    if (rec->type == KM_REC_SNAPSHOT) {
-        buf[2] = (uint8_t)rec->version;
-        buf[3] = (uint8_t)(rec->version >> 8);
-        prv_put32(&buf[4], rec->gen);
-        prv_put32(&buf[8], rec->hash);
-    } else {
-        buf[2] = 0u;
-        buf[3] = 0u;
-    }
-    memset(&buf[at], 0xFF, crc_at - at);
-    prv_put32(&buf[crc_at], km_crc32(0u, buf, crc_at));
+    buf[2] = (uint8_t)rec->version;
+    buf[3] = (uint8_t)(rec->version >> 8);
+    prv_put32(&buf[4], rec->gen);
+    prv_put32(&buf[8], rec->hash);
+    prv_seal(buf, at, size - cell);
     memset(&buf[size - cell], 0x00, cell);
     return size;
 }
 
-bool km_rec_read(const km_flash_t *f, uint32_t page, uint32_t offset, uint8_t *buf, km_rec_t *rec)
+typedef struct {
+    const km_flash_t *f;
+    uint32_t addr;   /* of the record */
+    uint32_t room;   /* bytes from the record to the end of its page */
+    uint32_t have;   /* bytes read so far, whole cells */
+    uint8_t *buf;
+} prv_reader_t;
+
+/* Makes sure the first n bytes of the record are in buf, reading only the
+ * cells that hold them. */
+static bool prv_need(prv_reader_t *r, uint32_t n)
 {
-    const uint32_t cell = f->prog_size;
-    const uint32_t base = page * f->page_size;
-    if (offset + cell > f->page_size || f->read(f->ctx, base + offset, buf, cell) != KM_FLASH_OK) {
+    if (n <= r->have) {
+        return true;
+    }
+    const uint32_t to = prv_round_up(n, r->f->prog_size);
+    if (to > r->room || to > KM_REC_MAX_BYTES ||
+        r->f->read(r->f->ctx, r->addr + r->have, &r->buf[r->have], to - r->have) != KM_FLASH_OK) {
         return false;
     }
-    const uint8_t type = buf[0];
-    const uint8_t count = buf[1];
-    if ((type != KM_REC_SNAPSHOT && type != KM_REC_DELTA) || count > KM_STORE_MAX_KEYS ||
-        (type == KM_REC_DELTA && count == 0u)) {
+    r->have = to;
+    return true;
+}
+
+static bool prv_crc_ok(const uint8_t *buf, uint32_t crc_at)
+{
+    return km_crc32(0u, buf, crc_at) == prv_get(&buf[crc_at], KM_REC_CRC);
+}
+
+/* Dense delta: entries walked to find its size, then padding and CRC. */
+static bool prv_read_dense(prv_reader_t *r, km_rec_t *rec)
+{
+    const uint8_t *b = r->buf;
+    const uint32_t count = (b[0] & ~PRV_DENSE_MASK) + 1u;
+    uint32_t at = 1;
+    uint32_t next_idx = 0; /* indices strictly increase */
+    for (uint32_t i = 0; i < count; i++) {
+        if (!prv_need(r, at + 1u)) {
+            return false;
+        }
+        const uint8_t e = b[at];
+        const uint32_t idx = e & 0x1Fu;
+        if ((e & 0x80u) != 0u || idx < next_idx) {
+            return false;
+        }
+        next_idx = idx + 1u;
+        at += 1u + ((uint32_t)e >> PRV_IDX_LEN_SHIFT) + 1u;
+    }
+    const uint32_t size = prv_round_up(at + KM_REC_CRC, r->f->prog_size);
+    if (!prv_need(r, size)) {
         return false;
     }
-    const uint32_t size = km_rec_size(type, count, cell);
-    if (size > f->page_size - offset ||
-        f->read(f->ctx, base + offset + cell, &buf[cell], size - cell) != KM_FLASH_OK) {
-        return false;
-    }
-    for (uint32_t i = size - cell; i < size; i++) {
-        if (buf[i] != 0x00u) {
+    for (uint32_t i = at; i < size - KM_REC_CRC; i++) {
+        if (b[i] != 0xFFu) {
             return false;
         }
     }
-    const uint32_t crc_at = size - cell - KM_REC_CRC;
-    if (km_crc32(0u, buf, crc_at) != prv_get32(&buf[crc_at])) {
+    if (!prv_crc_ok(b, size - KM_REC_CRC)) {
+        return false;
+    }
+    rec->type = KM_REC_DELTA;
+    rec->count = (uint8_t)count;
+    rec->size = size;
+    rec->entries = &b[1];
+    return true;
+}
+
+/* Snapshot or legacy delta: fixed-size entries, CRC, then the commit cell. */
+static bool prv_read_fixed(prv_reader_t *r, km_rec_t *rec)
+{
+    const uint8_t *b = r->buf;
+    const uint8_t type = b[0];
+    const uint8_t count = b[1];
+    const uint32_t c = r->f->prog_size;
+    if (count > KM_STORE_MAX_KEYS || (type == KM_REC_DELTA_LEGACY && count == 0u)) {
+        return false;
+    }
+    const uint32_t hdr = (type == KM_REC_SNAPSHOT) ? KM_REC_HDR_SNAPSHOT : KM_REC_HDR_LEGACY;
+    const uint32_t size = prv_round_up(hdr + count * KM_REC_ENTRY + KM_REC_CRC, c) + c;
+    if (!prv_need(r, size)) {
+        return false;
+    }
+    for (uint32_t i = size - c; i < size; i++) {
+        if (b[i] != 0x00u) {
+            return false;
+        }
+    }
+    if (!prv_crc_ok(b, size - c - KM_REC_CRC)) {
         return false;
     }
     rec->type = type;
     rec->count = count;
     rec->size = size;
-    rec->entries = &buf[prv_hdr_size(type)];
+    rec->entries = &b[hdr];
     if (type == KM_REC_SNAPSHOT) {
-        rec->version = (uint16_t)(buf[2] | (buf[3] << 8));
-        rec->gen = prv_get32(&buf[4]);
-        rec->hash = prv_get32(&buf[8]);
-    } else {
-        rec->version = 0u;
-        rec->gen = 0u;
-        rec->hash = 0u;
+        rec->version = (uint16_t)prv_get(&b[2], 2u);
+        rec->gen = prv_get(&b[4], 4u);
+        rec->hash = prv_get(&b[8], 4u);
     }
     return true;
 }
 
-uint8_t km_rec_key(const km_rec_t *rec, uint32_t i)
+bool km_rec_read(const km_flash_t *f, uint32_t page, uint32_t offset, uint8_t *buf, km_rec_t *rec)
 {
-    return rec->entries[i * KM_REC_ENTRY];
+    prv_reader_t r = {f, page * f->page_size + offset, 0u, 0u, buf};
+    if (offset >= f->page_size) {
+        return false;
+    }
+    r.room = f->page_size - offset;
+    memset(rec, 0, sizeof *rec);
+    if (!prv_need(&r, 1u)) {
+        return false;
+    }
+    if ((buf[0] & PRV_DENSE_MASK) == KM_REC_DELTA) {
+        return prv_read_dense(&r, rec);
+    }
+    if (buf[0] == KM_REC_SNAPSHOT || buf[0] == KM_REC_DELTA_LEGACY) {
+        return prv_read_fixed(&r, rec);
+    }
+    return false;
 }
 
-uint32_t km_rec_value(const km_rec_t *rec, uint32_t i)
+void km_rec_entry(const km_rec_t *rec, uint32_t *at, uint8_t *id, uint32_t *value, bool *indexed)
 {
-    return prv_get32(&rec->entries[i * KM_REC_ENTRY + 1u]);
+    const uint8_t *e = &rec->entries[*at];
+    if (rec->type == KM_REC_DELTA) {
+        const uint32_t len = ((uint32_t)e[0] >> PRV_IDX_LEN_SHIFT) + 1u;
+        *id = (uint8_t)(e[0] & 0x1Fu);
+        *value = prv_get(&e[1], len);
+        *indexed = true;
+        *at += 1u + len;
+    } else {
+        *id = e[0];
+        *value = prv_get(&e[1], 4u);
+        *indexed = false;
+        *at += KM_REC_ENTRY;
+    }
 }
 
 bool km_rec_cell_erased(const km_flash_t *f, uint32_t addr)

@@ -7,6 +7,7 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "km_crc32.h"
 #include "km_nor_sim.h"
 #include "km_store.h"
 #include "km_store_test_schema.h"
@@ -180,7 +181,8 @@ static void test_maintain_compacts_ahead(void **state)
         assert_true(km_nor_sim_init(&s_sim, &s_geoms[g], &s_flash));
         (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
         uint32_t maint_erases = 0;
-        for (uint32_t n = 0; n < 400; n++) {
+        /* 1,000 one-register deltas of 8 bytes: four pages' worth. */
+        for (uint32_t n = 0; n < 1000; n++) {
             const uint32_t before = s_sim.count.erases;
             prv_commit1(0x12, n + 1u);
             if (n > 0u) {
@@ -193,7 +195,7 @@ static void test_maintain_compacts_ahead(void **state)
         }
         assert_true(maint_erases >= 2);
         assert_int_equal(prv_remount(), KM_STORE_MOUNT_LOADED);
-        assert_int_equal(prv_get(0x12), 400u);
+        assert_int_equal(prv_get(0x12), 1000u);
     }
 }
 
@@ -293,7 +295,8 @@ static void test_failed_program_keeps_old_value(void **state)
 {
     (void)state;
     for (int mode = 0; mode < 2; mode++) {
-        for (uint32_t at = 0; at < 6; at++) {
+        /* Each program of the one-register delta: 8 bytes, four 2-byte cells. */
+        for (uint32_t at = 0; at < 4; at++) {
             assert_true(km_nor_sim_init(&s_sim, &s_geoms[1], &s_flash));
             prv_faulty_t ctx = {&s_flash, 0, 0xFFFFFFFFu, mode};
             const km_flash_t faulty = {s_flash.page_size, s_flash.prog_size, s_flash.page_count,
@@ -538,6 +541,178 @@ static void test_bad_geometry_is_refused(void **state)
                      KM_STORE_MOUNT_ERR_ARG);
 }
 
+/* A delta is read cell by cell and never past its end: the cell after the
+ * last acknowledged delta may be the first cell of a cut one, torn with an
+ * ECC error (STM32G0), and must not cost the acknowledged delta before it.
+ * The same for a cut in the second cell of a two-cell delta. */
+static void test_delta_before_a_torn_ecc_cell_still_loads(void **state)
+{
+    (void)state;
+    for (uint32_t cell = 0; cell < 2u; cell++) {
+        prv_g0_real(2u);
+        prv_commit1(0x0F, 1u);   /* snapshot */
+        prv_commit1(0x13, 700u); /* one-cell delta, acknowledged */
+        km_nor_sim_power_cycle(&s_sim);
+        /* Next delta: 0x3F with a 32-bit value, two cells; cut in one of them. */
+        prv_commit_cut(0x3F, 0x12345678u, cell, KM_NOR_PROG_TORN_ECC, KM_NOR_ERASE_NOT_DONE);
+        for (int r = 0; r < 3; r++) {
+            prv_remount_reading(KM_NOR_WEAK_RANDOM);
+            assert_int_equal(prv_get(0x13), 700u);
+            assert_int_equal(prv_get(0x0F), 1u);
+            assert_int_equal(prv_get(0x3F), 0x140258u); /* the cut commit never took */
+        }
+        prv_commit1(0x12, 9u); /* the next session compacts elsewhere */
+        prv_remount_reading(KM_NOR_WEAK_RANDOM);
+        assert_int_equal(prv_get(0x13), 700u);
+        assert_int_equal(prv_get(0x12), 9u);
+        assert_int_equal(s_sim.count.violations, 0);
+    }
+}
+
+/* Dense deltas (docs/store.md, "On-flash format"): a one-register commit
+ * whose value fits 16 bits is 8 bytes, one STM32G0 double word; the flash
+ * bytes each commit programs, per geometry. */
+static void test_dense_delta_sizes(void **state)
+{
+    (void)state;
+    /* cells programmed on G0 (8 B) / F0 (2 B) / nRF51 (4 B) */
+    static const uint32_t one16[GEOMS] = {1u, 4u, 2u};   /* 1+1+2+4 = 8 B */
+    static const uint32_t one24[GEOMS] = {2u, 5u, 3u};   /* 1+1+3+4 = 9 B */
+    static const uint32_t one32[GEOMS] = {2u, 5u, 3u};   /* 1+1+4+4 = 10 B */
+    static const uint32_t four16[GEOMS] = {3u, 9u, 5u};  /* 1+4*3+4 = 17 B */
+    for (unsigned g = 0; g < GEOMS; g++) {
+        assert_true(km_nor_sim_init(&s_sim, &s_geoms[g], &s_flash));
+        (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
+        prv_commit1(0x0F, 1u); /* the session's first commit: a snapshot */
+        uint32_t p = s_sim.count.programs;
+        prv_commit1(0x13, 0xFFFFu);
+        assert_int_equal(s_sim.count.programs - p, one16[g]);
+        p = s_sim.count.programs;
+        prv_commit1(0x3E, 0x1405DDu);
+        assert_int_equal(s_sim.count.programs - p, one24[g]);
+        p = s_sim.count.programs;
+        prv_commit1(0x3F, 0xFFFFFFFFu);
+        assert_int_equal(s_sim.count.programs - p, one32[g]);
+        p = s_sim.count.programs;
+        const uint8_t keys[] = {0x12, 0x13, 0x14, 0x15};
+        const uint32_t vals[] = {0x101u, 0x100u, 0x1000u, 0xFFFFu}; /* two bytes each */
+        assert_int_equal(km_store_commit(&s_store, keys, vals, 4), KM_STORE_OK);
+        assert_int_equal(s_sim.count.programs - p, four16[g]);
+        assert_int_equal(prv_remount(), KM_STORE_MOUNT_LOADED);
+        assert_int_equal(prv_get(0x13), 0x100u);
+        assert_int_equal(prv_get(0x14), 0x1000u);
+        assert_int_equal(prv_get(0x15), 0xFFFFu);
+        assert_int_equal(prv_get(0x3E), 0x1405DDu);
+        assert_int_equal(prv_get(0x3F), 0xFFFFFFFFu);
+        assert_int_equal(s_sim.count.illegal, 0);
+    }
+}
+
+/* A dense delta names a key by its index in the page's snapshot, so a
+ * changed key list (reordered, a key dropped, one added) still maps each
+ * stored value to its key. */
+static void test_dense_delta_indices_follow_the_snapshot_keys(void **state)
+{
+    (void)state;
+    assert_true(km_nor_sim_init(&s_sim, &s_geoms[0], &s_flash));
+    (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
+    prv_commit1(0x0F, 3u);   /* snapshot */
+    prv_commit1(0x13, 777u); /* deltas: indices 4 and 1 of the old list */
+    prv_commit1(0x10, 96u);
+    km_store_key_t keys2[] = {{0x13, 1u}, {0x40, 77u}, {0x10, 2u}, {0x0F, 4u}};
+    const km_store_schema_t schema2 = {keys2, 4, 1u};
+    km_nor_sim_power_cycle(&s_sim);
+    uint32_t vals[KM_STORE_MAX_KEYS];
+    assert_int_equal(km_store_mount(&s_store, &s_flash, &schema2, vals),
+                     KM_STORE_MOUNT_MIGRATED);
+    assert_int_equal(vals[0], 777u);
+    assert_int_equal(vals[1], 77u);
+    assert_int_equal(vals[2], 96u);
+    assert_int_equal(vals[3], 3u);
+}
+
+/* A page written by the store before the dense format (snapshot, K, then
+ * 'D' deltas with 5-byte entries and a commit cell) still loads whole after
+ * a firmware update. */
+static void test_legacy_delta_still_read(void **state)
+{
+    (void)state;
+    assert_true(km_nor_sim_init(&s_sim, &s_geoms[0], &s_flash));
+    (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
+    prv_commit1(0x0F, 3u); /* snapshot and K: the same format in both stores */
+    /* 'D', count 1, 0, 0 | key 0x12, 500 LE | pad | CRC-32 | commit cell */
+    uint8_t rec[24];
+    memset(rec, 0xFF, sizeof rec);
+    const uint8_t body[] = {0x44, 1, 0, 0, 0x12, 0xF4, 0x01, 0x00, 0x00};
+    memcpy(rec, body, sizeof body);
+    const uint32_t crc = km_crc32(0u, rec, 12u);
+    for (unsigned i = 0; i < 4u; i++) {
+        rec[12u + i] = (uint8_t)(crc >> (8u * i));
+    }
+    memset(&rec[16], 0x00, 8u);
+    const uint32_t at = s_store.active * s_flash.page_size + s_store.tail;
+    for (uint32_t c = 0; c < sizeof rec; c += 8u) {
+        assert_int_equal(s_flash.program(s_flash.ctx, at + c, &rec[c], 8u), KM_FLASH_OK);
+    }
+    assert_int_equal(prv_remount(), KM_STORE_MOUNT_LOADED);
+    assert_int_equal(prv_get(0x0F), 3u);
+    assert_int_equal(prv_get(0x12), 500u);
+}
+
+/* The first flash operation of every committing session is an erase, on
+ * every geometry. No store can do with less under the fault model: a cut
+ * at a session's first program can leave its cell reading all ones (ECC
+ * partly written on the STM32G0), the next session then reads the same
+ * flash as the cut one did and would pick the same cell (docs/store.md,
+ * "Wear figures"). */
+typedef struct {
+    const km_flash_t *inner;
+    int first; /* 0 none yet, 1 erase, 2 program */
+} prv_first_op_t;
+
+static km_flash_result_t prv_r_program(void *ctx, uint32_t off, const void *d, uint32_t len)
+{
+    prv_first_op_t *r = ctx;
+    r->first = (r->first == 0) ? 2 : r->first;
+    return r->inner->program(r->inner->ctx, off, d, len);
+}
+
+static km_flash_result_t prv_r_erase(void *ctx, uint32_t page)
+{
+    prv_first_op_t *r = ctx;
+    r->first = (r->first == 0) ? 1 : r->first;
+    return r->inner->erase(r->inner->ctx, page);
+}
+
+static km_flash_result_t prv_r_read(void *ctx, uint32_t off, void *d, uint32_t len)
+{
+    prv_first_op_t *r = ctx;
+    return r->inner->read(r->inner->ctx, off, d, len);
+}
+
+static void test_first_flash_op_of_a_committing_session_is_an_erase(void **state)
+{
+    (void)state;
+    for (unsigned g = 0; g < GEOMS; g++) {
+        assert_true(km_nor_sim_init(&s_sim, &s_geoms[g], &s_flash));
+        prv_first_op_t rec = {&s_flash, 0};
+        const km_flash_t wrapped = {s_flash.page_size, s_flash.prog_size, s_flash.page_count,
+                                    prv_r_erase, prv_r_program, prv_r_read, &rec};
+        for (uint32_t boot = 0; boot < 40u; boot++) {
+            km_nor_sim_power_cycle(&s_sim);
+            rec.first = 0;
+            (void)km_store_mount(&s_store, &wrapped, &k_test_schema, NULL);
+            const uint8_t k = 0x12;
+            const uint32_t v = (boot % 3u == 0u) ? 7u : boot; /* some commits change nothing */
+            for (uint32_t n = 0; n <= boot % 4u; n++) {
+                assert_int_equal(km_store_commit(&s_store, &k, &v, 1), KM_STORE_OK);
+            }
+            assert_int_equal(rec.first, 1);
+        }
+        assert_int_equal(s_sim.count.violations, 0);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -557,6 +732,11 @@ int main(void)
         cmocka_unit_test(test_weak_k_read_both_ways_keeps_the_state),
         cmocka_unit_test(test_three_pages_keep_both_candidates),
         cmocka_unit_test(test_bad_geometry_is_refused),
+        cmocka_unit_test(test_dense_delta_sizes),
+        cmocka_unit_test(test_delta_before_a_torn_ecc_cell_still_loads),
+        cmocka_unit_test(test_dense_delta_indices_follow_the_snapshot_keys),
+        cmocka_unit_test(test_legacy_delta_still_read),
+        cmocka_unit_test(test_first_flash_op_of_a_committing_session_is_an_erase),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -10,7 +10,7 @@
  *      the simulator counted no violation (a program onto a cell that is
  *      not cleanly erased, even one the controller's check let through) and
  *      no misaligned call;
- *  (d) after each first-level cut, 200 further commits (with reboots and
+ *  (d) after each first-level cut, 300 further commits (with reboots and
  *      idle maintenance, two page-full compactions or more) match a
  *      reference model.
  * The simulator runs with the rules of a real controller: its erased check
@@ -27,7 +27,7 @@
  * The scenarios that fill a page run their steps in the same session as the
  * fill, so their cuts land in a page-full compaction (a session's first
  * commit always compacts). `test_store_powercut seeds` runs only the seeded
- * histories. Runs in about 76 s on one core (Debug build). */
+ * histories. Runs in about 97 s of CPU on one core (Debug build). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -43,10 +43,12 @@
 #define NKEYS (sizeof k_test_keys / sizeof k_test_keys[0])
 #define MAX_ALLOWED 16u
 /* Enough for two page-full compactions on every geometry after the cut
- * (about 45 to 80 single-key commits fill a page), with reboots right after
- * the cut and every 50 commits; more commits without a cut only repeat what
+ * (dense deltas of 1-4 keys average 13-16 bytes: about 60 commits fill a
+ * 1 KiB page, 115 a 2 KiB one), with reboots right after the cut and every
+ * REBOOT_EVERY commits; more commits without a cut only repeat what
  * test_store.c already covers. */
-#define FURTHER_COMMITS 200u
+#define FURTHER_COMMITS 300u
+#define REBOOT_EVERY 150u
 
 typedef struct {
     uint32_t v[NKEYS];
@@ -140,6 +142,9 @@ static prv_state_t s_allowed[MAX_ALLOWED];
 static unsigned s_nallowed;
 
 static unsigned long s_cuts1, s_cuts2, s_outcomes, s_reboots, s_further, s_failures;
+/* Erases and sessions in the further commits: erases beyond one per session
+ * are page-full compactions (or suspect pages cleared). */
+static unsigned long s_further_erases, s_further_sessions;
 static unsigned long s_fail_kind[4]; /* (a) lost or mixed, (b), (c) violation, (d) */
 static const char *s_where_scn;
 static unsigned s_where_geom, s_where_n, s_where_o, s_where_m, s_where_o2;
@@ -275,6 +280,8 @@ static void prv_further_commits(uint32_t seed)
     prv_state_t model;
     prv_read_state(&model);
     s_lcg = seed;
+    const uint32_t erases0 = s_sim.count.erases;
+    s_further_sessions++;
     for (uint32_t c = 0; c < FURTHER_COMMITS; c++) {
         const uint32_t r = prv_rand();
         prv_step_t step = {STEP_COMMIT, (uint8_t)(1u + r % 4u), {0}, {0}};
@@ -311,7 +318,8 @@ static void prv_further_commits(uint32_t seed)
         }
         /* Reboot right after the first acknowledged commits too: a torn
          * page left by the cut must not win over them at the next mount. */
-        if (c < 3u || c % 50u == 49u) {
+        if (c < 3u || c % REBOOT_EVERY == REBOOT_EVERY - 1u) {
+            s_further_sessions += (c + 1u < FURTHER_COMMITS) ? 1u : 0u;
             km_nor_sim_power_cycle(&s_sim);
             km_nor_sim_set_weak_reads(&s_sim, (c == 0u) ? s_p2 : KM_NOR_WEAK_RANDOM);
             (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
@@ -323,6 +331,7 @@ static void prv_further_commits(uint32_t seed)
         }
     }
     s_further += FURTHER_COMMITS;
+    s_further_erases += s_sim.count.erases - erases0;
     if (s_sim.count.violations != 0u) {
         prv_fail("(c) program onto a touched cell, in further commits");
     }
@@ -338,9 +347,11 @@ static void prv_prologue(const prv_scenario_t *scn)
             assert_int_equal(km_store_commit(&s_store, &keys[i], &v, 1), KM_STORE_OK);
         }
     } else if (scn->prologue == 2) {
-        /* Fill the active page to just short of needing a compaction. */
-        const uint32_t delta = 4u * s_flash.prog_size + 16u;
-        for (uint32_t v = 1; s_flash.page_size - s_store.tail > 2u * delta || v < 3u; v++) {
+        /* Fill the active page to just short of needing a compaction: at
+         * most 24 bytes left, so the steps (8-byte one-register deltas, a
+         * 14-17 byte three-register one) run into a page-full compaction on
+         * every geometry (at step 3 on the G0, step 2 on the others). */
+        for (uint32_t v = 1; s_flash.page_size - s_store.tail > 24u || v < 3u; v++) {
             const uint8_t k = 0x19;
             assert_int_equal(km_store_commit(&s_store, &k, &v, 1), KM_STORE_OK);
         }
@@ -449,6 +460,7 @@ static void prv_cut_recovery(void)
 static void prv_run_geometry(unsigned g)
 {
     const unsigned long f0 = s_failures, c1 = s_cuts1, c2 = s_cuts2, oc = s_outcomes;
+    const unsigned long fe0 = s_further_erases, fs0 = s_further_sessions;
     for (unsigned si = 0; si < sizeof s_scenarios / sizeof s_scenarios[0]; si++) {
         const prv_scenario_t *scn = &s_scenarios[si];
         km_nor_sim_config_t cfg = s_geoms[g];
@@ -517,9 +529,10 @@ static void prv_run_geometry(unsigned g)
         }
     }
     printf("geometry %u (%u B pages, %u B cells): %lu cut points, %lu recovery cut points, "
-           "%lu cut outcomes, %lu invariant failures\n",
+           "%lu cut outcomes, %lu invariant failures; further commits: %lu erases in %lu "
+           "committing sessions\n",
            g, s_geoms[g].page_size, s_geoms[g].prog_size, s_cuts1 - c1, s_cuts2 - c2,
-           s_outcomes - oc, s_failures - f0);
+           s_outcomes - oc, s_failures - f0, s_further_erases - fe0, s_further_sessions - fs0);
 }
 
 
