@@ -4,6 +4,8 @@
 
 #include <string.h>
 
+#include "km_fixdiv.h"
+
 void km_control_init(km_control_t *c, const km_control_params_t *p)
 {
     memset(c, 0, sizeof *c);
@@ -117,7 +119,7 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     live->speed = speed_dps;
     live->current = in->current_ma;
     live->pwm = km_output_pwm_reported(&c->bridge);
-    live->temperature = in->temperature_c10 / 10;
+    live->temperature = km_sdiv10(in->temperature_c10);
     live->voltage = in->voltage_mv;
     live->deviation = c->motor.active ? 0 : km_servo_mode_deviation(&c->servo, pos);
     live->rotation_ms = c->motor.active ? c->motor.rotation_ms : c->servo.rotation_ms;
@@ -125,5 +127,6 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     live->protecting = c->servo.ts == 5u;
     live->protections = 0u; /* the protection supervisor's: a later issue */
     live->hw_faults = in->faults;
-    *bridge = c->bridge;
+    bridge->mode = c->bridge.mode; /* by field: a struct copy is a memcpy call here */
+    bridge->pwm = c->bridge.pwm;
 }

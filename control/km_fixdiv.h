@@ -14,8 +14,9 @@
 
 #include <stdint.h>
 
-/* High 32 bits of a x b, exact. */
-static inline uint32_t km_umulhi(uint32_t a, uint32_t b)
+/* High 32 bits of a x b, exact. Always inlined: -Os would otherwise
+ * call it, a third of its cost again. */
+static inline __attribute__((always_inline)) uint32_t km_umulhi(uint32_t a, uint32_t b)
 {
     const uint32_t ah = a >> 16, al = a & 0xFFFFu, bh = b >> 16, bl = b & 0xFFFFu;
     const uint32_t ll = al * bl;
@@ -26,33 +27,49 @@ static inline uint32_t km_umulhi(uint32_t a, uint32_t b)
 
 /* The reciprocals: M = ceil(2^(32+s) / d). */
 #define KM_FIXDIV_M10 0xCCCCCCCDu   /* d = 10, s = 3 */
+#define KM_FIXDIV_M7 0x24924925u    /* d = 7, s = 0: exact only for n < 2^32 / 3 (km_speed_est.c) */
 #define KM_FIXDIV_M1000 0x10624DD3u /* d = 1000, s = 6 */
 #define KM_FIXDIV_M5 0xCCCCCCCDu    /* d = 5, s = 2 */
+#define KM_FIXDIV_M7 0x24924925u    /* d = 7, s = 0: exact only for n < 2^32 / 3 (km_speed_est.c) */
 #define KM_FIXDIV_M100 0xA3D70A3Eu  /* d = 100, s = 6 */
 
-static inline uint32_t km_udiv10(uint32_t n)
+/* Each returns 0 at once below its divisor: the tick's many small
+ * operands (a shaft holding still) then cost a compare. */
+static inline __attribute__((always_inline)) uint32_t km_udiv10(uint32_t n)
 {
+    if (n < 10u) {
+        return 0u;
+    }
     return km_umulhi(n, KM_FIXDIV_M10) >> 3;
 }
 
-static inline uint32_t km_udiv100(uint32_t n)
+static inline __attribute__((always_inline)) uint32_t km_udiv100(uint32_t n)
 {
+    if (n < 100u) {
+        return 0u;
+    }
     return km_umulhi(n, KM_FIXDIV_M100) >> 6;
 }
 
-static inline uint32_t km_udiv1000(uint32_t n)
+static inline __attribute__((always_inline)) uint32_t km_udiv1000(uint32_t n)
 {
+    if (n < 1000u) {
+        return 0u;
+    }
     return km_umulhi(n, KM_FIXDIV_M1000) >> 6;
 }
 
 /* 2560 = 2^9 x 5: floor(floor(n / 2^9) / 5) = floor(n / 2560). */
-static inline uint32_t km_udiv2560(uint32_t n)
+static inline __attribute__((always_inline)) uint32_t km_udiv2560(uint32_t n)
 {
+    if (n < 2560u) {
+        return 0u;
+    }
     return km_umulhi(n >> 9, KM_FIXDIV_M5) >> 2;
 }
 
 /* 256000 = 2^8 x 1000. */
-static inline uint32_t km_udiv256000(uint32_t n)
+static inline __attribute__((always_inline)) uint32_t km_udiv256000(uint32_t n)
 {
     return km_udiv1000(n >> 8);
 }

@@ -4,6 +4,8 @@
 
 #include <string.h>
 
+#include "km_fixdiv.h"
+
 void km_motor_mode_init(km_motor_mode_t *m)
 {
     memset(m, 0, sizeof *m);
@@ -102,7 +104,7 @@ int32_t km_motor_mode_step(km_motor_mode_t *m, const km_control_params_t *p, int
     }
     /* 0x4D and the counted run */
     m->rotation_rem_us += dt_us;
-    const uint32_t ms = m->rotation_rem_us / 1000u;
+    const uint32_t ms = km_udiv1000(m->rotation_rem_us);
     m->rotation_rem_us -= ms * 1000u;
     m->rotation_ms += ms;
     if (m->count_kind == 1u) {
@@ -133,12 +135,12 @@ int32_t km_motor_mode_step(km_motor_mode_t *m, const km_control_params_t *p, int
     int32_t err = sp * 10 - v;
     err = err > 20000 ? 20000 : (err < -20000 ? -20000 : err);
     const uint32_t dt = dt_us > 2000u ? 2000u : dt_us;
-    m->i_acc += (KM_MOTOR_KI_Q8 * err / 1000) * (int32_t)dt / 10; /* PWM x 256000 */
+    m->i_acc += km_sdiv10(km_sdiv1000(KM_MOTOR_KI_Q8 * err) * (int32_t)dt); /* PWM x 256000 */
     const int32_t imax = (int32_t)(g->i_max_pwm > 1000u ? 1000u : g->i_max_pwm) * 256000;
     m->i_acc = m->i_acc > imax ? imax : (m->i_acc < -imax ? -imax : m->i_acc);
     int32_t pwm = (int32_t)g->kv_q8 * sp / 256;
     pwm += sp > 0 ? (int32_t)g->friction_pwm : (sp < 0 ? -(int32_t)g->friction_pwm : 0);
-    pwm += (int32_t)g->kd_q8 * err / 2560;
-    pwm += m->i_acc / 256000;
+    pwm += km_sdiv2560((int32_t)g->kd_q8 * err);
+    pwm += km_sdiv256000(m->i_acc);
     return pwm > 1000 ? 1000 : (pwm < -1000 ? -1000 : pwm);
 }

@@ -1,6 +1,9 @@
 /* Position loop (see km_position_loop.h): PID with speed feedforward and
- * anti-windup, 32-bit fixed point. */
+ * anti-windup, 32-bit fixed point; its divisions by constants are
+ * reciprocal multiplies (km_fixdiv.h: the M0 has no divide), equal to C's. */
 #include "km_position_loop.h"
+
+#include "km_fixdiv.h"
 
 static int32_t prv_clamp(int32_t v, int32_t lo, int32_t hi)
 {
@@ -24,26 +27,29 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     const int32_t vs = prv_clamp(in->setpoint_ddps, -20000, 20000);
     const int32_t ev = prv_clamp(vs - prv_clamp(in->speed_ddps, -20000, 20000), -20000, 20000);
     /* kp: PWM per 0.1 deg Q8 -> kp x e_u / 1000 / 256; e_u / 100 first keeps 32 bits */
-    int32_t out = (int32_t)g->kp_q8 * (e_u / 100) / 2560;
-    out += (int32_t)g->kd_q8 * ev / 2560;   /* kd: PWM per deg/s Q8, ev 0.1 deg/s */
+    int32_t out = km_sdiv2560((int32_t)g->kp_q8 * km_sdiv100(e_u));
+    out += km_sdiv2560((int32_t)g->kd_q8 * ev);   /* kd: PWM per deg/s Q8, ev 0.1 deg/s */
     /* acceleration feedforward: tau x dv/dt as a speed, 0.1 deg/s */
-    const uint32_t dt_ms = dt_us >= 1000u ? dt_us / 1000u : 1u;
     const int32_t dvs = prv_clamp(vs - l->last_sp_ddps, -20000, 20000);
     const int32_t tau = g->tau_ms > 1000u ? 1000 : (int32_t)g->tau_ms;
-    const int32_t va = prv_clamp(dvs * tau / (int32_t)dt_ms, -20000, 20000);
+    int32_t va = dvs * tau; /* over dt in ms, at least 1: a tick under 2 ms divides by 1 */
+    if (dt_us >= 2000u) {
+        va /= (int32_t)km_udiv1000(dt_us);
+    }
+    va = prv_clamp(va, -20000, 20000);
     l->last_sp_ddps = vs;
-    out += (int32_t)g->kv_q8 * prv_clamp(vs + va, -20000, 20000) / 2560;   /* kv: PWM per deg/s Q8 */
+    out += km_sdiv2560((int32_t)g->kv_q8 * prv_clamp(vs + va, -20000, 20000)); /* kv: PWM per deg/s Q8 */
     if (vs != 0) {
         out += vs > 0 ? (int32_t)g->friction_pwm : -(int32_t)g->friction_pwm;
     }
     /* integrator: ki PWM per 0.1 deg.s Q8; acc in PWM x 256000 */
     const int32_t i_max = (g->i_max_pwm > 1000u ? 1000 : (int32_t)g->i_max_pwm) * 256000;
-    const int32_t e_d = prv_clamp(e_u / 1000, -100, 100); /* 10 deg: the integrator is for small errors */
-    const int32_t di = (int32_t)g->ki_q8 * e_d / 10 * (int32_t)(dt_us > 2000u ? 2000u : dt_us) / 100;
-    const int32_t before = out + l->i_acc / 256000;
+    const int32_t e_d = prv_clamp(km_sdiv1000(e_u), -100, 100); /* 10 deg: the integrator is for small errors */
+    const int32_t di = km_sdiv100(km_sdiv10((int32_t)g->ki_q8 * e_d) * (int32_t)(dt_us > 2000u ? 2000u : dt_us));
+    const int32_t before = out + km_sdiv256000(l->i_acc);
     if (in->integrate && !((before >= in->pwm_max && di > 0) || (before <= -in->pwm_max && di < 0))) {
         l->i_acc = prv_clamp(l->i_acc + di, -i_max, i_max);
     }
-    out += l->i_acc / 256000;
+    out += km_sdiv256000(l->i_acc);
     return prv_clamp(out, -in->pwm_max, in->pwm_max);
 }

@@ -4,6 +4,8 @@
 
 #include <string.h>
 
+#include "km_fixdiv.h"
+
 enum { TS_FREE = 0, TS_BRAKE = 1, TS_ON = 2, TS_ARMED = 3, TS_PROTECTING = 5 };
 
 void km_servo_mode_init(km_servo_mode_t *m, const km_control_params_t *p)
@@ -200,8 +202,9 @@ void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_
         m->reset_loop = false;
         if (m->running) {
             m->rotation_rem_us += dt_us;
-            m->rotation_ms += m->rotation_rem_us / 1000u;
-            m->rotation_rem_us %= 1000u;
+            const uint32_t ms = km_udiv1000(m->rotation_rem_us);
+            m->rotation_ms += ms;
+            m->rotation_rem_us -= ms * 1000u;
             if (done) {
                 m->settle_us += dt_us;
                 const int32_t dev = position - m->target;

@@ -3,6 +3,10 @@
 
 #include <string.h>
 
+#include "km_fixdiv.h"
+
+_Static_assert(100000u % KM_SPEED_WINDOW_US == 0u, "the window's exact fast path");
+
 void km_speed_window_init(km_speed_window_t *w)
 {
     memset(w, 0, sizeof *w);
@@ -18,7 +22,10 @@ int32_t km_speed_window_step(km_speed_window_t *w, int32_t position, uint32_t dt
              * stays in 32 bits (M0 has no 64-bit divide instruction);
              * +-20000 x 0.1 deg in one window is far past any servo. */
             const int32_t acc = w->acc > 20000 ? 20000 : (w->acc < -20000 ? -20000 : w->acc);
-            w->dps = (acc * 100000) / (int32_t)w->us;
+            /* a window of exactly 20 ms (20 ticks of 1 ms): x 1e5 / 20000 is
+             * exactly x 5, no divide */
+            w->dps = w->us == KM_SPEED_WINDOW_US ? acc * (100000 / (int32_t)KM_SPEED_WINDOW_US)
+                                                 : (acc * 100000) / (int32_t)w->us;
             w->acc = 0;
             w->us = 0;
         }
@@ -60,6 +67,15 @@ int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
     const uint8_t i = (uint8_t)((f->head + KM_SPEED_FAST_N + 1u - f->count) % KM_SPEED_FAST_N);
     int32_t d = position - f->pos[i];
     d = d > 2000 ? 2000 : (d < -2000 ? -2000 : d); /* keeps d x 1e6 in 32 bits */
-    f->ddps = span ? (d * 1000000) / (int32_t)span : 0;
+    if (span == (KM_SPEED_FAST_N - 1u) * 1000u) {
+        /* the steady 1 kHz tick: d x 1e6 / 7000 = d x 1000 / 7, and for
+         * n = |d| x 1000 <= 2e6 (n x M) >> 32 with M = ceil(2^32 / 7) is
+         * floor(n / 7) (the error n x (7M - 2^32) / 2^32 stays below 1/7);
+         * tests/unit/test_control_fixdiv.c checks every d */
+        const uint32_t q = km_umulhi((uint32_t)(d < 0 ? -d : d) * 1000u, KM_FIXDIV_M7);
+        f->ddps = d < 0 ? -(int32_t)q : (int32_t)q;
+    } else {
+        f->ddps = span ? (d * 1000000) / (int32_t)span : 0;
+    }
     return f->ddps;
 }

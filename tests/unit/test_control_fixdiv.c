@@ -68,7 +68,21 @@ static void check_sdiv(int32_t n)
     }
 }
 
-/* Every n within +-2^23 (past every operand of the tick but the integrator
+/* The unsigned quotients over random uint32 and the top of the range. */
+static void test_unsigned_quotients_match_c(void **state)
+{
+    (void)state;
+    for (unsigned k = 0; k < 2000000u; k++) {
+        const uint32_t n = k < 1000u ? 0xFFFFFFFFu - k : rnd();
+        assert_int_equal(km_udiv10(n), n / 10u);
+        assert_int_equal(km_udiv100(n), n / 100u);
+        assert_int_equal(km_udiv1000(n), n / 1000u);
+        assert_int_equal(km_udiv2560(n), n / 2560u);
+        assert_int_equal(km_udiv256000(n), n / 256000u);
+    }
+}
+
+/* Every n within +-2^22 (past every operand of the tick but the integrator
  * and the profile's speeds), the edges of int32 and around each multiple
  * of the divisors there, and random n over all of int32. */
 static void test_signed_quotients_match_c(void **state)
@@ -275,6 +289,23 @@ static int32_t ref_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_u
 
 /* The running span equals the summed one from init and from a zeroed
  * ring, with ticks of any length (stalled ones included). */
+/* The 1 kHz fast path (span 7000 us, a reciprocal of 7) equals the
+ * division for every displacement the estimator lets through. */
+static void test_speed_fast_steady_tick_every_displacement(void **state)
+{
+    (void)state;
+    for (int32_t d = -2100; d <= 2100; d++) {
+        km_speed_fast_t a, b;
+        km_speed_fast_init(&a, 0);
+        b = a;
+        for (unsigned t = 1; t <= KM_SPEED_FAST_N + 2u; t++) {
+            const int32_t pos = d * (int32_t)t / (int32_t)(KM_SPEED_FAST_N - 1u);
+            assert_int_equal(km_speed_fast_step(&a, pos, 1000u), ref_fast_step(&b, pos, 1000u));
+        }
+        assert_int_equal(a.span_us, 7000u);
+    }
+}
+
 static void test_speed_fast_running_span_equals_sum(void **state)
 {
     (void)state;
@@ -297,14 +328,54 @@ static void test_speed_fast_running_span_equals_sum(void **state)
     }
 }
 
+/* The reported speed (0x47) as it was: a division every window. */
+static int32_t ref_window_step(km_speed_window_t *w, int32_t position, uint32_t dt_us)
+{
+    if (w->have_position) {
+        w->acc += position - w->last_position;
+        w->us += dt_us;
+        if (w->us >= KM_SPEED_WINDOW_US) {
+            const int32_t acc = w->acc > 20000 ? 20000 : (w->acc < -20000 ? -20000 : w->acc);
+            w->dps = (acc * 100000) / (int32_t)w->us;
+            w->acc = 0;
+            w->us = 0;
+        }
+    }
+    w->last_position = position;
+    w->have_position = true;
+    return w->dps;
+}
+
+/* Its exact 20 ms window (x 5) equals the division, for 1 ms ticks and
+ * any others, over displacements past the clamp. */
+static void test_speed_window_equals_division(void **state)
+{
+    (void)state;
+    for (unsigned run = 0; run < 400u; run++) {
+        km_speed_window_t a, b;
+        km_speed_window_init(&a);
+        b = a;
+        int32_t pos = 0;
+        const int32_t step = (int32_t)(rnd() % 4001u) - 2000;
+        for (unsigned t = 0; t < 300u; t++) {
+            pos += step + (int32_t)(rnd() % 7u) - 3;
+            const uint32_t dt = run % 2u ? 1000u : (rnd() % 4u ? 1000u : rnd() % 5000u);
+            assert_int_equal(km_speed_window_step(&a, pos, dt), ref_window_step(&b, pos, dt));
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_reciprocals_are_exact_for_all_uint32),
         cmocka_unit_test(test_umulhi_matches_64_bit_product),
+        cmocka_unit_test(test_unsigned_quotients_match_c),
         cmocka_unit_test(test_signed_quotients_match_c),
         cmocka_unit_test(test_profile_equals_division_reference),
+        cmocka_unit_test(test_speed_fast_steady_tick_every_displacement),
         cmocka_unit_test(test_speed_fast_running_span_equals_sum),
+        cmocka_unit_test(test_speed_window_equals_division),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
