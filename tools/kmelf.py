@@ -245,8 +245,8 @@ class Image:
                     g = self.func_at(c)
                     if g is None:
                         f.indirect.append(Insn(c, 2, "b", f"{c:#x} (no function there)"))
-                    elif g is not f:
-                        calls.add(g.addr)
+                    else:
+                        calls.add(g.addr)  # itself too: a bl to its own entry is recursion
             f.calls = calls
 
     def func_at(self, addr):
@@ -304,12 +304,12 @@ class Image:
             lib_dir, target, member = Path(m.group(1) or "."), m.group(2), m.group(3)
             if not lib_dir.is_absolute():
                 lib_dir = link_dir / lib_dir
-            cands = list((lib_dir / "CMakeFiles" / f"{target}.dir").rglob(member[:-4] + ".su"))
+            cands = list((lib_dir / "CMakeFiles" / f"{target}.dir").rglob(Path(member).with_suffix(".su").name))
             return cands[0] if len(cands) == 1 else None
         p = Path(obj)
         if not p.is_absolute():
             p = link_dir / p
-        return p.with_suffix(".su") if p.suffix == ".obj" else None
+        return p.with_suffix(".su")  # GCC names it after the object, last suffix replaced
 
     @staticmethod
     def _prologue_frame(f):
