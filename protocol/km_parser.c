@@ -311,6 +311,9 @@ void km_parser_set_gap(km_parser_t *p, uint32_t gap_ticks)
 /* Stores one byte at the end of the window. */
 static inline void prv_push(km_parser_t *p, uint8_t byte, uint32_t now)
 {
+    if (p->fill == 0u) {
+        p->head = 0u; /* see prv_append */
+    }
     const uint8_t slot = (uint8_t)(p->head + p->fill);
     p->window[slot] = byte;
     p->psum[slot] = p->acc;
@@ -368,6 +371,13 @@ _Static_assert(offsetof(km_parser_t, psum) == offsetof(km_parser_t, window) + KM
  * known length, split at the ring's end. */
 static void prv_append(km_parser_t *p, const uint8_t *bytes, uint32_t k)
 {
+    if (p->fill == 0u) {
+        /* An empty window may start anywhere: at slot 0 a frame (<= 256
+         * bytes) never wraps around the ring's end, and is handed out as a
+         * view, not copied into the spill. Only a frame found by a rescan
+         * inside a failed candidate can wrap. */
+        p->head = 0u;
+    }
     const uint8_t slot = (uint8_t)(p->head + p->fill);
     const uint32_t first = KM_FRAME_MAX - slot;
     uint32_t acc = p->acc;

@@ -61,8 +61,9 @@ typedef struct {
  * the caller's bytes (a frame that came whole in one run: judged where it
  * lies), into the parser's ring (a frame that spanned calls), or into
  * `spill`, where the body of the rare frame that wraps around the ring's
- * end is copied so that a view is always one contiguous run. Valid until
- * the next call on the parser and while the caller's bytes stay put. */
+ * end (one found by a rescan inside a failed candidate) is copied so that
+ * a view is always one contiguous run. Valid until the next call on the
+ * parser and while the caller's bytes stay put. */
 typedef struct {
     km_frame_view_t frame;
     uint8_t spill[KM_BODY_MAX];

@@ -364,7 +364,7 @@ static uint8_t prv_encode_value(km_servo_t *s, km_reg_index_t r, uint8_t *out)
     }
 }
 
-static void prv_read(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
+static void prv_read(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply)
 {
     /* "Malformed frames": a read carries exactly one address byte. */
     const int r = f->body_len == 1 ? km_reg_find(f->body[0]) : -1;
@@ -702,7 +702,7 @@ static bool prv_multi_k_ok(uint8_t addr, uint8_t k)
 }
 
 /* "Multi-ID write": every servo on the bus judges the frame. */
-static void prv_multi_write(km_servo_t *s, const km_frame_t *f)
+static void prv_multi_write(km_servo_t *s, const km_frame_view_t *f)
 {
     if (f->body_len < 1u || !prv_multi_addr_ok(f->body[0])) {
         /* §4: an address the command does not support is bit 5, on every
@@ -753,7 +753,7 @@ static bool prv_ext_value(const km_servo_t *s, uint8_t addr, uint8_t *out, uint8
 
 #define EXT_VALUE_MAX 2u /* longest extension value: the super-ID slot's answer size */
 
-static void prv_ext_read(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
+static void prv_ext_read(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply)
 {
     uint8_t body[1 + EXT_VALUE_MAX];
     uint8_t n = 0;
@@ -777,7 +777,7 @@ typedef enum {
 } prv_report_t;
 
 /* Runs one command addressed to this servo; fills *reply. */
-static prv_report_t prv_dispatch(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
+static prv_report_t prv_dispatch(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply)
 {
     const bool to_me = f->id == km_servo_id(s);
     const bool broadcast = f->id == KM_ID_BROADCAST;
@@ -862,7 +862,7 @@ static prv_report_t prv_dispatch(km_servo_t *s, const km_frame_t *f, km_reply_t 
     }
 }
 
-void km_servo_handle(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
+void km_servo_handle_view(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply)
 {
     reply->len = 0;
     reply->delay_us = 0;
@@ -906,4 +906,16 @@ void km_servo_handle(km_servo_t *s, const km_frame_t *f, km_reply_t *reply)
         s->unreported |= s->flags;
     }
     s->flags = 0u;
+}
+
+void km_servo_handle(km_servo_t *s, const km_frame_t *frame, km_reply_t *reply)
+{
+    const km_frame_view_t v = {
+        .id = frame->id,
+        .cmd = frame->cmd,
+        .body_len = frame->body_len,
+        .body = frame->body,
+        .end_tick = frame->end_tick,
+    };
+    km_servo_handle_view(s, &v, reply);
 }

@@ -74,6 +74,10 @@ void km_servo_init(km_servo_t *s, const km_product_t *product, const uint32_t *p
 /* Processes one validated frame; fills *reply (len 0 = no answer). */
 void km_servo_handle(km_servo_t *s, const km_frame_t *frame, km_reply_t *reply);
 
+/* The same for a frame the parser handed out as a view (its body where it
+ * lies: no copy). */
+void km_servo_handle_view(km_servo_t *s, const km_frame_view_t *frame, km_reply_t *reply);
+
 /* The parser saw a bad-checksum frame with our ID: bit 5 until a status
  * answer reports it ("Status bits 5 and 6"). */
 void km_servo_note_checksum_error(km_servo_t *s);

@@ -35,7 +35,7 @@
 
 static km_rx_queue_t s_rxq;
 static km_parser_t s_parser;
-static km_frame_t s_frame;
+static km_parser_out_t s_out;  /* the frame the parser hands out: a view */
 static km_servo_t s_servo;
 static km_reply_t s_reply;
 static km_control_t s_control;
@@ -154,9 +154,9 @@ static void prv_report_answer(void)
 
 static void prv_on_frame(void)
 {
-    km_servo_handle(&s_servo, &s_frame, &s_reply);
+    km_servo_handle_view(&s_servo, &s_out.frame, &s_reply);
     if (s_reply.len > 0) {
-        s_reply_end = s_frame.end_tick;
+        s_reply_end = s_out.frame.end_tick;
         s_reply_waiting = !prv_try_schedule_answer();
     }
     prv_report_answer();
@@ -183,22 +183,26 @@ static bool prv_rx_blocked(void)
     return s_restart_pending || s_reply_waiting;
 }
 
+/* Runs of bytes from the RX queue to the parser, where they lie: one call
+ * per run (it stops at a frame), the frame handled as a view of the queue's
+ * bytes before they are released. */
 static void prv_drain_rx(void)
 {
-    uint8_t byte;
-    uint32_t tick;
-    uint8_t flags;
-    for (unsigned n = 0; n < KM_APP_RX_BUDGET && !prv_rx_blocked(); n++) {
-        if (!km_rx_queue_pop(&s_rxq, &byte, &tick, &flags)) {
-            break;
-        }
-        if (flags & KM_RX_LOST) {
+    uint32_t budget = KM_APP_RX_BUDGET;
+    km_rx_run_t run;
+    while (budget > 0u && !prv_rx_blocked() && km_rx_queue_peek(&s_rxq, &run)) {
+        if (run.lost) {
             km_parser_overrun(&s_parser);
         }
-        prv_on_events(km_parser_feed(&s_parser, byte, tick, &s_frame));
+        uint32_t used;
+        const unsigned events = km_parser_feed_bytes(&s_parser, run.bytes, run.ticks,
+                                                     run.n < budget ? run.n : budget, &used, &s_out);
+        prv_on_events(events);
+        km_rx_queue_release(&s_rxq, used);
+        budget -= used;
     }
     if (!prv_rx_blocked()) {
-        prv_on_events(km_parser_poll(&s_parser, km_hal_time_now(), &s_frame));
+        prv_on_events(km_parser_poll_view(&s_parser, km_hal_time_now(), &s_out));
     }
 }
 

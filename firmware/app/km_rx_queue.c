@@ -5,6 +5,9 @@ void km_rx_queue_init(km_rx_queue_t *q)
 {
     atomic_init(&q->head, 0u);
     atomic_init(&q->tail, 0u);
+    atomic_init(&q->marks, 0u);
+    q->marks_taken = 0;
+    q->run_lost = false;
     q->dropped = 0;
     q->pending_loss = false;
 }
@@ -21,7 +24,15 @@ void km_rx_queue_push(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost)
     const unsigned slot = head & (KM_RX_QUEUE_SIZE - 1u);
     q->byte[slot] = byte;
     q->tick[slot] = tick;
-    q->flags[slot] = (lost || q->pending_loss) ? KM_RX_LOST : 0u;
+    if (lost || q->pending_loss) {
+        q->flags[slot] = KM_RX_LOST;
+        /* One writer: a plain load and store (ARMv6-M has no atomic add);
+         * the release of head below publishes it with the byte. */
+        atomic_store_explicit(&q->marks, atomic_load_explicit(&q->marks, memory_order_relaxed) + 1u,
+                              memory_order_relaxed);
+    } else {
+        q->flags[slot] = 0u;
+    }
     q->pending_loss = false;
     /* Release: the entry is complete before the consumer can see it. */
     atomic_store_explicit(&q->head, head + 1u, memory_order_release);
@@ -38,6 +49,9 @@ bool km_rx_queue_pop(km_rx_queue_t *q, uint8_t *byte, uint32_t *tick, uint8_t *f
     *byte = q->byte[slot];
     *tick = q->tick[slot];
     *flags = q->flags[slot];
+    if (*flags & KM_RX_LOST) {
+        q->marks_taken++;
+    }
     /* Release: the slot is read before the producer may reuse it. */
     atomic_store_explicit(&q->tail, tail + 1u, memory_order_release);
     return true;
@@ -47,4 +61,49 @@ bool km_rx_queue_empty(km_rx_queue_t *q)
 {
     return atomic_load_explicit(&q->head, memory_order_acquire) ==
            atomic_load_explicit(&q->tail, memory_order_relaxed);
+}
+
+bool km_rx_queue_peek(km_rx_queue_t *q, km_rx_run_t *run)
+{
+    const unsigned tail = atomic_load_explicit(&q->tail, memory_order_relaxed);
+    const unsigned head = atomic_load_explicit(&q->head, memory_order_acquire);
+    if (head == tail) {
+        return false;
+    }
+    const unsigned slot = tail & (KM_RX_QUEUE_SIZE - 1u);
+    uint32_t n = head - tail;
+    if (n > KM_RX_QUEUE_SIZE - slot) {
+        n = KM_RX_QUEUE_SIZE - slot; /* up to the queue's end */
+    }
+    run->bytes = &q->byte[slot];
+    run->ticks = &q->tick[slot];
+    run->lost = false;
+    /* Read after head (acquire): counts at least every mark among the
+     * bytes seen; a mark of a byte not yet seen only costs a look here. */
+    if (atomic_load_explicit(&q->marks, memory_order_relaxed) != q->marks_taken) {
+        run->lost = (q->flags[slot] & KM_RX_LOST) != 0u;
+        for (uint32_t i = 1; i < n; i++) {
+            if (q->flags[slot + i] & KM_RX_LOST) {
+                n = i; /* the parser must hear of that loss before that byte */
+                break;
+            }
+        }
+    }
+    q->run_lost = run->lost;
+    run->n = n;
+    return true;
+}
+
+void km_rx_queue_release(km_rx_queue_t *q, uint32_t n)
+{
+    if (n == 0u) {
+        return;
+    }
+    if (q->run_lost) {
+        q->marks_taken++;
+        q->run_lost = false;
+    }
+    const unsigned tail = atomic_load_explicit(&q->tail, memory_order_relaxed);
+    /* Release: the bytes are read before the producer may reuse them. */
+    atomic_store_explicit(&q->tail, tail + n, memory_order_release);
 }

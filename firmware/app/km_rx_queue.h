@@ -31,9 +31,23 @@ typedef struct {
     uint32_t tick[KM_RX_QUEUE_SIZE];
     atomic_uint head;        /* written by the producer only */
     atomic_uint tail;        /* written by the consumer only */
+    /* LOST-marked bytes stored, ever (producer) and taken (consumer): while
+     * they are equal no byte waiting is marked, and a run is handed out
+     * without looking at one flag. */
+    atomic_uint marks;
+    uint32_t marks_taken;
+    bool run_lost;           /* consumer side: the run peeked starts with a LOST byte */
     uint32_t dropped;        /* producer side: bytes lost because the queue was full */
     bool pending_loss;       /* producer side: mark the next stored byte as LOST */
 } km_rx_queue_t;
+
+/* The oldest waiting bytes as one run, where they lie in the queue. */
+typedef struct {
+    const uint8_t *bytes;
+    const uint32_t *ticks;
+    uint32_t n;              /* >= 1 */
+    bool lost;               /* bytes were lost right before bytes[0] */
+} km_rx_run_t;
 
 void km_rx_queue_init(km_rx_queue_t *q);
 
@@ -46,5 +60,13 @@ bool km_rx_queue_empty(km_rx_queue_t *q);
 
 /* Main loop. Returns false when empty. */
 bool km_rx_queue_pop(km_rx_queue_t *q, uint8_t *byte, uint32_t *tick, uint8_t *flags);
+
+/* Main loop, the batch way (no call per byte, no copy): the oldest waiting
+ * bytes, up to the queue's end and up to (not including) the next byte
+ * after a loss, left in place; false when empty. The bytes stay valid and
+ * in the queue until km_rx_queue_release() takes the first n of them
+ * (n <= run->n), so a frame can be handled where it lies first. */
+bool km_rx_queue_peek(km_rx_queue_t *q, km_rx_run_t *run);
+void km_rx_queue_release(km_rx_queue_t *q, uint32_t n);
 
 #endif

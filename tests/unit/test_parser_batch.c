@@ -242,8 +242,8 @@ static void test_s2_s7_batch_equals_byte_by_byte_long_runs(void **state)
 
 /* §2: a frame that comes whole in one call is handed out as a view of the
  * caller's bytes; one that comes in pieces is a view into the parser's
- * ring, or, if its body wraps around the ring's end, a copy in the spill. */
-static void test_s2_batch_view_and_wrapped_body(void **state)
+ * ring (an empty window restarts at slot 0, so it does not wrap). */
+static void test_s2_batch_views(void **state)
 {
     (void)state;
     static km_parser_t p;
@@ -255,10 +255,8 @@ static void test_s2_batch_view_and_wrapped_body(void **state)
     }
     uint8_t f[KM_FRAME_MAX];
     uint32_t ticks[KM_FRAME_MAX] = {0};
-    bool saw_view = false;
-    bool saw_spill = false;
     for (unsigned round = 0; round < 20; round++) {
-        const size_t blen = 30u + round * 3u;
+        const size_t blen = 30u + round * 11u;
         const size_t n = rig_command(f, 1, 0x03, body, blen);
         uint32_t used = 0;
         unsigned ev = km_parser_feed_bytes(&p, f, ticks, (uint32_t)n, &used, &out);
@@ -274,14 +272,46 @@ static void test_s2_batch_view_and_wrapped_body(void **state)
         assert_int_equal(used, n - 3u);
         assert_int_equal(out.frame.body_len, blen);
         assert_memory_equal(out.frame.body, body, blen);
-        if (out.frame.body == out.spill) {
-            saw_spill = true;
-        } else {
-            assert_true(out.frame.body >= p.window && out.frame.body + blen <= p.window + KM_FRAME_MAX);
-            saw_view = true;
-        }
+        assert_ptr_equal(out.frame.body, &p.window[5]);
     }
-    assert_true(saw_view && saw_spill);
+}
+
+/* §2 resync: a good frame found by the rescan of a failed 256-byte
+ * candidate, starting near the ring's end, wraps around it: its body is
+ * handed out whole, copied into the spill. */
+static void test_s2_batch_wrapped_body_in_spill(void **state)
+{
+    (void)state;
+    static km_parser_t p;
+    static km_parser_out_t out;
+    km_parser_init(&p, GAP);
+    uint8_t s[300] = {0};
+    uint32_t ticks[300] = {0};
+    s[0] = 0xF9; /* an outer candidate of 256 bytes, its checksum wrong */
+    s[1] = 0xFF;
+    s[2] = 1;
+    s[3] = KM_LENGTH_MAX;
+    uint8_t inner_body[54];
+    for (size_t i = 0; i < sizeof inner_body; i++) {
+        inner_body[i] = (uint8_t)(100u + i);
+    }
+    const size_t inner = rig_command(&s[200], 2, 0x03, inner_body, sizeof inner_body); /* 200..259 */
+    assert_int_equal(inner, 60);
+    uint32_t used = 0;
+    /* Bytes 0..3 alone, so the candidate enters the ring at slot 0. */
+    unsigned ev = km_parser_feed_bytes(&p, s, ticks, 4u, &used, &out);
+    assert_int_equal(ev, 0u);
+    ev = km_parser_feed_bytes(&p, &s[4], ticks, 252u, &used, &out);
+    assert_int_equal(used, 252u);
+    assert_int_equal(ev, KM_PARSE_CHECKSUM_ERR); /* the outer one fails... */
+    assert_int_equal(p.fill, 56u);               /* ...and the inner one waits */
+    ev = km_parser_feed_bytes(&p, &s[256], ticks, 4u, &used, &out);
+    assert_int_equal(ev, KM_PARSE_FRAME);
+    assert_int_equal(used, 4u);
+    assert_int_equal(out.frame.id, 2);
+    assert_int_equal(out.frame.body_len, sizeof inner_body);
+    assert_ptr_equal(out.frame.body, out.spill);
+    assert_memory_equal(out.frame.body, inner_body, sizeof inner_body);
 }
 
 int main(void)
@@ -289,7 +319,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_s2_s7_batch_equals_byte_by_byte_short_runs),
         cmocka_unit_test(test_s2_s7_batch_equals_byte_by_byte_long_runs),
-        cmocka_unit_test(test_s2_batch_view_and_wrapped_body),
+        cmocka_unit_test(test_s2_batch_views),
+        cmocka_unit_test(test_s2_batch_wrapped_body_in_spill),
     };
     return cmocka_run_group_tests_name("parser_batch", tests, NULL, NULL);
 }

@@ -1,4 +1,5 @@
-/* RX queue tests: order, ticks, full-queue loss marking, index wrap. */
+/* RX queue tests: order, ticks, full-queue loss marking, index wrap, and
+ * the batch side (peek a run in place, release part of it). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -79,12 +80,107 @@ static void test_index_wrap_many_laps(void **state)
     assert_int_equal(s_q.dropped, 0);
 }
 
+/* A run ends at the queue's end and before a byte that follows a loss; a
+ * loss is told with the run that starts at its byte, once. */
+static void test_peek_runs_stop_at_end_and_at_loss(void **state)
+{
+    (void)state;
+    km_rx_queue_init(&s_q);
+    km_rx_run_t run;
+    assert_false(km_rx_queue_peek(&s_q, &run));
+    /* Move the indices to 120 so the next run meets the queue's end. */
+    for (unsigned i = 0; i < 120; i++) {
+        km_rx_queue_push(&s_q, 0, 0, false);
+    }
+    assert_true(km_rx_queue_peek(&s_q, &run));
+    assert_int_equal(run.n, 120);
+    km_rx_queue_release(&s_q, 120);
+    for (unsigned i = 0; i < 12; i++) {
+        km_rx_queue_push(&s_q, (uint8_t)i, 500u + i, i == 5u || i == 6u);
+    }
+    assert_true(km_rx_queue_peek(&s_q, &run)); /* 0..4: before the first loss */
+    assert_int_equal(run.n, 5);
+    assert_false(run.lost);
+    assert_int_equal(run.bytes[4], 4);
+    assert_int_equal(run.ticks[4], 504);
+    km_rx_queue_release(&s_q, 2); /* part of it: the rest comes again */
+    assert_true(km_rx_queue_peek(&s_q, &run));
+    assert_int_equal(run.n, 3);
+    assert_int_equal(run.bytes[0], 2);
+    km_rx_queue_release(&s_q, 3);
+    assert_true(km_rx_queue_peek(&s_q, &run)); /* byte 5 alone: 6 follows a loss too */
+    assert_true(run.lost);
+    assert_int_equal(run.n, 1);
+    assert_int_equal(run.bytes[0], 5);
+    km_rx_queue_release(&s_q, 1);
+    assert_true(km_rx_queue_peek(&s_q, &run)); /* 6, 7: the queue's end at 128 */
+    assert_true(run.lost);
+    assert_int_equal(run.n, 2);
+    km_rx_queue_release(&s_q, 2);
+    assert_true(km_rx_queue_peek(&s_q, &run)); /* 8..11 from the queue's start */
+    assert_false(run.lost);
+    assert_int_equal(run.n, 4);
+    assert_int_equal(run.bytes[0], 8);
+    assert_ptr_equal(run.bytes, &s_q.byte[0]);
+    km_rx_queue_release(&s_q, 4);
+    assert_false(km_rx_queue_peek(&s_q, &run));
+    assert_true(km_rx_queue_empty(&s_q));
+}
+
+/* Seeded: pushes (some lost, some dropped on a full queue) interleaved with
+ * peeks and partial releases hand out the very bytes, ticks and losses that
+ * pop would, in order. */
+static void test_peek_release_equals_pop(void **state)
+{
+    (void)state;
+    static km_rx_queue_t a;
+    static km_rx_queue_t b;
+    km_rx_queue_init(&a);
+    km_rx_queue_init(&b);
+    uint32_t rng = 0x2545F491u;
+    uint32_t seq = 0;
+    unsigned losses = 0;
+    for (unsigned step = 0; step < 20000; step++) {
+        rng ^= rng << 13;
+        rng ^= rng >> 17;
+        rng ^= rng << 5;
+        for (unsigned k = rng % 40u; k > 0u; k--) {
+            const bool lost = (rng >> 8) % 50u == 0u && k == 1u;
+            km_rx_queue_push(&a, (uint8_t)seq, seq, lost);
+            km_rx_queue_push(&b, (uint8_t)seq, seq, lost);
+            seq++;
+        }
+        km_rx_run_t run;
+        if (!km_rx_queue_peek(&b, &run)) {
+            assert_false(km_rx_queue_pop(&a, &(uint8_t){0}, &(uint32_t){0}, &(uint8_t){0}));
+            continue;
+        }
+        const uint32_t take = 1u + (rng >> 16) % run.n;
+        for (uint32_t i = 0; i < take; i++) {
+            uint8_t byte;
+            uint32_t tick;
+            uint8_t flags;
+            assert_true(km_rx_queue_pop(&a, &byte, &tick, &flags));
+            assert_int_equal(byte, run.bytes[i]);
+            assert_int_equal(tick, run.ticks[i]);
+            /* Only a run's first byte can follow a loss. */
+            assert_int_equal((flags & KM_RX_LOST) != 0u, i == 0u && run.lost);
+            losses += (flags & KM_RX_LOST) != 0u;
+        }
+        km_rx_queue_release(&b, take);
+    }
+    assert_true(losses > 10u && a.dropped > 10u);
+    assert_int_equal(a.dropped, b.dropped);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fifo_order_and_ticks),
         cmocka_unit_test(test_full_queue_marks_loss),
         cmocka_unit_test(test_index_wrap_many_laps),
+        cmocka_unit_test(test_peek_runs_stop_at_end_and_at_loss),
+        cmocka_unit_test(test_peek_release_equals_pop),
     };
     return cmocka_run_group_tests_name("rx_queue", tests, NULL, NULL);
 }
