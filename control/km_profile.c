@@ -40,30 +40,44 @@ static int32_t prv_speed_for(int32_t d, int32_t ms, int32_t vmax)
     return v < vmax ? v : vmax;
 }
 
-/* Two bits of the square root a step, from the top of w: the remainder
- * stays <= 2 x root < 2^29 for roots below 2^28, so all of it is 32-bit. */
-#define PRV_SQRT_DIGITS(w, n)                         \
-    for (; (n) > 0u; (n)--) {                         \
-        rem = (rem << 2) | ((w) >> 30);               \
-        (w) <<= 2;                                    \
-        const uint32_t t = (root << 2) | 1u;          \
-        root <<= 1;                                   \
-        if (rem >= t) {                               \
-            rem -= t;                                 \
-            root |= 1u;                               \
-        }                                             \
+/* Four bits of x a step, two of the root: with R the root so far and
+ * rem = prefix - R^2 (<= 2R), X = 16 rem + the next four bits, and the new
+ * root is 4R + b for the largest b in 0..3 with 8Rb + b^2 <= X. For roots
+ * below 2^28, R < 2^26 before the last step, so X <= 32R + 15 < 2^31: all
+ * 32-bit. */
+#define PRV_SQRT_NIBBLES(w, n)                                   \
+    for (; (n) > 0u; (n)--) {                                    \
+        const uint32_t x = (rem << 4) | ((w) >> 28);             \
+        (w) <<= 4;                                               \
+        const uint32_t r8 = root << 3, t2 = (r8 << 1) + 4u;      \
+        root <<= 2;                                              \
+        if (x >= t2) {                                           \
+            const uint32_t t3 = t2 + r8 + 5u;                    \
+            if (x >= t3) {                                       \
+                rem = x - t3;                                    \
+                root |= 3u;                                      \
+            } else {                                             \
+                rem = x - t2;                                    \
+                root |= 2u;                                      \
+            }                                                    \
+        } else if (x > r8) {                                     \
+            rem = x - (r8 + 1u);                                 \
+            root |= 1u;                                          \
+        } else {                                                 \
+            rem = x;                                             \
+        }                                                        \
     }
 
 /* floor(sqrt(hi:lo)) for hi:lo < 2^56, one word after the other, leading
- * zero digits skipped (they leave root and remainder 0): ~12 instructions
- * a digit on the M0, where the 64-bit version below costs ~1,100 a root. */
+ * zero nibbles skipped (they leave root and remainder 0): ~9 instructions
+ * a root bit on the M0, where the 64-bit version below costs ~1,100 a
+ * root. */
 static uint32_t prv_isqrt56(uint32_t hi, uint32_t lo)
 {
     uint32_t root = 0, rem = 0;
-    unsigned n = 16u, m = 16u; /* digits left in hi, in lo */
+    unsigned n = 8u, m = 8u; /* nibbles left in hi, in lo */
     if (hi == 0u) {
         hi = lo;
-        n = 16u;
         m = 0u;
         if (hi == 0u) {
             return 0u;
@@ -71,14 +85,14 @@ static uint32_t prv_isqrt56(uint32_t hi, uint32_t lo)
     }
     while ((hi >> 24) == 0u) {
         hi <<= 8;
-        n -= 4u;
+        n -= 2u;
     }
-    while ((hi >> 30) == 0u) {
-        hi <<= 2;
+    while ((hi >> 28) == 0u) {
+        hi <<= 4;
         n--;
     }
-    PRV_SQRT_DIGITS(hi, n)
-    PRV_SQRT_DIGITS(lo, m)
+    PRV_SQRT_NIBBLES(hi, n)
+    PRV_SQRT_NIBBLES(lo, m)
     return root;
 }
 
@@ -164,8 +178,8 @@ void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_u
 
 /* pos += vel * dt / 1e6 exactly, remainder carried (dt <= 1000). The
  * remainder is normalised by compares: |pos_rem| < 3e6 before it, so this
- * is C's / and % by 1e6 without a divide. */
-static void prv_advance(km_profile_t *p, uint32_t dt_us)
+ * is C's / and % by 1e6 without a divide. Returns vel / 1000. */
+static int32_t prv_advance(km_profile_t *p, uint32_t dt_us)
 {
     const int32_t q = km_sdiv1000(p->vel), r = p->vel - q * 1000;
     if (dt_us == 1000u) { /* the tick: q x 1000 / 1000 = q, no remainder */
@@ -185,6 +199,7 @@ static void prv_advance(km_profile_t *p, uint32_t dt_us)
         p->pos--;
         p->pos_rem += 1000000;
     }
+    return q;
 }
 
 /* The braking-curve speed min(floor(sqrt(k x d)), vmax); k x d is compared
@@ -210,7 +225,7 @@ static void prv_step(km_profile_t *p, uint32_t dt_us)
 {
     const int32_t e = p->target - p->pos;
     if (p->stream) {
-        prv_advance(p, dt_us);
+        (void)prv_advance(p, dt_us);
         const int32_t left = p->target - p->pos;
         if (left == 0 || (left > 0) != (e > 0)) {
             p->pos = p->target;
@@ -221,10 +236,15 @@ static void prv_step(km_profile_t *p, uint32_t dt_us)
         return;
     }
     /* speed change allowed this piece: accel (u/s per ms) x dt, remainder kept */
-    int32_t dv = p->accel * (int32_t)dt_us + p->vel_rem;
-    const int32_t dvq = km_sdiv1000(dv);
-    p->vel_rem = dv - dvq * 1000;
-    dv = dvq;
+    int32_t dv;
+    if (dt_us == 1000u && p->vel_rem >= 0) {
+        dv = p->accel; /* (accel x 1000 + rem) / 1000 with 0 <= rem < 1000: rem stays */
+    } else {
+        dv = p->accel * (int32_t)dt_us + p->vel_rem;
+        const int32_t dvq = km_sdiv1000(dv);
+        p->vel_rem = dv - dvq * 1000;
+        dv = dvq;
+    }
     /* the fastest speed that can still brake to a stop on the target from
      * where this piece ends (so the last piece arrives at a crawl, not at
      * the speed of the tick before) */
@@ -241,11 +261,11 @@ static void prv_step(km_profile_t *p, uint32_t dt_us)
     } else if (p->vel > want) {
         p->vel = p->vel - dv > want ? p->vel - dv : want;
     }
-    prv_advance(p, dt_us);
+    const int32_t q = prv_abs(prv_advance(p, dt_us)); /* |vel| / 1000: C's / truncates */
     const int32_t left = p->target - p->pos;
     /* arrived (or crossed within one piece): stop on the target */
     if (left == 0 || ((left > 0) != (e > 0) && e != 0) ||
-        (prv_abs(left) <= km_sdiv1000(prv_abs(p->vel)) + 1 && prv_abs(p->vel) <= dv)) {
+        (prv_abs(left) <= q + 1 && prv_abs(p->vel) <= dv)) {
         p->pos = p->target;
         p->pos_rem = 0;
         p->vel = 0;
