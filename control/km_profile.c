@@ -123,6 +123,7 @@ void km_profile_reset(km_profile_t *p, int32_t pos_ddeg)
     p->pos = prv_ddeg_to_u(pos_ddeg);
     p->target = p->pos;
     p->vmax = 1;
+    p->vsq_lo = 1u;
     p->accel = 1;
     p->done = true;
 }
@@ -131,6 +132,8 @@ void km_profile_move(km_profile_t *p, int32_t target_ddeg, int32_t vmax_ups, int
 {
     p->target = prv_ddeg_to_u(target_ddeg);
     p->vmax = vmax_ups > 0 ? vmax_ups : 1;
+    p->vsq_hi = km_umulhi((uint32_t)p->vmax, (uint32_t)p->vmax);
+    p->vsq_lo = (uint32_t)p->vmax * (uint32_t)p->vmax;
     p->accel = accel > 0 ? (accel < ACCEL_MAX ? accel : ACCEL_MAX) : 1;
     p->stream = false;
     p->done = false;
@@ -205,16 +208,14 @@ static int32_t prv_advance(km_profile_t *p, uint32_t dt_us)
 /* The braking-curve speed min(floor(sqrt(k x d)), vmax); k x d is compared
  * with vmax^2 first, so a move away from its braking phase (speeding up,
  * cruising) takes no square root at all. */
-static int32_t prv_brake_speed(uint32_t k, uint32_t d, int32_t vmax)
+static int32_t prv_brake_speed(const km_profile_t *p, uint32_t k, uint32_t d)
 {
     const uint32_t hi = km_umulhi(k, d), lo = k * d;
-    const uint32_t v = (uint32_t)vmax;
-    const uint32_t vh = km_umulhi(v, v), vl = v * v;
-    if (hi > vh || (hi == vh && lo >= vl)) {
-        return vmax;
+    if (hi > p->vsq_hi || (hi == p->vsq_hi && lo >= p->vsq_lo)) {
+        return p->vmax;
     }
     /* below vmax^2: the root is below vmax */
-    if (v < (1u << 28)) {
+    if ((uint32_t)p->vmax < (1u << 28)) {
         return (int32_t)prv_isqrt56(hi, lo);
     }
     return (int32_t)prv_isqrt64(((uint64_t)hi << 32) | lo);
@@ -254,7 +255,7 @@ static void prv_step(km_profile_t *p, uint32_t dt_us)
         d = 0;
     }
     /* 2 x accel x 1000 < 2^32 (ACCEL_MAX) */
-    const int32_t vb = prv_brake_speed(2000u * (uint32_t)p->accel, (uint32_t)d, p->vmax);
+    const int32_t vb = prv_brake_speed(p, 2000u * (uint32_t)p->accel, (uint32_t)d);
     const int32_t want = e >= 0 ? vb : -vb;
     if (p->vel < want) {
         p->vel = p->vel + dv < want ? p->vel + dv : want;

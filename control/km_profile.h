@@ -37,6 +37,8 @@ typedef struct {
     int32_t accel;     /* u/s per ms, > 0 */
     int32_t pos_rem;   /* position remainder, u/1e6 */
     int32_t vel_rem;   /* speed remainder, u/s per 1000 */
+    uint32_t vsq_hi;   /* vmax^2 (high, low word), set with vmax by a move: */
+    uint32_t vsq_lo;   /* the braking test of every tick compares with it */
     bool stream;       /* constant-speed segment (0x68) */
     bool done;         /* at the target, at rest */
 } km_profile_t;
