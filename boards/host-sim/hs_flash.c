@@ -38,7 +38,7 @@ static km_flash_result_t prv_erase(void *ctx, uint32_t page)
     if (page >= HS_PAGES) {
         return KM_FLASH_ERR_ALIGN;
     }
-    memset(s_mem + page * HS_PAGE_SIZE, 0xFF, HS_PAGE_SIZE);
+    memset(&s_mem[(size_t)page * HS_PAGE_SIZE], 0xFF, HS_PAGE_SIZE);
     return prv_write_through(page * HS_PAGE_SIZE, HS_PAGE_SIZE) ? KM_FLASH_OK : KM_FLASH_ERR_ERASE;
 }
 
@@ -83,7 +83,7 @@ bool hs_flash_open(const char *path, km_flash_t *flash)
             return false;
         }
     } else if (st.st_size != (off_t)HS_REGION ||
-               pread(s_fd, s_mem, HS_REGION, 0) != (ssize_t)HS_REGION) {
+               pread(s_fd, s_mem, sizeof s_mem, 0) != (ssize_t)sizeof s_mem) {
         fprintf(stderr, "host-sim: %s is not a %u-byte flash image\n", path, HS_REGION);
         return false;
     }

@@ -31,6 +31,49 @@ static bool prv_fail(const char *path, unsigned line, const char *why)
     return false;
 }
 
+static const char *prv_skip_blanks(const char *p)
+{
+    while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n') {
+        p++;
+    }
+    return p;
+}
+
+/* One line "T_MS KEY VALUE": 1 if well formed, -1 if blank, 0 otherwise.
+ * strtoul/strtol, not sscanf: a number too large for its type is an error
+ * here, not a silently clamped or undefined value. */
+static int prv_parse(const char *text, unsigned long *t_ms, char *name, size_t name_size,
+                     long *value)
+{
+    const char *p = prv_skip_blanks(text);
+    if (*p == '\0') {
+        return -1;
+    }
+    char *end;
+    errno = 0;
+    *t_ms = strtoul(p, &end, 10);
+    if (end == p || errno != 0 || *p == '-') {
+        return 0;
+    }
+    p = prv_skip_blanks(end);
+    size_t k = 0;
+    while (p[k] != '\0' && p[k] != ' ' && p[k] != '\t' && p[k] != '\r' && p[k] != '\n') {
+        k++;
+    }
+    if (k == 0u || k >= name_size) {
+        return 0;
+    }
+    memcpy(name, p, k);
+    name[k] = '\0';
+    p = prv_skip_blanks(p + k);
+    errno = 0;
+    *value = strtol(p, &end, 0);
+    if (end == p || errno != 0) {
+        return 0;
+    }
+    return *prv_skip_blanks(end) == '\0' ? 1 : 0;
+}
+
 bool hs_scenario_load(const char *path)
 {
     FILE *f = fopen(path, "r");
@@ -51,12 +94,11 @@ bool hs_scenario_load(const char *path)
         char name[32];
         unsigned long t_ms;
         long value;
-        char extra;
-        const int n = sscanf(text, "%lu %31s %li %c", &t_ms, name, &value, &extra);
-        if (n == EOF || (n <= 0 && strspn(text, " \t\r\n") == strlen(text))) {
+        const int n = prv_parse(text, &t_ms, name, sizeof name, &value);
+        if (n < 0) {
             continue; /* blank or comment */
         }
-        if (n != 3) {
+        if (n == 0) {
             ok = prv_fail(path, line, "expected: T_MS KEY VALUE");
             break;
         }

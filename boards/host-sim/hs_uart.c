@@ -32,6 +32,7 @@
 #define _GNU_SOURCE /* posix_openpt, ptsname */
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <netdb.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
@@ -92,7 +93,13 @@ uint32_t km_hal_uart_gap_floor_us(void)
 static int prv_env_fd(const char *name)
 {
     const char *v = getenv(name);
-    return v ? atoi(v) : -1;
+    if (v == NULL) {
+        return -1;
+    }
+    char *end;
+    errno = 0;
+    const long fd = strtol(v, &end, 10);
+    return (end == v || *end != '\0' || errno != 0 || fd < 0 || fd > INT_MAX) ? -1 : (int)fd;
 }
 
 void hs_uart_prepare_exec(void)

@@ -50,7 +50,7 @@ static void ISR_on_timer(void *ctx)
 /* Sleep only if nothing is pending yet: with interrupts masked, an event
  * arriving between the check and WFI still wakes WFI (ARMv6-M), where an
  * unmasked check could miss it and sleep until some unrelated interrupt. */
-static void prv_idle_unless(volatile bool *flag, bool want)
+static void prv_idle_unless(const volatile bool *flag, bool want)
 {
     uint32_t irq = km_hal_irq_lock();
     if (*flag != want) {
