@@ -214,9 +214,9 @@ bool km_store_maintain(km_store_t *s)
         return false;
     }
     const km_flash_t *f = s->flash;
-    /* Keep room for the largest record so a commit does not wait on an
-     * erase. */
-    const uint32_t room = km_rec_snapshot_size(s->schema->count, f->prog_size);
+    /* Keep room for the largest delta (every key, 4-byte values) so a
+     * commit does not wait on an erase. */
+    const uint32_t room = km_rec_delta_max_size(s->schema->count, f->prog_size);
     if (f->page_size - s->tail >= room) {
         return false;
     }

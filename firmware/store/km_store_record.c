@@ -45,6 +45,11 @@ uint32_t km_rec_snapshot_size(uint32_t count, uint32_t cell)
     return prv_round_up(KM_REC_HDR_SNAPSHOT + count * KM_REC_ENTRY + KM_REC_CRC, cell) + cell;
 }
 
+uint32_t km_rec_delta_max_size(uint32_t count, uint32_t cell)
+{
+    return prv_round_up(1u + count * (1u + 4u) + KM_REC_CRC, cell);
+}
+
 /* Pads buf[at..) with 0xFF to end - 4 and puts the CRC of buf[0..end-4) there. */
 static void prv_seal(uint8_t *buf, uint32_t at, uint32_t end)
 {

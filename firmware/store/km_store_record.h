@@ -48,6 +48,8 @@ typedef struct {
 
 /* Bytes a snapshot of count entries takes with cells of cell bytes. */
 uint32_t km_rec_snapshot_size(uint32_t count, uint32_t cell);
+/* Bytes the largest delta of count entries can take (4-byte values). */
+uint32_t km_rec_delta_max_size(uint32_t count, uint32_t cell);
 
 /* Builds in buf the record of the keys in keys_mask (schema indices) with
  * their values; rec gives type (snapshot or delta), version, gen and hash.

@@ -333,7 +333,9 @@ static void test_torn_unstable_snapshot_cannot_win_later(void **state)
     for (uint32_t seed = 1; seed < 40u; seed++) {
         assert_true(km_nor_sim_init(&s_sim, &s_geoms[0], &s_flash));
         (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
-        for (uint32_t v = 1; s_flash.page_size - s_store.tail >= 120u; v++) {
+        /* Fill until less than the largest delta (1 + 18 * 5 + 4 -> 96 B)
+         * is left: maintain then compacts ahead. */
+        for (uint32_t v = 1; s_flash.page_size - s_store.tail >= 96u; v++) {
             prv_commit1(0x19, v);
         }
         /* maintain erases the next page (unless the session's first commit
