@@ -30,65 +30,20 @@ static inline __attribute__((always_inline)) uint32_t km_umulhi(uint32_t a, uint
 #define KM_FIXDIV_M7 0x24924925u    /* d = 7, s = 0: exact only for n < 2^32 / 3 (km_speed_est.c) */
 #define KM_FIXDIV_M1000 0x10624DD3u /* d = 1000, s = 6 */
 #define KM_FIXDIV_M5 0xCCCCCCCDu    /* d = 5, s = 2 */
-#define KM_FIXDIV_M7 0x24924925u    /* d = 7, s = 0: exact only for n < 2^32 / 3 (km_speed_est.c) */
 #define KM_FIXDIV_M100 0xA3D70A3Eu  /* d = 100, s = 6 */
 
-/* Each returns 0 at once below its divisor: the tick's many small
- * operands (a shaft holding still) then cost a compare. */
-static inline __attribute__((always_inline)) uint32_t km_udiv10(uint32_t n)
-{
-    if (n < 10u) {
-        return 0u;
-    }
-    return km_umulhi(n, KM_FIXDIV_M10) >> 3;
-}
-
-static inline __attribute__((always_inline)) uint32_t km_udiv100(uint32_t n)
-{
-    if (n < 100u) {
-        return 0u;
-    }
-    return km_umulhi(n, KM_FIXDIV_M100) >> 6;
-}
-
-static inline __attribute__((always_inline)) uint32_t km_udiv1000(uint32_t n)
-{
-    if (n < 1000u) {
-        return 0u;
-    }
-    return km_umulhi(n, KM_FIXDIV_M1000) >> 6;
-}
-
-/* 2560 = 2^9 x 5: floor(floor(n / 2^9) / 5) = floor(n / 2560). */
-static inline __attribute__((always_inline)) uint32_t km_udiv2560(uint32_t n)
-{
-    if (n < 2560u) {
-        return 0u;
-    }
-    return km_umulhi(n >> 9, KM_FIXDIV_M5) >> 2;
-}
-
-/* 256000 = 2^8 x 1000. */
-static inline __attribute__((always_inline)) uint32_t km_udiv256000(uint32_t n)
-{
-    return km_udiv1000(n >> 8);
-}
-
-/* Signed, truncating toward zero like C's `/` (n = INT32_MIN included:
- * its magnitude is formed in uint32). */
-#define KM_FIXDIV_SIGNED(name, udiv)                                          \
-    static inline int32_t name(int32_t n)                                     \
-    {                                                                         \
-        if (n < 0) {                                                          \
-            return -(int32_t)udiv(0u - (uint32_t)n);                          \
-        }                                                                     \
-        return (int32_t)udiv((uint32_t)n);                                    \
-    }
-
-KM_FIXDIV_SIGNED(km_sdiv10, km_udiv10)
-KM_FIXDIV_SIGNED(km_sdiv100, km_udiv100)
-KM_FIXDIV_SIGNED(km_sdiv1000, km_udiv1000)
-KM_FIXDIV_SIGNED(km_sdiv2560, km_udiv2560)
-KM_FIXDIV_SIGNED(km_sdiv256000, km_udiv256000)
+/* Quotients of uint32 (floor) and int32 (truncated toward zero, as C's
+ * `/`; INT32_MIN included). Real functions (km_fixdiv.c), so that every
+ * module shares one copy: these M0 parts have 16..32 KiB of flash. */
+uint32_t km_udiv10(uint32_t n);
+uint32_t km_udiv100(uint32_t n);
+uint32_t km_udiv1000(uint32_t n);
+uint32_t km_udiv2560(uint32_t n);
+uint32_t km_udiv256000(uint32_t n);
+int32_t km_sdiv10(int32_t n);
+int32_t km_sdiv100(int32_t n);
+int32_t km_sdiv1000(int32_t n);
+int32_t km_sdiv2560(int32_t n);
+int32_t km_sdiv256000(int32_t n);
 
 #endif
