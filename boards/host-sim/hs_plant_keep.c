@@ -4,7 +4,9 @@
  * the bus descriptors are; a process started by hand has no such variable
  * and starts a fresh plant (a power-on). */
 #define _GNU_SOURCE /* setenv, unsetenv */
+#include <errno.h>
 #include <inttypes.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -41,11 +43,34 @@ bool km_sim_board_recall(km_plant_physics_t *out)
     if (v == NULL) {
         return false;
     }
+    /* strtol, not sscanf: a field out of its type's range is malformed
+     * here, not a silently clamped or undefined value. */
+    int64_t f[7];
+    const char *p = v;
+    int n = 0;
+    for (; n < 7; n++) {
+        char *end;
+        errno = 0;
+        const long long x = strtoll(p, &end, 10);
+        const bool is_faults = (n == 6);
+        if (end == p || errno != 0 || x < (is_faults ? 0 : INT32_MIN) ||
+            x > (is_faults ? (long long)UINT32_MAX : INT32_MAX)) {
+            break;
+        }
+        f[n] = x;
+        p = end;
+    }
     km_plant_physics_t ph;
     memset(&ph, 0, sizeof ph);
-    const int n = sscanf(v, "%" SCNd32 " %" SCNd32 " %" SCNd32 " %" SCNd32 " %" SCNd32 " %" SCNd32 " %" SCNu32,
-                         &ph.pos_ddeg, &ph.pos_rem_ndeg, &ph.speed_mdps, &ph.temp_uc, &ph.supply_mv,
-                         &ph.ambient_uc, &ph.faults);
+    if (n == 7) {
+        ph.pos_ddeg = (int32_t)f[0];
+        ph.pos_rem_ndeg = (int32_t)f[1];
+        ph.speed_mdps = (int32_t)f[2];
+        ph.temp_uc = (int32_t)f[3];
+        ph.supply_mv = (int32_t)f[4];
+        ph.ambient_uc = (int32_t)f[5];
+        ph.faults = (uint32_t)f[6];
+    }
     unsetenv(PRV_PLANT_ENV); /* nothing started from here inherits it */
     if (n != 7) {
         fprintf(stderr, "host-sim: ignoring a malformed %s: a fresh plant\n", PRV_PLANT_ENV);
