@@ -9,8 +9,14 @@
 
 #include "km_fixdiv.h"
 
-#define STEP_MAX_US 1000u /* longer ticks are integrated in pieces */
-#define ACCEL_MAX 1000000 /* u/s per ms = 100,000 deg/s^2: keeps accel x dt in 32 bits */
+/* Longer ticks are integrated in pieces. 2 ms, not 1: the app measures
+ * each tick's dt, so a 1 kHz tick a few us late (1,010 us) is still one
+ * piece (one square root), not 1,000 + 10 us (two). */
+#define STEP_MAX_US 2000u
+#define ACCEL_MAX 1000000 /* u/s per ms = 100,000 deg/s^2: keeps accel x dt (2 ms) in 32 bits */
+/* |speed| < 2^30 u/s (107,374 deg/s; 0x5D's u16 allows 65,535): so
+ * |vel| / 1000 x dt stays in 32 bits for a 2 ms piece */
+#define VMAX_MAX 0x3FFFFFFF
 
 static int32_t prv_abs(int32_t v)
 {
@@ -131,7 +137,7 @@ void km_profile_reset(km_profile_t *p, int32_t pos_ddeg)
 void km_profile_move(km_profile_t *p, int32_t target_ddeg, int32_t vmax_ups, int32_t accel)
 {
     p->target = prv_ddeg_to_u(target_ddeg);
-    p->vmax = vmax_ups > 0 ? vmax_ups : 1;
+    p->vmax = vmax_ups > 0 ? (vmax_ups < VMAX_MAX ? vmax_ups : VMAX_MAX) : 1;
     p->vsq_hi = km_umulhi((uint32_t)p->vmax, (uint32_t)p->vmax);
     p->vsq_lo = (uint32_t)p->vmax * (uint32_t)p->vmax;
     p->accel = accel > 0 ? (accel < ACCEL_MAX ? accel : ACCEL_MAX) : 1;
@@ -172,15 +178,15 @@ void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_u
         ms = 1u;
     }
     const int32_t v = prv_speed_for(d, (int32_t)ms, vlimit_ups);
-    p->vmax = v > 0 ? v : 1;
+    p->vmax = v > 0 ? (v < VMAX_MAX ? v : VMAX_MAX) : 1;
     p->vel = p->target >= p->pos ? p->vmax : -p->vmax;
     p->vel_rem = 0;
     p->stream = true;
     p->done = false;
 }
 
-/* pos += vel * dt / 1e6 exactly, remainder carried (dt <= 1000). The
- * remainder is normalised by compares: |pos_rem| < 3e6 before it, so this
+/* pos += vel * dt / 1e6 exactly, remainder carried (dt <= 2000). The
+ * remainder is normalised by compares: |pos_rem| < 4e6 before it, so this
  * is C's / and % by 1e6 without a divide. Returns vel / 1000. */
 static int32_t prv_advance(km_profile_t *p, uint32_t dt_us)
 {
@@ -189,7 +195,7 @@ static int32_t prv_advance(km_profile_t *p, uint32_t dt_us)
         p->pos += q;
         p->pos_rem += r * 1000;
     } else {
-        const int32_t qd = q * (int32_t)dt_us; /* |q| < 2^21, dt <= 1000 */
+        const int32_t qd = q * (int32_t)dt_us; /* |q| < 2^20 (VMAX_MAX), dt <= 2000 */
         const int32_t qq = km_sdiv1000(qd);
         p->pos += qq;
         p->pos_rem += (qd - qq * 1000) * 1000 + r * (int32_t)dt_us;

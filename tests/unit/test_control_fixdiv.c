@@ -192,7 +192,7 @@ static void ref_piece(km_profile_t *p, uint32_t dt_us)
 static bool ref_step(km_profile_t *p, uint32_t dt_us)
 {
     while (!p->done && dt_us > 0u) {
-        const uint32_t piece = dt_us > 1000u ? 1000u : dt_us;
+        const uint32_t piece = dt_us > 2000u ? 2000u : dt_us; /* km_profile.c's STEP_MAX_US */
         ref_piece(p, piece);
         dt_us -= piece;
     }
@@ -211,13 +211,14 @@ static void expect_same(const km_profile_t *a, const km_profile_t *b, unsigned r
 }
 
 /* Random moves (speed, time, stream segments, a new command mid-move) at
- * 1 ms ticks and at odd tick lengths (pieces below 1 ms, several pieces a
- * tick), speeds from 1 u/s to past 2^28 u/s (the 64-bit root's range):
+ * 1 ms ticks and at odd tick lengths (pieces below 1 ms and up to 2 ms,
+ * several pieces a tick), speeds from 1 u/s to past 2^28 u/s (the 64-bit
+ * root's range) and up to 2^30 u/s (the bound of a 2 ms piece):
  * the rewritten profile equals the old one at every tick. */
 static void test_profile_equals_division_reference(void **state)
 {
     (void)state;
-    static const uint32_t dts[] = {1000u, 1000u, 1000u, 250u, 999u, 1001u, 2500u, 17u};
+    static const uint32_t dts[] = {1000u, 1000u, 1000u, 250u, 999u, 1001u, 2500u, 17u, 2000u, 4999u};
     for (unsigned run = 0; run < 1200u; run++) {
         km_profile_t a, b;
         const int32_t from = (int32_t)(rnd() % 20001u) - 10000;
@@ -227,7 +228,7 @@ static void test_profile_equals_division_reference(void **state)
         for (unsigned cmd = 0; cmd < 3u; cmd++) {
             const int32_t to = (int32_t)(rnd() % 40001u) - 20000;
             const uint32_t big = rnd() % 8u == 0u;
-            const int32_t vmax = big ? (int32_t)(rnd() % 600000000u) + 1 : (int32_t)(rnd() % 7200000u) + 1;
+            const int32_t vmax = big ? (int32_t)(rnd() % 1200000000u) + 1 : (int32_t)(rnd() % 7200000u) + 1;
             const int32_t accel = (int32_t)(rnd() % (big ? 1000000u : 200000u)) + 1;
             switch (rnd() % 3u) {
             case 0:

@@ -330,12 +330,14 @@ static void m0h_dispatcher(void)
 
 /* One measured tick as the app runs it (parameters decoded first, only
  * when a register changed), its live registers handed back. */
+static uint32_t s_tick_us = 1000u; /* the tick's dt; m0h_follow_jitter varies it */
+
 static void m0h_tick(const char *name, const km_sensors_t *in, km_live_t *live, km_bridge_t *bridge)
 {
     m0h_region(name);
     const km_control_params_t *params = m0h_params();
     m0_begin();
-    km_control_step(&s_control, in, params, 1000u, live, bridge);
+    km_control_step(&s_control, in, params, s_tick_us, live, bridge);
     m0_end();
     km_servo_set_live(&s_servo, live);
 }
@@ -422,6 +424,20 @@ static void m0h_control(void)
         (void)m0h_follow("control_tick_stream", 10u, &in, &live);
     }
     m0h_check("control_streaming", live.running && live.position > 450 + 150);
+
+    /* The app measures each tick's dt (km_app.c): a late or early tick
+     * takes the general paths (dt != 1000 us). A move back to 0 in 300 ms
+     * with dt 990 and 1010 us in turn. */
+    const uint8_t back[5] = {0x65, 0x00, 0x00, 0x2C, 0x01};
+    m0h_dispatch("write_0x65_back", M0_ID, 0x03, back, 5, false, false);
+    m0h_desc("control_tick_move_jitter", "a 0x65 move in 300 ms, ticks of 990 and 1010 us in turn");
+    ticks = 0;
+    do {
+        s_tick_us = ticks % 2u ? 1010u : 990u;
+        ticks += m0h_follow("control_tick_move_jitter", 1u, &in, &live);
+    } while (live.running && ticks < 1000u);
+    s_tick_us = 1000u;
+    m0h_check("control_move_jitter", !live.running && live.position == 0);
 
     /* Motor mode (0x6E, constant PWM 50 %): the open-loop path of the tick. */
     const uint8_t pwm[3] = {0x6E, 0xF4, 0x01};
