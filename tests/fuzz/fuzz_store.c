@@ -18,7 +18,8 @@
  *             and key hash, at a chosen page and cell (km_rec_encode);
  *   mutate    rewrite the image as unknown content (every cell "programmed",
  *             as on a part of unknown history) with chosen bytes set or
- *             flipped: torn, garbage and bit-rotted images;
+ *             flipped, or whole pages of random bytes: torn, garbage and
+ *             bit-rotted images;
  *   rules     change the controller rules / how weak cells read.
  * A commit or idle call after a forge or mutate reboots first: the store
  * owns its flash while it runs, the edits stand for what a past life (or
@@ -285,7 +286,19 @@ static void prv_mutate(prv_in_t *in)
         const uint8_t how = prv_u8(in);
         const uint32_t at = prv_u16(in) % total;
         const uint8_t v = prv_u8(in);
-        image[at] = (how & 1u) ? (uint8_t)(image[at] ^ v) : v;
+        if (how & 2u) {
+            /* The page holding `at` becomes random bytes (seeded by the input). */
+            uint32_t x = 0x9E3779B9u ^ ((uint32_t)how << 16) ^ ((uint32_t)v << 8) ^ at;
+            const uint32_t page = at / s_flash.page_size;
+            for (uint32_t b = 0; b < s_flash.page_size; b++) {
+                x ^= x << 13;
+                x ^= x >> 17;
+                x ^= x << 5;
+                image[page * s_flash.page_size + b] = (uint8_t)(x >> 24);
+            }
+        } else {
+            image[at] = (how & 1u) ? (uint8_t)(image[at] ^ v) : v;
+        }
     }
     const km_nor_sim_config_t cfg = {s_flash.page_size, s_flash.prog_size, s_flash.page_count, 0x00u};
     const km_nor_sim_rules_t rules = s_sim.rules;
