@@ -42,14 +42,20 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     if (vs != 0) {
         out += vs > 0 ? (int32_t)g->friction_pwm : -(int32_t)g->friction_pwm;
     }
-    /* integrator: ki PWM per 0.1 deg.s Q8; acc in PWM x 256000 */
-    const int32_t i_max = (g->i_max_pwm > 1000u ? 1000 : (int32_t)g->i_max_pwm) * 256000;
-    const int32_t e_d = prv_clamp(km_sdiv1000(e_u), -100, 100); /* 10 deg: the integrator is for small errors */
-    const int32_t di = km_sdiv100(km_sdiv10((int32_t)g->ki_q8 * e_d) * (int32_t)(dt_us > 2000u ? 2000u : dt_us));
-    const int32_t before = out + km_sdiv256000(l->i_acc);
-    if (in->integrate && !((before >= in->pwm_max && di > 0) || (before <= -in->pwm_max && di < 0))) {
-        l->i_acc = prv_clamp(l->i_acc + di, -i_max, i_max);
+    /* integrator: ki PWM per 0.1 deg.s Q8; acc in PWM x 256000. Its terms
+     * are worked out only while it runs (holding): a moving tick skips
+     * four divisions. */
+    int32_t i_pwm = km_sdiv256000(l->i_acc);
+    if (in->integrate) {
+        const int32_t i_max = (g->i_max_pwm > 1000u ? 1000 : (int32_t)g->i_max_pwm) * 256000;
+        const int32_t e_d = prv_clamp(km_sdiv1000(e_u), -100, 100); /* 10 deg: the integrator is for small errors */
+        const int32_t di = km_sdiv100(km_sdiv10((int32_t)g->ki_q8 * e_d) * (int32_t)(dt_us > 2000u ? 2000u : dt_us));
+        const int32_t before = out + i_pwm;
+        if (!((before >= in->pwm_max && di > 0) || (before <= -in->pwm_max && di < 0))) {
+            l->i_acc = prv_clamp(l->i_acc + di, -i_max, i_max);
+            i_pwm = km_sdiv256000(l->i_acc);
+        }
     }
-    out += km_sdiv256000(l->i_acc);
+    out += i_pwm;
     return prv_clamp(out, -in->pwm_max, in->pwm_max);
 }
