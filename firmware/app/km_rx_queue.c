@@ -24,16 +24,16 @@ void km_rx_queue_push(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost)
     const unsigned slot = head & (KM_RX_QUEUE_SIZE - 1u);
     q->byte[slot] = byte;
     q->tick[slot] = tick;
+    uint8_t flag = 0u;
     if (lost || q->pending_loss) {
-        q->flags[slot] = KM_RX_LOST;
+        flag = KM_RX_LOST;
+        q->pending_loss = false;
         /* One writer: a plain load and store (ARMv6-M has no atomic add);
          * the release of head below publishes it with the byte. */
         atomic_store_explicit(&q->marks, atomic_load_explicit(&q->marks, memory_order_relaxed) + 1u,
                               memory_order_relaxed);
-    } else {
-        q->flags[slot] = 0u;
     }
-    q->pending_loss = false;
+    q->flags[slot] = flag;
     /* Release: the entry is complete before the consumer can see it. */
     atomic_store_explicit(&q->head, head + 1u, memory_order_release);
 }

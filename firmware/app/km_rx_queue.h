@@ -26,9 +26,10 @@
 #define KM_RX_LOST 0x01u /* bytes were lost before this one (overrun) */
 
 typedef struct {
-    uint8_t byte[KM_RX_QUEUE_SIZE];
-    uint8_t flags[KM_RX_QUEUE_SIZE];
-    uint32_t tick[KM_RX_QUEUE_SIZE];
+    /* The scalars first, the word array next: on ARMv6-M every field is
+     * then one load or store from the queue pointer (immediate offsets
+     * reach 124 bytes for words, 31 for bytes), which the interrupt side
+     * pays per received byte. */
     atomic_uint head;        /* written by the producer only */
     atomic_uint tail;        /* written by the consumer only */
     /* LOST-marked bytes stored, ever (producer) and taken (consumer): while
@@ -36,9 +37,12 @@ typedef struct {
      * without looking at one flag. */
     atomic_uint marks;
     uint32_t marks_taken;
-    bool run_lost;           /* consumer side: the run peeked starts with a LOST byte */
     uint32_t dropped;        /* producer side: bytes lost because the queue was full */
     bool pending_loss;       /* producer side: mark the next stored byte as LOST */
+    bool run_lost;           /* consumer side: the run peeked starts with a LOST byte */
+    uint32_t tick[KM_RX_QUEUE_SIZE];
+    uint8_t byte[KM_RX_QUEUE_SIZE];
+    uint8_t flags[KM_RX_QUEUE_SIZE];
 } km_rx_queue_t;
 
 /* The oldest waiting bytes as one run, where they lie in the queue. */
