@@ -18,7 +18,11 @@
  *    stopping, about 1.25 intervals behind the newest target; when the
  *    stream stops, the last segment ends on the last target. Speed bounded
  *    by `vmax`.
- * step(state, dt) advances it; no float, no 64-bit divide. */
+ * step(state, dt) advances it, in pieces of at most 2 ms; speeds are cut
+ * to 2^30 u/s (107,374 deg/s, past any 0x5D) so a piece stays in 32 bits.
+ * No float, no divide instruction (the M0 has none) in a 1 ms tick: the
+ * quotients by 1000 are reciprocal multiplies (km_fixdiv.h), the braking
+ * square root is 32-bit (2 bits a step) and taken only while braking. */
 #ifndef KM_PROFILE_H
 #define KM_PROFILE_H
 
