@@ -50,7 +50,8 @@ static int prv_usage(const char *argv0)
             "                    is; the encoder then reads its angle within one turn\n"
             "  --scenario FILE   a bench scenario played on the plant's clock: lines\n"
             "                    T_MS KEY VALUE, keys supply_mv, ambient_dc (0.1 degC),\n"
-            "                    load_mnm (mN*m), faults (1 pot, 2 motor, 4 NTC open)\n"
+            "                    load_mnm (mN*m), faults (1 pot, 2 motor, 4 NTC open),\n"
+            "                    temp_dc (winding temperature now, 0.1 degC)\n"
             "  --baud N          accepted, ignored: the line rate is the servo's register 0x10\n",
             argv0, HS_GAP_FLOOR_DEFAULT_US);
     return 2;

@@ -23,6 +23,7 @@ static const struct {
     {"ambient_dc", KM_SCN_AMBIENT_DC, -2730, 3000},
     {"load_mnm", KM_SCN_LOAD_MNM, -100000, 100000},
     {"faults", KM_SCN_FAULTS, 0, 7},
+    {"temp_dc", KM_SCN_TEMP_DC, -400, 2000},
 };
 
 static bool prv_fail(const char *path, unsigned line, const char *why)
@@ -107,7 +108,7 @@ bool hs_scenario_load(const char *path)
             k++;
         }
         if (k == sizeof s_keys / sizeof s_keys[0]) {
-            ok = prv_fail(path, line, "unknown key (supply_mv, ambient_dc, load_mnm, faults)");
+            ok = prv_fail(path, line, "unknown key (supply_mv, ambient_dc, load_mnm, faults, temp_dc)");
         } else if (value < s_keys[k].lo || value > s_keys[k].hi) {
             ok = prv_fail(path, line, "value out of range for its key");
         } else if (t_ms > UINT32_MAX || (s_count > 0 && t_ms < s_events[s_count - 1u].t_ms)) {

@@ -31,6 +31,9 @@ void km_scn_play(km_scn_player_t *pl, km_plant_t *plant, km_plant_input_t *in)
         case KM_SCN_FAULTS:
             km_plant_set_faults(plant, (uint32_t)e->value);
             break;
+        case KM_SCN_TEMP_DC:
+            km_plant_set_temp_dc(plant, e->value < -400 ? -400 : e->value > 2000 ? 2000 : e->value);
+            break;
         default:
             break; /* unknown: skipped (the loaders reject it first) */
         }

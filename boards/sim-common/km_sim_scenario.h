@@ -10,6 +10,8 @@
  *   ambient_dc  ambient temperature, 0.1 degC
  *   load_mnm    external torque on the output, mN*m (+ = positive direction)
  *   faults      plant faults, mask: 1 pot open, 2 motor open, 4 NTC open
+ *   temp_dc     the winding's temperature now, 0.1 degC (a heat gun on the
+ *               case: it then relaxes toward ambient, time constant ~75 s)
  * T_MS is the plant's time since power-on: a restart of the MCU does not
  * restart the scenario (the plant's clock goes on, km_plant.h). */
 #ifndef KM_SIM_SCENARIO_H
@@ -25,6 +27,7 @@ typedef enum {
     KM_SCN_AMBIENT_DC = 2,
     KM_SCN_LOAD_MNM = 3,
     KM_SCN_FAULTS = 4,
+    KM_SCN_TEMP_DC = 5,
 } km_scn_key_t;
 
 /* 12 bytes, little-endian words: also the QEMU table's layout. */

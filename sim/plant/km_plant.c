@@ -242,6 +242,11 @@ void km_plant_set_ambient_dc(km_plant_t *p, int16_t dc)
     p->ambient_uc = (int32_t)dc * 100000;
 }
 
+void km_plant_set_temp_dc(km_plant_t *p, int32_t dc)
+{
+    p->temp_uc = prv_clamp32((int64_t)dc * 100000, -273000000, 2000000000);
+}
+
 void km_plant_set_position_ddeg(km_plant_t *p, int32_t ddeg)
 {
     p->pos_ddeg = ddeg;

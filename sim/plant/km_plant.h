@@ -148,6 +148,7 @@ void km_plant_step(km_plant_t *p, const km_plant_input_t *in, uint32_t dt_us);
 /* Environment and test hooks. */
 void km_plant_set_supply_mv(km_plant_t *p, int32_t mv);   /* open-circuit supply, mV (>= 0) */
 void km_plant_set_ambient_dc(km_plant_t *p, int16_t dc);  /* ambient, 0.1 °C */
+void km_plant_set_temp_dc(km_plant_t *p, int32_t dc);     /* winding temperature now, 0.1 °C (a test's thermal profile) */
 void km_plant_set_position_ddeg(km_plant_t *p, int32_t ddeg); /* teleport shaft (at rest) */
 void km_plant_set_faults(km_plant_t *p, uint32_t faults); /* KM_PLANT_FAULT_* mask */
 
