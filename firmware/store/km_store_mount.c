@@ -87,6 +87,7 @@ static void prv_scan(const km_store_t *s, uint32_t page, prv_page_t *pi, uint32_
     pi->version = rec.version;
     pi->hash = rec.hash;
     uint8_t snap_keys[KM_STORE_MAX_KEYS];
+    memset(snap_keys, 0, sizeof snap_keys); /* filled below; said for -fanalyzer */
     const uint32_t snap_count = rec.count;
     uint32_t at = 0;
     for (uint32_t i = 0; i < snap_count; i++) {
@@ -150,7 +151,9 @@ static bool prv_geometry_ok(const km_flash_t *f, const km_store_schema_t *schema
 static uint8_t prv_target(uint32_t pages, uint8_t active, bool confirmed, uint32_t valid,
                           uint8_t anchor)
 {
-    if (active == KM_STORE_NO_PAGE) {
+    /* pages >= 2 after the geometry check; said again for the analyzers,
+     * which cannot see that s->values never aliases the flash's page count. */
+    if (active == KM_STORE_NO_PAGE || pages == 0u) {
         return 0u;
     }
     uint32_t t = ((uint32_t)active + 1u) % pages;
