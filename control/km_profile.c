@@ -39,7 +39,7 @@ static int32_t prv_ddeg_to_u(int32_t ddeg)
 static int32_t prv_speed_for(int32_t d, int32_t ms, int32_t vmax)
 {
     const int32_t q = d / ms;
-    if (q >= vmax / 1000 + 1) {
+    if (q >= km_sdiv1000(vmax) + 1) {
         return vmax;
     }
     const int32_t v = q * 1000 + ((d % ms) * 1000) / ms;
