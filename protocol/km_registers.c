@@ -74,24 +74,7 @@ static void prv_range(km_reg_index_t reg, const km_product_t *p, int32_t *lo_out
 
 uint8_t km_reg_fixed_size(km_layout_t layout)
 {
-    switch (layout) {
-    case KM_L_U8:
-    case KM_L_BITS8:
-    case KM_L_I8:
-        return 1;
-    case KM_L_U16:
-    case KM_L_I16:
-    case KM_L_U8U8:
-    case KM_L_STATUS:
-        return 2;
-    case KM_L_U16U8:
-        return 3;
-    case KM_L_U32:
-    case KM_L_MAGIC:
-        return 4;
-    default:
-        return 0;
-    }
+    return km_reg_fixed_size_const(layout);
 }
 
 uint8_t km_put_le(uint8_t *out, uint32_t value, uint8_t size)

@@ -67,6 +67,29 @@ bool km_reg_validate(km_reg_index_t reg, const km_product_t *p, const uint8_t *d
 /* Bytes a stored value takes on the wire for fixed layouts (0 otherwise). */
 uint8_t km_reg_fixed_size(km_layout_t layout);
 
+/* The same, inline, so that a constant layout folds at compile time. */
+static inline uint8_t km_reg_fixed_size_const(km_layout_t layout)
+{
+    switch (layout) {
+    case KM_L_U8:
+    case KM_L_BITS8:
+    case KM_L_I8:
+        return 1;
+    case KM_L_U16:
+    case KM_L_I16:
+    case KM_L_U8U8:
+    case KM_L_STATUS:
+        return 2;
+    case KM_L_U16U8:
+        return 3;
+    case KM_L_U32:
+    case KM_L_MAGIC:
+        return 4;
+    default:
+        return 0;
+    }
+}
+
 /* Encodes a value little-endian into out; returns the byte count. */
 uint8_t km_put_le(uint8_t *out, uint32_t value, uint8_t size);
 

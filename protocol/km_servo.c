@@ -393,32 +393,56 @@ static void prv_commit_one(km_servo_t *s, km_reg_index_t r, uint32_t v)
     prv_apply(s, r, v);
 }
 
+/* A default packed as km_reg_default() packs it (the wire bytes of a
+ * fixed layout shorter than 4). Always inlined: with a constant layout it
+ * folds to a mask or nothing. */
+static inline __attribute__((always_inline)) uint32_t prv_pack_default(uint32_t v,
+                                                                       km_layout_t layout)
+{
+    const uint8_t size = km_reg_fixed_size_const(layout);
+    return size > 0u && size < 4u ? v & ((1u << (8u * size)) - 1u) : v;
+}
+
+/* The registers a user-data reset writes back and their defaults, straight
+ * from the register table at compile time (no loop over the 47 registers,
+ * no look-up, no switch per register): persisted and writable from the bus.
+ * "User-data reset": factory data (persisted, not writable from the bus:
+ * the level-1 zero offset 0x16) is per-unit calibration that no master
+ * could write back, so no level resets it; §5.1 0x03 level 1 keeps ID,
+ * baud and both zero offsets. Returns how many. */
+static uint8_t prv_reset_list(const km_product_t *p, uint8_t level, uint8_t *regs, uint8_t *addrs,
+                              uint32_t *values)
+{
+    uint8_t n = 0;
+    const bool keep_ids = level == 1;
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi)                              \
+    if ((persisted) && ((access) & KM_W) &&                                                     \
+        !(keep_ids && (KM_REG_##ident == KM_REG_ID || KM_REG_##ident == KM_REG_BAUD ||          \
+                       KM_REG_##ident == KM_REG_ZERO_OFFSET2))) {                               \
+        regs[n] = (uint8_t)KM_REG_##ident;                                                      \
+        addrs[n] = (addr);                                                                      \
+        values[n] = prv_pack_default((uint32_t)(def), (layout));                                \
+        n++;                                                                                    \
+    }
+#include "km_registers.def"
+#undef KM_REG
+    return n;
+}
+
 static void prv_userdata_reset(km_servo_t *s, uint8_t level)
 {
-    uint8_t addrs[KM_REG_COUNT];
-    uint32_t values[KM_REG_COUNT];
-    uint8_t n = 0;
-    for (unsigned i = 0; i < KM_REG_COUNT; i++) {
-        /* "User-data reset": factory data (persisted, not writable from the
-         * bus: the level-1 zero offset 0x16) is per-unit calibration that
-         * no master could write back, so no level resets it. */
-        if (!km_reg_table[i].persisted || !(km_reg_table[i].access & KM_W)) {
-            continue;
-        }
-        /* §5.1 0x03 level 1 keeps ID, baud and both zero offsets. */
-        if (level == 1 && (i == KM_REG_ID || i == KM_REG_BAUD || i == KM_REG_ZERO_OFFSET2)) {
-            continue;
-        }
-        addrs[n] = km_reg_table[i].addr;
-        values[n] = km_reg_default((km_reg_index_t)i, s->product);
-        n++;
-    }
+    /* The register indexes are kept beside the addresses, so applying the
+     * committed values needs no look-up by address. */
+    uint8_t regs[KM_REG_PERSISTED_COUNT];
+    uint8_t addrs[KM_REG_PERSISTED_COUNT];
+    uint32_t values[KM_REG_PERSISTED_COUNT];
+    const uint8_t n = prv_reset_list(s->product, level, regs, addrs, values);
     if (!prv_commit(s, addrs, values, n)) {
         prv_fail(s);
         return;
     }
     for (uint8_t j = 0; j < n; j++) {
-        prv_apply(s, (km_reg_index_t)km_reg_find(addrs[j]), values[j]);
+        prv_apply(s, (km_reg_index_t)regs[j], values[j]);
     }
 }
 
@@ -718,10 +742,16 @@ static void prv_multi_write(km_servo_t *s, const km_frame_view_t *f)
         s->sync.full = false;
         return;
     }
-    for (uint8_t off = 2; off < f->body_len; off = (uint8_t)(off + k + 1u)) {
-        if (f->body[off] == km_servo_id(s)) {
+    /* The scan over up to 49 entries: the ID, the body and its end in
+     * locals (the loop's stores could alias them otherwise). */
+    const uint8_t own = km_servo_id(s);
+    const uint8_t *const body = f->body;
+    const uint8_t len = f->body_len;
+    const uint8_t step = (uint8_t)(k + 1u);
+    for (uint8_t off = 2; off < len; off = (uint8_t)(off + step)) {
+        if (body[off] == own) {
             s->sync.full = false;
-            (void)prv_write(s, f->body[0], &f->body[off + 1u], k);
+            (void)prv_write(s, body[0], &body[off + 1u], k);
             return;
         }
     }
