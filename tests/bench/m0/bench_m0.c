@@ -498,6 +498,19 @@ static void m0h_control_encoder(void)
              "motor mode, 0x70 run of 2.0 turns at 180 deg/s (encoder product)");
     (void)m0h_motor_ticks("control_tick_motor_turns", 30u, 2, &in, &live, &bridge);
     m0h_check("control_motor_turns", live.running && bridge.mode == KM_BRIDGE_PWM && bridge.pwm != 0);
+
+    /* Back to servo mode, a move at the fastest speed (0x66, speed 0) to
+     * +130.0 deg (the angle limits this image's store carries are the pot
+     * product's +-135.0 deg): the fastest braking curve of the bench
+     * (360 deg/s, the largest square roots). */
+    const uint8_t on[2] = {0x64, 0x02};
+    m0h_dispatch("enc_torque_on", M0_ID, 0x03, on, 2, false, false);
+    const uint8_t far[5] = {0x66, 0x14, 0x05, 0x00, 0x00};
+    m0h_dispatch("write_0x66_far", M0_ID, 0x03, far, 5, false, false);
+    m0h_desc("control_tick_enc_move",
+             "a 0x66 move at the fastest speed to +130.0 deg (encoder product), the sensor on the set-point");
+    const unsigned ticks = m0h_follow("control_tick_enc_move", 5000u, &in, &live);
+    m0h_check("control_enc_move", !live.running && ticks < 5000u && live.position == 1300);
 }
 
 int main(void)
