@@ -272,6 +272,14 @@ static uint32_t prv_rand(void)
     return s_lcg >> 8;
 }
 
+/* A value of 1 to 4 significant bytes, so dense deltas of every value
+ * length are cut. */
+static uint32_t prv_rand_value(void)
+{
+    const uint32_t v = (prv_rand() << 8) ^ prv_rand();
+    return v >> (8u * (prv_rand() % 4u));
+}
+
 /* (d): from the current mounted store, FURTHER_COMMITS commits of 1..4 keys
  * (some user data resets), idle maintenance and reboots, checked against a
  * model after each one. */
@@ -293,7 +301,7 @@ static void prv_further_commits(uint32_t seed)
         } else {
             for (unsigned k = 0; k < step.n; k++) {
                 step.keys[k] = k_test_keys[(r / 7u + k * 5u) % NKEYS].key;
-                step.vals[k] = prv_rand() & 0xFFFFu;
+                step.vals[k] = prv_rand_value();
             }
         }
         prv_state_t target = model;
@@ -600,7 +608,7 @@ static void prv_seed_history(uint32_t seed)
             } else {
                 for (unsigned k = 0; k < step.n; k++) {
                     step.keys[k] = k_test_keys[(r / 7u + k * 5u) % NKEYS].key;
-                    step.vals[k] = prv_rand() & 0xFFFFu;
+                    step.vals[k] = prv_rand_value();
                 }
             }
             if (prv_run_step(&step)) {
