@@ -119,7 +119,11 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     live->speed = speed_dps;
     live->current = in->current_ma;
     live->pwm = km_output_pwm_reported(&c->bridge);
-    live->temperature = km_sdiv10(in->temperature_c10);
+    if (in->temperature_c10 != c->temp_c10) { /* 0 and 0 after init: consistent */
+        c->temp_c10 = in->temperature_c10;
+        c->temp_c = km_sdiv10(c->temp_c10);
+    }
+    live->temperature = c->temp_c;
     live->voltage = in->voltage_mv;
     live->deviation = c->motor.active ? 0 : km_servo_mode_deviation(&c->servo, pos);
     live->rotation_ms = c->motor.active ? c->motor.rotation_ms : c->servo.rotation_ms;

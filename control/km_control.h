@@ -39,6 +39,8 @@ typedef struct {
     km_bridge_t bridge;          /* the last command */
     int32_t position;            /* 0.1 deg, master's frame, last tick */
     bool have_position;
+    int32_t temp_c10;            /* the last temperature read, 0.1 degC, */
+    int32_t temp_c;              /* and it in degC: divided again only when it changes */
     uint32_t requests;           /* typed requests received (diagnostics) */
     km_request_t last_request;
 } km_control_t;
