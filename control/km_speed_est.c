@@ -47,10 +47,10 @@ int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
     if (dt_us > 100000u) {
         dt_us = 100000u; /* a stalled tick: the estimate stays finite */
     }
-    /* span: the newest count-1 intervals, from the oldest sample kept. Kept
-     * as a running sum: the new interval comes in and, once the ring is
-     * full, the one that closed the sample being overwritten's successor
-     * (the new oldest) goes out. */
+    /* span: the newest count-1 intervals, from the oldest sample kept, as
+     * a running sum: the new interval comes in and, once the ring is full,
+     * the interval that led to the new oldest sample goes out (it was
+     * measured from the sample just overwritten). */
     f->head = (uint8_t)((f->head + 1u) % KM_SPEED_FAST_N);
     const uint8_t oldest = (uint8_t)((f->head + 1u) % KM_SPEED_FAST_N);
     f->pos[f->head] = position;
