@@ -21,7 +21,12 @@
  *    checksum event comes with a checksum_errors increment and exactly then
  *    an addressable ID is recorded for km_parser_take_checksum_error();
  *  - the window holds at most 256 bytes, and after the final polls it is
- *    empty with nothing pending. */
+ *    empty with nothing pending;
+ *  - a second parser fed the same bytes through the batch entry
+ *    (km_parser_feed_bytes, in runs between polls, overruns and tick jumps,
+ *    as the app feeds it from the RX queue) hands out the same frames
+ *    (fields, body, end_tick), keeps the same counters and the same
+ *    window, at every run's end. */
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -38,6 +43,30 @@ static uint32_t s_tick[HISTORY_MAX];  /* tick each byte was fed at */
 static size_t s_hist_len;
 static km_parser_stats_t s_prev;
 static uint32_t s_delivered;
+
+/* The batch side: the bytes and ticks of the current run, the parser they
+ * go to, and a hash of the frames each parser handed out, in order. */
+static km_parser_t s_q;
+static km_parser_out_t s_q_out;
+static uint8_t s_run_bytes[HISTORY_MAX];
+static uint32_t s_run_ticks[HISTORY_MAX];
+static size_t s_run_len;
+static uint32_t s_hash_bytewise;
+static uint32_t s_hash_batch;
+
+static uint32_t prv_hash(uint32_t h, uint8_t id, uint8_t cmd, uint8_t len, const uint8_t *body,
+                         uint32_t end_tick)
+{
+    const uint8_t head[7] = {id, cmd, len, (uint8_t)end_tick, (uint8_t)(end_tick >> 8),
+                             (uint8_t)(end_tick >> 16), (uint8_t)(end_tick >> 24)};
+    for (size_t i = 0; i < sizeof head; i++) {
+        h = (h ^ head[i]) * 16777619u; /* FNV-1a */
+    }
+    for (size_t i = 0; i < len; i++) {
+        h = (h ^ body[i]) * 16777619u;
+    }
+    return h;
+}
 
 /* Aborts with the line of the broken invariant, for the crash report. */
 #define prv_check(ok) prv_check_at((ok), __LINE__)
@@ -127,9 +156,56 @@ static void prv_take(km_parser_t *p, unsigned ev, const km_frame_t *f)
     if (ev & KM_PARSE_FRAME) {
         s_delivered++;
         prv_check_frame(f);
+        s_hash_bytewise = prv_hash(s_hash_bytewise, f->id, f->cmd, f->body_len, f->body, f->end_tick);
     }
     prv_check_stats(p, ev);
     prv_check_bad_ids(p, ev);
+}
+
+/* The batch parser takes the run so far, a call at a time (each stops at
+ * the frame it hands out), then both parsers must agree. */
+static void prv_batch_flush(const km_parser_t *p)
+{
+    size_t i = 0;
+    while (i < s_run_len) {
+        uint32_t used = 0;
+        const unsigned ev = km_parser_feed_bytes(&s_q, &s_run_bytes[i], &s_run_ticks[i],
+                                                 (uint32_t)(s_run_len - i), &used, &s_q_out);
+        prv_check(used >= 1u && used <= s_run_len - i);
+        prv_check(!(ev & KM_PARSE_FRAME) || s_q_out.frame.body_len <= KM_BODY_MAX);
+        if (ev & KM_PARSE_FRAME) {
+            const km_frame_view_t *v = &s_q_out.frame;
+            s_hash_batch = prv_hash(s_hash_batch, v->id, v->cmd, v->body_len, v->body, v->end_tick);
+        }
+        if (ev & KM_PARSE_CHECKSUM_ERR) {
+            (void)km_parser_take_checksum_error(&s_q, 0);
+        }
+        i += used;
+    }
+    s_run_len = 0;
+    prv_check(s_hash_batch == s_hash_bytewise);
+    prv_check(memcmp(&s_q.stats, &p->stats, sizeof p->stats) == 0);
+    prv_check(s_q.fill == p->fill && s_q.need == p->need && s_q.stale == p->stale &&
+              s_q.pending == p->pending && s_q.last_tick == p->last_tick);
+    for (unsigned k = 0; k < p->fill; k++) {
+        prv_check(s_q.window[(uint8_t)(s_q.head + k)] == p->window[(uint8_t)(p->head + k)]);
+    }
+}
+
+/* A poll on the batch parser, as on the byte parser. */
+static void prv_batch_poll(uint32_t now)
+{
+    unsigned ev;
+    do {
+        ev = km_parser_poll_view(&s_q, now, &s_q_out);
+        if (ev & KM_PARSE_FRAME) {
+            const km_frame_view_t *v = &s_q_out.frame;
+            s_hash_batch = prv_hash(s_hash_batch, v->id, v->cmd, v->body_len, v->body, v->end_tick);
+        }
+        if (ev & KM_PARSE_CHECKSUM_ERR) {
+            (void)km_parser_take_checksum_error(&s_q, 0);
+        }
+    } while (ev & KM_PARSE_FRAME);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -146,6 +222,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     s_hist_len = 0;
     s_delivered = 0;
     memset(&s_prev, 0, sizeof s_prev);
+    km_parser_init(&s_q, data[0] & 15u);
+    s_run_len = 0;
+    s_hash_bytewise = 2166136261u;
+    s_hash_batch = 2166136261u;
 
     for (size_t i = 2; i < size && s_hist_len < HISTORY_MAX; i += 2u) {
         const uint8_t byte = data[i];
@@ -158,18 +238,25 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         case 1: {
             unsigned ev;
             now += arg;
+            prv_batch_flush(&p);
             do {
                 memset(&f, 0, sizeof f);
                 ev = km_parser_poll(&p, now, &f);
                 prv_take(&p, ev, &f);
             } while (ev & KM_PARSE_FRAME);
+            prv_batch_poll(now);
             break;
         }
         case 2:
+            prv_batch_flush(&p);
             km_parser_overrun(&p);
+            km_parser_overrun(&s_q);
             run++;
             break;
         default:
+            /* A jump of up to 2^32 ticks: one call's ticks must come from
+             * a clock that does not go round, so a new run starts. */
+            prv_batch_flush(&p);
             now += arg << 26;
             break;
         }
@@ -183,7 +270,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         newest = now;
         memset(&f, 0, sizeof f);
         prv_take(&p, km_parser_feed(&p, byte, now, &f), &f);
+        s_run_bytes[s_run_len] = byte;
+        s_run_ticks[s_run_len] = now;
+        s_run_len++;
     }
+    prv_batch_flush(&p);
 
     /* Silence past the gap: everything must resolve. */
     unsigned ev;
@@ -194,5 +285,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         prv_check(++guard < 300);
     } while (ev & KM_PARSE_FRAME);
     prv_check(p.fill == 0u && !p.pending);
+    prv_batch_poll(newest + p.gap_ticks + 1u);
+    prv_check(s_hash_batch == s_hash_bytewise);
+    prv_check(memcmp(&s_q.stats, &p.stats, sizeof p.stats) == 0);
+    prv_check(s_q.fill == 0u && !s_q.pending);
     return 0;
 }
