@@ -3,35 +3,46 @@
  * tests/unit/test_control_fixdiv.c checks it). */
 #include "km_fixdiv.h"
 
+/* (n x m) >> (32 + s): one copy of the multiply for every divisor (flash). */
+static __attribute__((noinline)) uint32_t prv_mulhi_shr(uint32_t n, uint32_t m, uint32_t s)
+{
+    return km_umulhi(n, m) >> s;
+}
+
 #define PRV_INLINE static inline __attribute__((always_inline))
 
-/* Each returns 0 at once below its divisor: the tick's many small
- * operands (a shaft holding still) then cost a compare. */
+/* floor(n / d), 0 at once below d: the tick's many small operands (a shaft
+ * holding still) then cost a compare, not a call. */
+PRV_INLINE uint32_t prv_udiv(uint32_t n, uint32_t d, uint32_t m, uint32_t s)
+{
+    return n < d ? 0u : prv_mulhi_shr(n, m, s);
+}
+
 PRV_INLINE uint32_t prv_udiv10(uint32_t n)
 {
-    return n < 10u ? 0u : km_umulhi(n, KM_FIXDIV_M10) >> 3;
+    return prv_udiv(n, 10u, KM_FIXDIV_M10, 3u);
 }
 
 PRV_INLINE uint32_t prv_udiv100(uint32_t n)
 {
-    return n < 100u ? 0u : km_umulhi(n, KM_FIXDIV_M100) >> 6;
+    return prv_udiv(n, 100u, KM_FIXDIV_M100, 6u);
 }
 
 PRV_INLINE uint32_t prv_udiv1000(uint32_t n)
 {
-    return n < 1000u ? 0u : km_umulhi(n, KM_FIXDIV_M1000) >> 6;
+    return prv_udiv(n, 1000u, KM_FIXDIV_M1000, 6u);
 }
 
 /* 2560 = 2^9 x 5: floor(floor(n / 2^9) / 5) = floor(n / 2560). */
 PRV_INLINE uint32_t prv_udiv2560(uint32_t n)
 {
-    return n < 2560u ? 0u : km_umulhi(n >> 9, KM_FIXDIV_M5) >> 2;
+    return prv_udiv(n >> 9, 5u, KM_FIXDIV_M5, 2u);
 }
 
 /* 256000 = 2^8 x 1000, likewise. */
 PRV_INLINE uint32_t prv_udiv256000(uint32_t n)
 {
-    return prv_udiv1000(n >> 8);
+    return prv_udiv(n >> 8, 1000u, KM_FIXDIV_M1000, 6u);
 }
 
 /* Each unsigned one, and its signed twin: truncated toward zero like C's
