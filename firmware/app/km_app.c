@@ -178,7 +178,7 @@ static void prv_on_events(unsigned events)
 /* True while the parser must not be fed: a restart was requested (nothing
  * received after a valid restart frame may take effect), or an answer
  * waits for the TX buffer (the next frame's answer would overwrite it). */
-static inline bool prv_rx_blocked(void)
+static inline __attribute__((always_inline)) bool prv_rx_blocked(void)
 {
     return s_restart_pending || s_reply_waiting;
 }
