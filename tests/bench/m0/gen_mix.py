@@ -84,7 +84,9 @@ class Mix:
 
 
 def generate():
-    """(Mix, command frames generated): tools/bench-m0 uses it to class the bytes."""
+    """(Mix, command frames generated). Mix.kind classes each byte (command
+    frame, other servo's answer, noise) for anyone who wants per-class costs;
+    tools/bench-m0 now counts whole batch calls, not bytes one by one."""
     mix = Mix()
     want = 0
     while len(mix.stream) < TARGET_BYTES:
