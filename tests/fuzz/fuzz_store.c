@@ -13,9 +13,12 @@
  *   maintain  idle compaction calls;
  *   reboot    power cycle, mount, check (below);
  *   cut       arm a power cut at a later flash op with chosen outcomes;
- *   forge     program a record with a valid CRC but chosen type, keys
- *             (schema, unknown or repeated), values, version, generation
- *             and key hash, at a chosen page and cell (km_rec_encode);
+ *   forge     program a record with a valid CRC but chosen contents, at a
+ *             chosen page and cell: a snapshot (keys of the schema, unknown
+ *             or repeated, any values, version, generation, key hash), a
+ *             dense delta (any set of snapshot indices and values), both
+ *             with km_rec_encode, or a legacy 'D' delta as older firmware
+ *             wrote them;
  *   mutate    rewrite the image as unknown content (every cell "programmed",
  *             as on a part of unknown history) with chosen bytes set or
  *             flipped, or whole pages of random bytes: torn, garbage and
@@ -231,33 +234,79 @@ static void prv_commit(prv_in_t *in)
     }
 }
 
+/* A legacy delta ('D', read only since the dense format): header, entries
+ * (key u8, value u32 LE), 0xFF padding, CRC-32, then one zero commit cell,
+ * as older firmware wrote them (docs/store.md). */
+static uint32_t prv_encode_legacy(uint8_t *buf, const km_store_key_t *keys, const uint32_t *values,
+                                  uint8_t count, uint32_t cell)
+{
+    uint32_t at = KM_REC_HDR_LEGACY;
+    for (uint8_t i = 0; i < count; i++) {
+        buf[at] = keys[i].key;
+        km_put_le(&buf[at + 1u], values[i], 4u);
+        at += KM_REC_ENTRY;
+    }
+    const uint32_t body = (at + KM_REC_CRC + cell - 1u) / cell * cell;
+    buf[0] = KM_REC_DELTA_LEGACY;
+    buf[1] = count;
+    buf[2] = 0u;
+    buf[3] = 0u;
+    memset(&buf[at], 0xFF, body - KM_REC_CRC - at);
+    km_put_le(&buf[body - KM_REC_CRC], km_crc32(0u, buf, body - KM_REC_CRC), 4u);
+    memset(&buf[body], 0x00, cell);
+    return body + cell;
+}
+
 static void prv_forge(prv_in_t *in)
 {
     const uint8_t kind = prv_u8(in);
-    const uint8_t count = (uint8_t)(prv_u8(in) % (KM_STORE_MAX_KEYS + 1u));
+    uint8_t count = (uint8_t)(prv_u8(in) % (KM_STORE_MAX_KEYS + 1u));
     km_store_key_t keys[KM_STORE_MAX_KEYS];
     uint32_t values[KM_STORE_MAX_KEYS];
     uint32_t real_hash = 0;
     for (uint8_t i = 0; i < s_count; i++) {
         real_hash = km_crc32(real_hash, &s_addrs[i], 1u);
     }
+    uint8_t type = KM_REC_SNAPSHOT;
+    if (kind % 3u == 1u) {
+        type = KM_REC_DELTA;
+    } else if (kind % 3u == 2u) {
+        type = KM_REC_DELTA_LEGACY;
+    }
+    uint32_t mask = count >= 32u ? 0xFFFFFFFFu : ((1u << count) - 1u);
+    if (type == KM_REC_DELTA) {
+        /* A dense delta names snapshot indices: any non-empty set of 0..31. */
+        count = KM_STORE_MAX_KEYS;
+        mask = prv_u32(in);
+        mask = mask ? mask : 1u;
+    } else if (type == KM_REC_DELTA_LEGACY && count == 0u) {
+        count = 1u; /* a delta carries at least one change */
+        mask = 1u;
+    }
     for (uint8_t i = 0; i < count; i++) {
+        keys[i].def = 0;
+        keys[i].key = 0;
+        values[i] = 0;
+        if (type == KM_REC_DELTA && !(mask & (1u << i))) {
+            continue;
+        }
         const uint8_t k = prv_u8(in);
         /* Mostly the product's keys (repeats allowed), else any byte. */
         keys[i].key = (k & 0x80u) ? (uint8_t)(k & 0x7Fu) : s_addrs[k % s_count];
-        keys[i].def = 0;
         values[i] = prv_u32(in);
     }
     const km_store_schema_t fake = {keys, count, 1u};
     km_rec_t rec;
     memset(&rec, 0, sizeof rec);
-    rec.type = (kind & 1u) ? KM_REC_DELTA : KM_REC_SNAPSHOT;
-    rec.version = (kind & 2u) ? prv_u16(in) : 1u; /* 1 = the app's schema version */
-    rec.gen = prv_u16(in);                       /* a lifetime of commits, no more */
-    rec.hash = (kind & 4u) ? prv_u32(in) : real_hash;
-    const uint32_t mask = count >= 32u ? 0xFFFFFFFFu : ((1u << count) - 1u);
+    rec.type = type;
+    rec.version = (kind & 8u) ? prv_u16(in) : 1u; /* 1 = the app's schema version */
+    rec.gen = prv_u16(in);                        /* a lifetime of commits, no more */
+    rec.hash = (kind & 16u) ? prv_u32(in) : real_hash;
     uint8_t buf[KM_REC_MAX_BYTES];
-    const uint32_t size = km_rec_encode(buf, &rec, &fake, values, mask, s_flash.prog_size);
+    const uint32_t size = (type == KM_REC_DELTA_LEGACY)
+                              ? prv_encode_legacy(buf, keys, values, count, s_flash.prog_size)
+                              : km_rec_encode(buf, &rec, &fake, values, mask, s_flash.prog_size);
+    prv_check(size <= sizeof buf);
     const uint32_t page = prv_u8(in) % s_flash.page_count;
     const uint32_t cells = s_flash.page_size / s_flash.prog_size;
     const uint32_t offset = (prv_u16(in) % cells) * s_flash.prog_size;
