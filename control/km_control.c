@@ -1,5 +1,6 @@
-/* The control tick (see km_control.h): sensing, servo mode, position loop
- * and output stage, in that order, once per tick. */
+/* The control tick (see km_control.h): sensing, self-test and protection,
+ * servo mode, position loop and output stage, in that order, once per
+ * tick. */
 #include "km_control.h"
 
 #include <string.h>
@@ -13,14 +14,44 @@ void km_control_init(km_control_t *c, const km_control_params_t *p)
     km_motor_mode_init(&c->motor);
     km_position_loop_init(&c->loop);
     km_speed_window_init(&c->speed);
+    km_current_limit_init(&c->ilim);
+    km_protect_init(&c->prot);
+    km_selftest_init(&c->selftest);
+    c->action = KM_PROT_ACT_NONE;
     /* §5.1 0x11 bit 0: the power-on output until the first tick says otherwise */
     c->bridge = km_output_bridge(p->power_on_brake ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE, 0, 0, false);
+}
+
+/* While protecting (km_control.h): 0x64 = 0/1 taken and remembered for the
+ * release, every other torque or motion request refused. */
+static bool prv_request_protecting(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
+{
+    if (req->kind != KM_REQ_TORQUE_SWITCH || req->u.u8 > 1u) {
+        return false;
+    }
+    c->ts_after = req->u.u8;
+    if (c->motor.active) {
+        km_motor_mode_release(&c->motor);
+    }
+    return km_servo_mode_request(&c->servo, req, p, c->position);
 }
 
 bool km_control_request(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
 {
     c->requests++;
     c->last_request = *req;
+    if (req->kind == KM_REQ_PROTECTION_CLEAR) {
+        return km_protect_clear(&c->prot, req->u.u8); /* refused while its excursion holds */
+    }
+    if (req->kind == KM_REQ_ZERO_POSITION) {
+        return true; /* the dispatcher moves the offsets; nothing moves here */
+    }
+    if (c->hw != 0u && (req->kind != KM_REQ_TORQUE_SWITCH || req->u.u8 == 2u || req->u.u8 == 3u)) {
+        return false; /* §5.2 0x35: a hardware fault blocks all motion until restart */
+    }
+    if (c->action != KM_PROT_ACT_NONE) {
+        return prv_request_protecting(c, req, p);
+    }
     switch (req->kind) {
     case KM_REQ_TORQUE_SWITCH:
     case KM_REQ_MOVE_TIME:
@@ -50,9 +81,60 @@ bool km_control_request(km_control_t *c, const km_request_t *req, const km_contr
         c->servo.streaming = false;
         return true;
     default:
-        /* zeroing, protection clear: later issues; accepted as before */
-        return true;
+        return false; /* not a control request */
     }
+}
+
+/* A protection's action began, changed or ended (km_control.h for 0x64). */
+static void prv_protect_transition(km_control_t *c, km_prot_action_t act, const km_control_params_t *p)
+{
+    const km_prot_action_t was = (km_prot_action_t)c->action;
+    if (act == was) {
+        return;
+    }
+    c->action = (uint8_t)act;
+    if (act == KM_PROT_ACT_NONE) {
+        /* released: 0x64 back to what km_control.h says */
+        if (c->ts_after != 2u) {
+            km_request_t q;
+            q.kind = KM_REQ_TORQUE_SWITCH;
+            q.u.u8 = c->ts_after;
+            (void)km_servo_mode_request(&c->servo, &q, p, c->position);
+        }
+        return;
+    }
+    if (was == KM_PROT_ACT_NONE) {
+        c->ts_after = c->servo.ts <= 1u ? c->servo.ts : 3u;
+    }
+    if (c->motor.active) {
+        km_motor_mode_stop(&c->motor, act == KM_PROT_ACT_FREE ? KM_BRIDGE_FREE : KM_BRIDGE_BRAKE);
+    }
+    if (act == KM_PROT_ACT_HOLD && c->servo.ts == 2u && !c->motor.active) {
+        if (was == KM_PROT_ACT_NONE) {
+            km_servo_mode_rebase(&c->servo, c->position); /* hold where it tripped */
+            c->ts_after = 2u;
+        }
+    } else if (c->servo.ts > 1u) {
+        km_servo_mode_protect(&c->servo); /* motion stops; 0x64 = 5 */
+        if (c->ts_after == 2u) {
+            c->ts_after = 3u; /* the output was let go: armed, not holding */
+        }
+    }
+}
+
+/* §5.2 0x35: a hardware fault stops everything, the output free. */
+static void prv_hw_fault(km_control_t *c, const km_control_params_t *p)
+{
+    km_request_t q;
+    q.kind = KM_REQ_TORQUE_SWITCH;
+    q.u.u8 = 0;
+    if (c->motor.active) {
+        km_motor_mode_stop(&c->motor, KM_BRIDGE_FREE);
+    }
+    if (c->servo.ts != 5u) {
+        (void)km_servo_mode_request(&c->servo, &q, p, c->position);
+    }
+    c->ts_after = 0;
 }
 
 /* §5.1: reported position = sensor + level-1 + level-2 zero offsets, with
@@ -75,8 +157,36 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     const int32_t speed_ddps = c->have_position ? km_speed_fast_step(&c->fast, pos, dt_us) : 0;
     c->position = pos;
     c->have_position = true;
+    c->time_rem_us += dt_us;
+    while (c->time_rem_us >= 1000u) { /* once per 1 ms tick: no divide */
+        c->time_rem_us -= 1000u;
+        c->time_ms++;
+    }
+
+    /* 2. self-test and protection, on what the bridge drives now */
+    const int32_t drive = c->bridge.mode == KM_BRIDGE_PWM ? c->bridge.pwm : 0;
+    const uint8_t hw = km_selftest_step(&c->selftest, in, p, drive, c->bridge.mode == KM_BRIDGE_FREE, dt_us);
+    if (hw != c->hw) {
+        c->hw = hw;
+        prv_hw_fault(c, p);
+    }
+    const km_protect_in_t pin = {
+        .voltage_mv = in->voltage_mv,
+        .current_ma = in->current_ma,
+        .temperature_c10 = in->temperature_c10,
+        .position = pos,
+        .drive_pwm = drive,
+        .servo_mode = !c->motor.active,
+    };
+    km_protect_events_t ev;
+    prv_protect_transition(c, km_protect_step(&c->prot, &pin, p, dt_us, &ev), p);
 
     int32_t limit = p->torque_limit < p->max_torque ? p->torque_limit : p->max_torque;
+    const uint32_t ilimit = p->current_limit_ma < p->max_current_ma ? p->current_limit_ma : p->max_current_ma;
+    const int32_t icap = km_current_limit_step(&c->ilim, in->current_ma, ilimit);
+    if (icap < limit) {
+        limit = icap;
+    }
     if (c->motor.active) {
         /* 2b. motor mode owns the bridge (servo mode's output is unused);
          * 0x5A = 1 (servo only) stops it. Output limited by 0x5B. */
@@ -91,7 +201,7 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
          * output would be unused, and the hand-back (km_control_request)
          * restarts it from where the shaft is (rebase or torque on). */
         km_servo_mode_out_t sm;
-        km_servo_mode_step(&c->servo, p, pos, dt_us, &sm);
+        km_servo_mode_step(&c->servo, p, pos, speed_ddps, dt_us, &sm);
         /* 3. position loop, 4. output */
         if (sm.pwm_cap < limit) {
             limit = sm.pwm_cap;
@@ -113,6 +223,12 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
         }
         c->bridge = km_output_bridge(sm.bridge, pwm, limit, p->reverse);
     }
+    /* 4b. the protection's action has the last word on the bridge */
+    if (c->action == KM_PROT_ACT_FREE || c->action == KM_PROT_ACT_BRAKE ||
+        (c->action == KM_PROT_ACT_HOLD && c->servo.ts != 2u)) {
+        c->bridge.mode = c->action == KM_PROT_ACT_BRAKE ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE;
+        c->bridge.pwm = 0;
+    }
 
     /* every field assigned (no memset: it is a byte loop on the M0) */
     live->position = pos;
@@ -128,9 +244,11 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     live->deviation = c->motor.active ? 0 : km_servo_mode_deviation(&c->servo, pos);
     live->rotation_ms = c->motor.active ? c->motor.rotation_ms : c->servo.rotation_ms;
     live->running = c->motor.active ? c->motor.running : c->servo.running;
-    live->protecting = c->servo.ts == 5u;
-    live->protections = 0u; /* the protection supervisor's: a later issue */
-    live->hw_faults = in->faults;
+    live->protecting = c->action != KM_PROT_ACT_NONE;
+    live->torque_switch = live->protecting ? 5u : c->servo.ts;
+    live->protections = km_protect_active(&c->prot);
+    live->hw_faults = c->hw;
+    live->time_ms = c->time_ms;
     bridge->mode = c->bridge.mode; /* by field: a struct copy is a memcpy call here */
     bridge->pwm = c->bridge.pwm;
 }

@@ -6,13 +6,26 @@
  * One tick, in order (sensing, limits and output in one place):
  *   1. sensing: position in the master's frame = (sensor + 0x16 + 0x17),
  *      negated when 0x11 bit 2 is set; speeds (km_speed_est);
- *   2. servo mode: torque switch and profile (km_servo_mode, km_profile);
- *   3. position loop (km_position_loop) when the torque is on;
- *   4. output (km_output): PWM limit 0x5B (and a move's own cap), direction
- *      back to the sensor's frame, bridge mode.
- * Motor mode (0x6E..0x70, km_motor_mode) replaces steps 2-3 while it owns
- * the bridge (hand-over rules in km_motor_mode.h). The protection
- * supervisor is a later issue. Only this header
+ *   2. self-test (km_selftest: 0x35 over the first ticks, the motor lead
+ *      whenever driven) and protection supervisor (km_protect: 0x32-0x3F),
+ *      on the sensors and the PWM the bridge drives now; a new hardware
+ *      fault or protection stops motion here;
+ *   3. servo mode: torque switch and profile (km_servo_mode, km_profile),
+ *      position loop (km_position_loop) when the torque is on;
+ *   4. output (km_output): PWM limit min(0x5B, 0x13, a move's own cap, the
+ *      current limit's cap: km_current_limit, 0x5C/0x14), direction back
+ *      to the sensor's frame, bridge mode; then the protection's action
+ *      (free, brake, or hold = servo mode holding where it tripped), so
+ *      nothing reaches the bridge without passing the supervisor.
+ * Motor mode (0x6E..0x70, km_motor_mode) replaces step 3 while it owns
+ * the bridge (hand-over rules in km_motor_mode.h).
+ *
+ * While protecting, 0x64 reads 5; motion requests and 0x64 = 2/3 are
+ * refused (status bit 6); 0x64 = 0/1 are taken (the output is off anyway)
+ * and are what 0x64 returns to. On release 0x64 returns to 0/1 if it was
+ * off, to 2 if the output held position throughout (a hold action), else
+ * to 3 (armed: on at the next rotation command, so a released servo never
+ * moves by itself). Only this header
  * and km_servo_io.h are the interface; the modules are internals. */
 #ifndef KM_CONTROL_H
 #define KM_CONTROL_H
@@ -20,10 +33,13 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "km_current_limit.h"
 #include "km_hal_sensors.h"
 #include "km_output.h"
 #include "km_motor_mode.h"
 #include "km_position_loop.h"
+#include "km_protect.h"
+#include "km_selftest.h"
 #include "km_servo_io.h"
 #include "km_servo_mode.h"
 #include "km_speed_est.h"
@@ -41,6 +57,14 @@ typedef struct {
     bool have_position;
     int32_t temp_c10;            /* the last temperature read, 0.1 degC, */
     int32_t temp_c;              /* and it in degC: divided again only when it changes */
+    km_current_limit_t ilim;     /* 0x5C / 0x14 */
+    km_protect_t prot;           /* the protection supervisor */
+    km_selftest_t selftest;      /* 0x35 */
+    uint8_t action;              /* km_prot_action_t in force */
+    uint8_t ts_after;            /* 0x64 once the protections are released */
+    uint8_t hw;                  /* 0x35 bits found */
+    uint32_t time_ms;            /* since init (the fault log's clock) */
+    uint32_t time_rem_us;
     uint32_t requests;           /* typed requests received (diagnostics) */
     km_request_t last_request;
 } km_control_t;

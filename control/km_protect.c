@@ -98,26 +98,44 @@ km_prot_action_t km_protect_step(km_protect_t *s, const km_protect_in_t *in, con
 
     const uint8_t over = (uint8_t)(prv_excursions(s, in, p) & enabled);
     s->over = over;
+    if ((over | s->active | s->timing) == 0u) {
+        return KM_PROT_ACT_NONE; /* the usual tick: nothing over, nothing being timed */
+    }
+    /* Only the protections that are over, active or being timed: a
+     * disabled one's timer is dropped. */
     for (uint8_t i = 0; i < PRV_N; i++) {
-        const uint8_t bit = (uint8_t)(1u << i);
-        if ((enabled & bit) == 0u) {
+        if ((s->timing & ~enabled & (1u << i)) != 0u) {
             s->timer_us[i] = 0u;
+        }
+    }
+    uint8_t todo = (uint8_t)((over | s->active | s->timing) & enabled);
+    s->timing = 0;
+    for (uint8_t i = 0, bit = 1u; todo != 0u; i++, bit = (uint8_t)(bit << 1)) {
+        if ((todo & bit) == 0u) {
             continue;
         }
-        const uint32_t t_detect = km_protect_detect_us(p, bit);
+        todo &= (uint8_t)~bit;
+        uint32_t timer = s->timer_us[i];
         if ((over & bit) != 0u) {
-            const uint32_t up = s->timer_us[i] + dt_us;
-            s->timer_us[i] = up > t_detect ? t_detect : up;
-            if ((s->active & bit) == 0u && s->timer_us[i] >= t_detect) {
-                s->active |= bit;
-                ev->tripped |= bit;
+            const uint32_t t_detect = km_protect_detect_us(p, bit);
+            timer += dt_us;
+            if (timer >= t_detect) {
+                timer = t_detect;
+                if ((s->active & bit) == 0u) {
+                    s->active |= bit;
+                    ev->tripped |= bit;
+                }
             }
         } else {
-            s->timer_us[i] = s->timer_us[i] > dt_us ? s->timer_us[i] - dt_us : 0u;
-            if ((s->active & bit) != 0u && s->timer_us[i] == 0u && (p->prot_release & bit) == 0u) {
+            timer = timer > dt_us ? timer - dt_us : 0u;
+            if (timer == 0u && (s->active & bit) != 0u && (p->prot_release & bit) == 0u) {
                 s->active &= (uint8_t)~bit; /* automatic release: absent for T */
                 ev->released |= bit;
             }
+        }
+        s->timer_us[i] = timer;
+        if (timer != 0u) {
+            s->timing |= bit;
         }
     }
 

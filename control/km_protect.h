@@ -85,6 +85,7 @@ typedef struct {
     bool stall_anchored;
     uint8_t active;          /* tripped protections, 0x36 bits */
     uint8_t over;            /* excursions present at the last step */
+    uint8_t timing;          /* timers not at 0 (the step's fast path when none) */
 } km_protect_t;
 
 /* Changes at one step, for the fault log. */

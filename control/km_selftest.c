@@ -18,7 +18,8 @@ void km_selftest_init(km_selftest_t *t)
     memset(t, 0, sizeof *t);
 }
 
-static void prv_power_on_sample(km_selftest_t *t, const km_sensors_t *in, const km_control_params_t *p)
+static void prv_power_on_sample(km_selftest_t *t, const km_sensors_t *in, const km_control_params_t *p,
+                                bool bridge_free)
 {
     bool bad[PRV_N];
     bad[PRV_POS] = p->variant == KM_VARIANT_POTENTIOMETER &&
@@ -26,7 +27,10 @@ static void prv_power_on_sample(km_selftest_t *t, const km_sensors_t *in, const 
     bad[PRV_TEMP] = in->temperature_c10 < KM_SELFTEST_NTC_OPEN_C10 ||
                     in->temperature_c10 > KM_SELFTEST_NTC_SHORT_C10;
     bad[PRV_VOLT] = in->voltage_mv < KM_SELFTEST_SUPPLY_MIN_MV || in->voltage_mv > KM_SELFTEST_SUPPLY_MAX_MV;
-    bad[PRV_CURR] = prv_abs(in->current_ma) > KM_SELFTEST_CURRENT_OFFSET_MA;
+    bad[PRV_CURR] = bridge_free && prv_abs(in->current_ma) > KM_SELFTEST_CURRENT_OFFSET_MA;
+    if (bridge_free) {
+        t->free_samples++;
+    }
     for (unsigned i = 0; i < PRV_N; i++) {
         if (bad[i]) {
             t->fails[i]++;
@@ -35,7 +39,8 @@ static void prv_power_on_sample(km_selftest_t *t, const km_sensors_t *in, const 
     t->samples++;
     if (t->samples == KM_SELFTEST_SAMPLES) {
         for (unsigned i = 0; i < PRV_N; i++) {
-            if (t->fails[i] > KM_SELFTEST_SAMPLES / 2u) {
+            const unsigned n = i == PRV_CURR ? t->free_samples : KM_SELFTEST_SAMPLES;
+            if (n >= KM_SELFTEST_FREE_MIN && t->fails[i] > n / 2u) {
                 t->faults |= s_bit[i];
             }
         }
@@ -43,11 +48,11 @@ static void prv_power_on_sample(km_selftest_t *t, const km_sensors_t *in, const 
 }
 
 uint8_t km_selftest_step(km_selftest_t *t, const km_sensors_t *in, const km_control_params_t *p,
-                         int32_t drive_pwm, uint32_t dt_us)
+                         int32_t drive_pwm, bool bridge_free, uint32_t dt_us)
 {
     t->faults |= in->faults; /* what the hal's drivers flag, at any time */
     if (!km_selftest_done(t)) {
-        prv_power_on_sample(t, in, p);
+        prv_power_on_sample(t, in, p, bridge_free);
     }
     if (prv_abs(drive_pwm) >= KM_SELFTEST_MOTOR_PWM && prv_abs(in->current_ma) < KM_SELFTEST_MOTOR_MA) {
         t->motor_open_us += dt_us;

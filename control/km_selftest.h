@@ -14,7 +14,10 @@
  *                      (a shorted one);
  *   3 voltage sensor   supply reads below 2.0 V (the MCU runs, so the
  *                      divider or its ADC input is broken) or above 40.0 V;
- *   4 current sensor   more than 200 mA with the bridge off (offset);
+ *   4 current sensor   more than 200 mA with the bridge free (offset): only
+ *                      the samples taken with the bridge free count, and
+ *                      at least 4 of them are needed (a servo commanded
+ *                      in its first milliseconds skips this check);
  * At run time:
  *   6 motor            |PWM| >= 300 with |current| < 10 mA for 500 ms: a
  *                      driven motor that draws nothing is an open lead.
@@ -40,6 +43,7 @@
 #define KM_HW_OTHER 0x80u
 
 #define KM_SELFTEST_SAMPLES 16u          /* ticks of the power-on check */
+#define KM_SELFTEST_FREE_MIN 4u          /* bridge-free samples the offset check needs */
 #define KM_SELFTEST_NTC_OPEN_C10 (-300)
 #define KM_SELFTEST_NTC_SHORT_C10 1500
 #define KM_SELFTEST_SUPPLY_MIN_MV 2000
@@ -51,7 +55,8 @@
 
 typedef struct {
     uint8_t samples;          /* power-on samples taken */
-    uint8_t fails[5];         /* per power-on check: samples that failed */
+    uint8_t fails[4];         /* per power-on check: samples that failed */
+    uint8_t free_samples;     /* samples taken with the bridge free (the current check's) */
     uint8_t faults;           /* 0x35 bits found so far (latched) */
     uint32_t motor_open_us;   /* driven without current, continuous */
 } km_selftest_t;
@@ -59,9 +64,10 @@ typedef struct {
 void km_selftest_init(km_selftest_t *t);
 
 /* One tick. `drive_pwm` is the PWM the bridge drove during the tick
- * (0 when free or braked). Returns the 0x35 bits found so far. */
+ * (0 when free or braked), `bridge_free` whether it was free. Returns the
+ * 0x35 bits found so far. */
 uint8_t km_selftest_step(km_selftest_t *t, const km_sensors_t *in, const km_control_params_t *p,
-                         int32_t drive_pwm, uint32_t dt_us);
+                         int32_t drive_pwm, bool bridge_free, uint32_t dt_us);
 
 /* The power-on checks have all their samples. */
 static inline bool km_selftest_done(const km_selftest_t *t)

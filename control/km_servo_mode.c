@@ -179,8 +179,8 @@ int32_t km_servo_mode_deviation(const km_servo_mode_t *m, int32_t position)
     return m->ts == TS_ON ? position - m->target : 0;
 }
 
-void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_t position, uint32_t dt_us,
-                        km_servo_mode_out_t *out)
+void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_t position, int32_t speed_ddps,
+                        uint32_t dt_us, km_servo_mode_out_t *out)
 {
     /* every field assigned below (no memset: a byte loop on the M0) */
     out->pwm_cap = m->pwm_cap;
@@ -209,7 +209,9 @@ void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_
                 m->settle_us += dt_us;
                 const int32_t dev = position - m->target;
                 const int32_t band = (int32_t)p->gains.arrive_ddeg;
-                if ((dev <= band && dev >= -band) || m->settle_us >= (uint32_t)p->gains.settle_ms * 1000u) {
+                const bool slow = speed_ddps <= KM_ARRIVE_SPEED_DDPS && speed_ddps >= -KM_ARRIVE_SPEED_DDPS;
+                if ((dev <= band && dev >= -band && slow) ||
+                    m->settle_us >= (uint32_t)p->gains.settle_ms * 1000u) {
                     m->running = false; /* the motion ended: 0x4D stops counting */
                 }
             }

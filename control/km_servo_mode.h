@@ -77,9 +77,15 @@ void km_servo_mode_init(km_servo_mode_t *m, const km_control_params_t *p);
 bool km_servo_mode_request(km_servo_mode_t *m, const km_request_t *req, const km_control_params_t *p,
                            int32_t position);
 
-/* One tick: advances the profile and the running state. */
-void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_t position, uint32_t dt_us,
-                        km_servo_mode_out_t *out);
+/* A move has arrived (status bit 7 clears) once the profile is done and
+ * the shaft is inside the product's arrive band and slower than this: a
+ * shaft passing through the band is still moving (0.1 deg/s). */
+#define KM_ARRIVE_SPEED_DDPS 200
+
+/* One tick: advances the profile and the running state; `speed_ddps` is
+ * the measured speed (0.1 deg/s). */
+void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_t position, int32_t speed_ddps,
+                        uint32_t dt_us, km_servo_mode_out_t *out);
 
 /* Motor mode handed the shaft back: the target in force and the profile
  * restart from `position` (0x64 keeps its value). */

@@ -95,9 +95,11 @@ typedef struct {
     int32_t deviation;     /* 0.1 deg */
     uint32_t rotation_ms;  /* 0x4D */
     bool running;          /* status bit 7 */
-    bool protecting;       /* 0x64 reads 5 (hook for the protection supervisor) */
+    bool protecting;       /* a protection acts on the output: 0x64 reads 5 */
+    uint8_t torque_switch; /* 0x64 as control runs it; after a release, what 0x64 returns to */
     uint8_t protections;   /* active protections, 0x36 bits / status bits 0..3 */
-    uint8_t hw_faults;     /* 0x35 bits seen by power-on checks */
+    uint8_t hw_faults;     /* 0x35 bits found by the self-test (latched) */
+    uint32_t time_ms;      /* ms since control started: the fault log's clock */
 } km_live_t;
 
 #endif

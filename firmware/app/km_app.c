@@ -40,6 +40,12 @@ static km_servo_t s_servo;
 static km_reply_t s_reply;
 static km_control_t s_control;
 static km_control_params_t s_params;   /* the control registers, decoded */
+/* The fault log outlives a reset, not a power loss: .noinit on the MCU
+ * boards (neither loaded nor zeroed at startup), so a restart, a watchdog
+ * or a fault reset keeps the record of what led to it at no flash cost;
+ * km_fault_log_boot() tells a kept log from whatever RAM held. On the host
+ * it is process memory (host-sim's restart re-executes: an empty log). */
+static km_fault_log_t s_fault_log __attribute__((section(".noinit")));
 static uint32_t s_params_gen;          /* km_servo_params_gen() they were decoded at */
 static uint32_t s_last_control_tick;
 static uint32_t s_next_tick;
@@ -337,6 +343,8 @@ void km_app_init(void)
      * store's mount results are in the same order as KM_USERDATA_*. */
     km_servo_set_userdata_source(&s_servo, (uint8_t)mount);
     km_servo_set_reset_cause(&s_servo, (uint8_t)km_hal_reset_cause());
+    (void)km_fault_log_boot(&s_fault_log);
+    km_servo_set_fault_log(&s_servo, &s_fault_log);
     km_servo_control_params(&s_servo, &s_params);
     s_params_gen = km_servo_params_gen(&s_servo);
     km_control_init(&s_control, &s_params);

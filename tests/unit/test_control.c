@@ -256,6 +256,7 @@ static void test_s5_3_live_fields_from_sensors(void **state)
         {1500, 12100, 415, 0x00, 41}, {-800, 7400, 419, 0x20, 41}, {0, 0, 0, 0xFF, 0},
         {3000, 25000, 1000, 0x81, 100}, {12, 5000, -15, 0x04, -1},
     };
+    uint8_t latched = 0;
     for (unsigned i = 0; i < sizeof t / sizeof t[0]; i++) {
         km_sensors_t in = sensors_at(10);
         in.current_ma = t[i].cur;
@@ -266,7 +267,10 @@ static void test_s5_3_live_fields_from_sensors(void **state)
         assert_int_equal(live.current, t[i].cur);
         assert_int_equal(live.voltage, t[i].mv);
         assert_int_equal(live.temperature, t[i].want_c);
-        assert_int_equal(live.hw_faults, t[i].faults);
+        /* §5.2 0x35: the hal's fault bits are latched (until restart);
+         * five ticks are too few for the self-test's own verdicts */
+        latched |= t[i].faults;
+        assert_int_equal(live.hw_faults, latched);
         assert_int_equal(live.position, 10);
         assert_int_equal(live.pwm, 0);
         assert_int_equal(live.deviation, 0);

@@ -30,7 +30,7 @@ static uint8_t power_on(uint32_t faults, int32_t pos, int16_t ambient_dc, int32_
         km_sensors_t s;
         kr_sensors(&r, &s);
         assert_false(km_selftest_done(&t));
-        f = km_selftest_step(&t, &s, &r.params, 0, TICK_US);
+        f = km_selftest_step(&t, &s, &r.params, 0, true, TICK_US);
         km_plant_step(&r.plant, &coast, TICK_US);
     }
     assert_true(km_selftest_done(&t));
@@ -79,7 +79,7 @@ static void test_encoder_no_rail_check(void **state)
     p.variant = KM_VARIANT_ENCODER;
     km_sensors_t s = {.position = 1350, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250, .faults = 0};
     for (unsigned i = 0; i < KM_SELFTEST_SAMPLES; i++) {
-        (void)km_selftest_step(&t, &s, &p, 0, TICK_US);
+        (void)km_selftest_step(&t, &s, &p, 0, true, TICK_US);
     }
     assert_int_equal(t.faults, 0);
 }
@@ -102,7 +102,7 @@ static void test_noise_majority_rule(void **state)
                 s.current_ma = -900;
                 s.temperature_c10 = 2000;
             }
-            (void)km_selftest_step(&t, &s, &p, 0, TICK_US);
+            (void)km_selftest_step(&t, &s, &p, 0, true, TICK_US);
         }
         assert_int_equal(t.faults, want[k]);
     }
@@ -128,7 +128,7 @@ static void test_s5_2_motor_open_found_when_driven(void **state)
             if (km_plant_position_ddeg(&r.plant) >= 1300) {
                 km_plant_set_position_ddeg(&r.plant, 0); /* stay inside the travel, keep driving */
             }
-            const uint8_t f = km_selftest_step(&t, &s, &r.params, 500, TICK_US);
+            const uint8_t f = km_selftest_step(&t, &s, &r.params, 500, false, TICK_US);
             if (found_ms == 0u && (f & KM_HW_MOTOR) != 0u) {
                 found_ms = ms;
             }
@@ -138,6 +138,30 @@ static void test_s5_2_motor_open_found_when_driven(void **state)
         } else {
             assert_int_equal(found_ms, 0);
         }
+    }
+}
+
+/* A servo commanded in its first milliseconds draws current through its
+ * driven or braked bridge: those samples never count as an offset. */
+static void test_current_offset_only_with_bridge_free(void **state)
+{
+    (void)state;
+    const struct {
+        unsigned free_samples;
+        uint8_t want;
+    } rows[] = {{0, 0}, {3, 0}, {4, KM_HW_CURRENT}, {16, KM_HW_CURRENT}};
+    for (size_t k = 0; k < 4; k++) {
+        km_selftest_t t;
+        km_selftest_init(&t);
+        km_control_params_t p;
+        kr_default_params(&p);
+        km_sensors_t s = {.position = 0, .current_ma = 900, .voltage_mv = 7400, .temperature_c10 = 250,
+                          .faults = 0};
+        for (unsigned i = 0; i < KM_SELFTEST_SAMPLES; i++) {
+            const bool free_ = i < rows[k].free_samples;
+            (void)km_selftest_step(&t, &s, &p, free_ ? 0 : 700, free_, 1000u);
+        }
+        assert_int_equal(t.faults, rows[k].want);
     }
 }
 
@@ -151,9 +175,9 @@ static void test_hal_flags_taken(void **state)
     kr_default_params(&p);
     km_sensors_t s = {.position = 0, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250,
                       .faults = KM_HW_OTHER};
-    assert_int_equal(km_selftest_step(&t, &s, &p, 0, TICK_US), KM_HW_OTHER);
+    assert_int_equal(km_selftest_step(&t, &s, &p, 0, true, TICK_US), KM_HW_OTHER);
     s.faults = 0;
-    assert_int_equal(km_selftest_step(&t, &s, &p, 0, TICK_US), KM_HW_OTHER); /* latched */
+    assert_int_equal(km_selftest_step(&t, &s, &p, 0, true, TICK_US), KM_HW_OTHER); /* latched */
 }
 
 int main(void)
@@ -166,6 +190,7 @@ int main(void)
         cmocka_unit_test(test_encoder_no_rail_check),
         cmocka_unit_test(test_noise_majority_rule),
         cmocka_unit_test(test_s5_2_motor_open_found_when_driven),
+        cmocka_unit_test(test_current_offset_only_with_bridge_free),
         cmocka_unit_test(test_hal_flags_taken),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
