@@ -395,6 +395,11 @@ void km_app_poll(void)
     }
 }
 
+km_fault_log_t *km_app_fault_log(void)
+{
+    return &s_fault_log;
+}
+
 uint32_t km_app_tx_refused(void)
 {
     return s_tx_refused;

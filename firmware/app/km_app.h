@@ -37,4 +37,8 @@ uint32_t km_app_tx_refused(void);
  * fuzz target's invariants (and a debugger). */
 const km_servo_t *km_app_servo(void);
 
+/* The fault log's RAM (kept across resets, km_fault_log.h): a test board
+ * fills it with power-up garbage at a simulated power-on. */
+km_fault_log_t *km_app_fault_log(void);
+
 #endif

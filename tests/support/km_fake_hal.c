@@ -211,6 +211,8 @@ void kf_power_on(void)
     if (!km_nor_sim_init(&kf_world.nor, &cfg, &kf_world.flash)) {
         abort();
     }
+    /* RAM powers up as garbage: the app's reset-surviving fault log too */
+    memset(km_app_fault_log(), 0xA5, sizeof(km_fault_log_t));
     kf_boot(KM_RESET_POWER_ON);
 }
 
