@@ -10,6 +10,13 @@
 # 0x6F turns past 360 deg, stops on 0, restart reads 0) and the pot
 # product's refusal of 0x6F, about 3 s per backend.
 #
+# protect: the protection supervisor (PROTOCOL.md §5.2) end to end over the
+# bus, one servo driven by the bench scenario tests/bus/scenarios/protect.txt
+# (servo-bus --scenario: supply sags, heat, loads on the horn): voltage,
+# temperature and stall trips and releases (automatic and by 0x36), 0x64 = 5,
+# refused moves and clears, and the fault log read over 0x7F; about 50 s per
+# backend (the scenario's own time: 3 s detection times and releases).
+#
 # host-sim runs with --gap-floor-us 0, the parser's real inter-byte gap rule
 # (its UART paces bytes at line rate and holds its clock for a late byte, so
 # no floor is needed for frames that reach it whole); QEMU keeps the boards'
@@ -21,7 +28,7 @@ if(KM_PYTHON3_BUS)
     if(backend STREQUAL "host-sim")
       set(gap_args --gap-floor-us 0)
     endif()
-    foreach(which smoke bus encoder)
+    foreach(which smoke bus encoder protect)
       string(REPLACE "-" "_" tname "${backend}_${which}")
       add_test(NAME bus_${tname}
         COMMAND ${KM_PYTHON3_BUS} ${CMAKE_SOURCE_DIR}/tests/bus/bus_check.py ${which} --backend ${backend} ${gap_args})
