@@ -6,10 +6,11 @@
  *
  * The table below is data: each row names its inputs (a stimulus over time on
  * the plant: supply, winding temperature, external load torque, plant faults;
- * and a command: torque off, holding, motor mode 0x6E), its settings, the
- * expected trip window, the action, the flags and the release. One runner
- * plays every row and prints one line per row (name, trip time seen, action,
- * release seen, 0x64 after).
+ * an obstacle on the shaft's way; and a command: torque off, holding, a
+ * 0x66 move, motor mode 0x6E), its settings, the expected trip window, the
+ * action, the flags and the release. One runner plays every row and prints
+ * one line per row (name, trip time seen, 0x36 bits seen, action, release
+ * seen, 0x64 after, and d where the trip bound is checked).
  *
  * Time base: t = 0 is the first control tick that samples the stimulus (the
  * stimulus is put on the plant before that tick). "trip ms" is the number of
@@ -25,7 +26,8 @@
  * where the protection's own action ends the cause (motor mode into an end
  * stop), from the trip.
  *
- * Checked on every tick of every row, besides the row's own expectations:
+ * Checked in every row, besides its own expectations (on every tick where
+ * it is a state):
  *   - every active protection is reported (0x36, status bits 0-3) and 0x64
  *     reads 5 while protecting (§5.2, km_control.h);
  *   - the bridge does what 0x34 says for the highest active protection
@@ -39,7 +41,15 @@
  *   - after the release 0x64 returns to what the row says (km_control.h: 0/1
  *     if it was off, 2 after a hold, else 3 = armed) and, unless holding,
  *     the bridge is never driven again (a released servo never moves by
- *     itself). */
+ *     itself), a move stopped by a trip never resumes, and the next
+ *     rotation command is taken and moves the shaft.
+ *
+ * Self-test rows (§5.2 0x35, §4 bit 4): the fault is found after the
+ * power-on samples (KM_SELFTEST_SAMPLES ticks) or after 500 ms driven
+ * without current; every motion request is refused, 0x64 = 0 is still
+ * taken, the output is free; a restart (control started afresh on the
+ * plant, the fault mended) moves again.
+ */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -193,6 +203,19 @@ static const row_t k_rows[] = {
      .stim = {HEAT2(700, 0, 4000, 570, 5000, T_BASE), NONE}, .run_ms = 13000, .clear = NOCLEAR,
      .trip_lo = 3000, .trip_hi = 3001, .bits = KM_PROT_TEMPERATURE, .act = ACT_BRAKE,
      .rel = REL_AUTO, .rel_lo = 3000, .rel_hi = 3001, .ts_after = 3},
+    {.name = "temp_chatter_at_release_threshold_releases_once",
+     /* 70 degC for 4 s (trips at 3000), then 55.0 / 54.9 degC, at 55.0
+      * (still the excursion: >= 60 - 5) 4 ms of every 10 for 30 s: the
+      * timer, clamped at 3 s, reads 2994 ms after the first period and
+      * loses 2 ms net a period after that: after 1497 periods it reads
+      * 2 ms, the 1498th takes it to 6 and down to 0 on its 10th tick:
+      * released at tick 4000 + 14970 + 10 = 18980, 15980 ms after the
+      * trip (about T / (1 - 2 x 0.4) = 15 s into the chatter), once: 55
+      * is below the 60 trip once released, so it never trips again */
+     .cmd = CMD_HOLD, .pre_ms = 300, DEFAULTS,
+     .stim = {HEAT(700, 0, 4000), {ST_TEMP, 549, 550, 4000, 30000, false, 10, 4, 0, 0, 0}}, .run_ms = 34000,
+     .clear = NOCLEAR, .trip_lo = 3000, .trip_hi = 3001, .bits = KM_PROT_TEMPERATURE, .act = ACT_BRAKE,
+     .rel = REL_AUTO, .rel_from_trip = true, .rel_lo = 15980, .rel_hi = 15981, .ts_after = 3},
     {.name = "temp_chatter_at_trip_duty_40pct_no_trip",
      /* 60.0 / 59.9 degC, over 4 ms of every 10 for 20 s: < 50 % never trips */
      .cmd = CMD_HOLD, .pre_ms = 300, DEFAULTS,
@@ -559,6 +582,11 @@ static int32_t prv_stim(const stim_t *s, uint32_t t)
 
 #define PRE_T UINT32_MAX /* before t = 0: every stimulus at its base */
 
+static bool prv_in_window(const stim_t *s, uint32_t t)
+{
+    return t != PRE_T && t >= s->at && t < s->at + s->dur + s->dur2;
+}
+
 /* First tick back at base after the stimulus. */
 static uint32_t prv_stim_end(const stim_t *s)
 {
@@ -828,8 +856,9 @@ static void prv_run_row(const row_t *w)
     uint8_t prev_active = 0;
 
     for (uint32_t t = 0; t < w->run_ms; t++) {
-        for (unsigned k = 0; k < 2; k++) {
-            prv_apply(&r, &w->stim[k], t);
+        prv_apply(&r, &w->stim[0], t);
+        if (w->stim[1].kind != w->stim[0].kind || prv_in_window(&w->stim[1], t)) {
+            prv_apply(&r, &w->stim[1], t); /* on the same input: only within its window */
         }
         if (t == 0u && w->move_target != 0) {
             assert_true(kr_move(&r, KM_REQ_MOVE_SPEED, w->move_target, w->move_speed));
@@ -969,6 +998,15 @@ static void prv_run_row(const row_t *w)
         const int32_t left_trip = w->move_target - pos_trip;
         const int32_t left_end = w->move_target - kr_pos(&r);
         assert_true((left_end < 0 ? -left_end : left_end) >= (left_trip < 0 ? -left_trip : left_trip) - 30);
+    }
+    if (released != NO_TRIP && w->ts_after >= 2u) {
+        /* released, held or armed: the next rotation command moves it */
+        r.in.ext_torque_unm = 0;
+        const int32_t from = kr_pos(&r);
+        const int16_t to = (int16_t)(from > 0 ? from - 100 : from + 100);
+        assert_true(kr_move(&r, KM_REQ_MOVE_SPEED, to, 0));
+        kr_run(&r, 1000);
+        assert_true(kr_pos(&r) >= to - 10 && kr_pos(&r) <= to + 10);
     }
 }
 
