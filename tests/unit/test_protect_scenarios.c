@@ -124,6 +124,8 @@ typedef struct {
     stim_t stim[2];
     uint32_t run_ms;
     clear_t clear[2];
+    uint32_t ts_at;      /* a 0x64 write while protecting at this ms (0 = none): taken */
+    uint8_t ts_val;      /* its value, 0 or 1 */
     /* expectations */
     int32_t trip_lo, trip_hi;     /* ms, or NO_TRIP */
     uint8_t bits;                 /* 0x36 bits seen over the run */
@@ -330,6 +332,17 @@ static const row_t k_rows[] = {
      .clear = {{3500, KM_PROT_VOLTAGE, false}, {4500, KM_PROT_VOLTAGE, true}},
      .trip_lo = 3000, .trip_hi = 3001, .bits = KM_PROT_VOLTAGE, .act = ACT_FREE,
      .rel = REL_CMD, .rel_lo = 501, .rel_hi = 501, .ts_after = 3},
+    {.name = "voltage_torque_off_written_while_protecting_returns_to_0",
+     /* 0x64 = 0 at 3500 (protecting): taken, and what 0x64 returns to */
+     .cmd = CMD_HOLD, .pre_ms = 300, DEFAULTS,
+     .stim = {SAG(5000, 0, 4000), NONE}, .run_ms = 8000, .clear = NOCLEAR, .ts_at = 3500, .ts_val = 0,
+     .trip_lo = 3000, .trip_hi = 3001, .bits = KM_PROT_VOLTAGE, .act = ACT_FREE,
+     .rel = REL_AUTO, .rel_lo = 3000, .rel_hi = 3001, .ts_after = 0},
+    {.name = "voltage_brake_off_written_while_protecting_returns_to_1",
+     .cmd = CMD_HOLD, .pre_ms = 300, DEFAULTS,
+     .stim = {SAG(5000, 0, 4000), NONE}, .run_ms = 8000, .clear = NOCLEAR, .ts_at = 3500, .ts_val = 1,
+     .trip_lo = 3000, .trip_hi = 3001, .bits = KM_PROT_VOLTAGE, .act = ACT_FREE,
+     .rel = REL_AUTO, .rel_lo = 3000, .rel_hi = 3001, .ts_after = 1},
     {.name = "voltage_action_brake_servo_mode",
      .cmd = CMD_HOLD, .pre_ms = 300, SET(0x0F, 0x00, A34(1, 1, 1, 1), 1500, 20, 600, 20),
      .stim = {SAG(5000, 0, 4000), NONE}, .run_ms = 8000, .clear = NOCLEAR,
@@ -393,6 +406,13 @@ static const row_t k_rows[] = {
      .clear = {{1500, KM_PROT_CURRENT, false}, {2500, KM_PROT_CURRENT, true}},
      .trip_lo = 516, .trip_hi = 517, .bits = KM_PROT_CURRENT, .act = ACT_HOLD,
      .rel = REL_CMD, .rel_lo = 501, .rel_hi = 501, .ts_after = 2},
+    {.name = "current_hold_torque_off_written_while_holding_lets_go",
+     /* holding (0x34 current 1x), 0x64 = 0 written at 1000: taken, the
+      * hold ends (free), and 0x64 returns to 0 after the release */
+     .cmd = CMD_HOLD, .pre_ms = 300, SET(0x07, 0x00, A34(1, 1, 2, 0), 1500, 5, 600, 20),
+     .stim = {PUSH(LOAD, 0, 1500), NONE}, .run_ms = 3000, .clear = NOCLEAR, .ts_at = 1000, .ts_val = 0,
+     .trip_lo = 516, .trip_hi = 517, .bits = KM_PROT_CURRENT, .act = ACT_HOLD,
+     .rel = REL_AUTO, .rel_from_trip = true, .rel_lo = 984, .rel_hi = 985, .ts_after = 0},
     {.name = "current_motor_mode_end_stop_hold_acts_as_brake",
      /* 0x6E PWM 1000 from 0 deg into the +150 deg stop: the current limit
       * (0x5C 2000 mA) holds ~2 A there; d = 441 ms, the run to the stop
@@ -862,6 +882,10 @@ static void prv_run_row(const row_t *w)
         }
         if (t == 0u && w->move_target != 0) {
             assert_true(kr_move(&r, KM_REQ_MOVE_SPEED, w->move_target, w->move_speed));
+        }
+        if (w->ts_at != 0u && w->ts_at == t) {
+            assert_true(r.live.protecting);
+            assert_true(kr_torque(&r, w->ts_val)); /* 0x64 = 0/1 taken while protecting (km_control.h) */
         }
         for (unsigned k = 0; k < 2; k++) {
             if (w->clear[k].mask != 0u && w->clear[k].at == t) {
