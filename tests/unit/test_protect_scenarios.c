@@ -99,7 +99,7 @@ typedef struct {
     bool expect_ok;   /* accepted, or refused with status bit 6 */
 } clear_t;
 
-typedef enum { REL_NONE, REL_AUTO, REL_CMD } rel_t;
+typedef enum { REL_NONE, REL_AUTO, REL_CMD, REL_DISABLE } rel_t;
 
 typedef enum { ACT_NONE, ACT_FREE, ACT_BRAKE, ACT_HOLD } act_t;
 
@@ -126,6 +126,8 @@ typedef struct {
     clear_t clear[2];
     uint32_t ts_at;      /* a 0x64 write while protecting at this ms (0 = none): taken */
     uint8_t ts_val;      /* its value, 0 or 1 */
+    uint32_t en_at;      /* a 0x32 write at this ms (0 = none) */
+    uint8_t en_val;      /* its value */
     /* expectations */
     int32_t trip_lo, trip_hi;     /* ms, or NO_TRIP */
     uint8_t bits;                 /* 0x36 bits seen over the run */
@@ -363,6 +365,14 @@ static const row_t k_rows[] = {
      .stim = {SAG(5000, 0, 4000), NONE}, .run_ms = 8000, .clear = NOCLEAR,
      .trip_lo = 3000, .trip_hi = 3001, .bits = KM_PROT_VOLTAGE, .act = ACT_BRAKE,
      .rel = REL_AUTO, .rel_lo = 3000, .rel_hi = 3001, .ts_after = 3},
+    {.name = "voltage_disabled_while_tripped_releases_at_once",
+     /* 0x32 = 0x0E written at 4000 with the supply still at 5 V: released
+      * on that tick (km_protect.h), 1001 ms after the trip, not watched
+      * any more (the sag goes on to 5000: no new trip) */
+     .cmd = CMD_HOLD, .pre_ms = 300, DEFAULTS,
+     .stim = {SAG(5000, 0, 5000), NONE}, .run_ms = 7000, .clear = NOCLEAR, .en_at = 4000, .en_val = 0x0E,
+     .trip_lo = 3000, .trip_hi = 3001, .bits = KM_PROT_VOLTAGE, .act = ACT_FREE,
+     .rel = REL_DISABLE, .rel_from_trip = true, .rel_lo = 1001, .rel_hi = 1001, .ts_after = 3},
     {.name = "voltage_disabled_never_trips",
      .cmd = CMD_HOLD, .pre_ms = 300, SET(0x0E, 0x00, 0x54, 1500, 20, 600, 20),
      .stim = {SAG(5000, 0, 8000), NONE}, .run_ms = 9000, .clear = NOCLEAR,
@@ -883,6 +893,9 @@ static void prv_run_row(const row_t *w)
         if (t == 0u && w->move_target != 0) {
             assert_true(kr_move(&r, KM_REQ_MOVE_SPEED, w->move_target, w->move_speed));
         }
+        if (w->en_at != 0u && w->en_at == t) {
+            r.params.prot_enable = w->en_val; /* as the dispatcher decodes a 0x32 write */
+        }
         if (w->ts_at != 0u && w->ts_at == t) {
             assert_true(r.live.protecting);
             assert_true(kr_torque(&r, w->ts_val)); /* 0x64 = 0/1 taken while protecting (km_control.h) */
@@ -964,7 +977,7 @@ static void prv_run_row(const row_t *w)
     if (released == NO_TRIP) {
         snprintf(rel_txt, sizeof rel_txt, "%s", trip == NO_TRIP ? "-" : "held (not released)");
     } else {
-        snprintf(rel_txt, sizeof rel_txt, "%s %+d ms%s", w->rel == REL_CMD ? "clear" : "auto", rel_ms,
+        snprintf(rel_txt, sizeof rel_txt, "%s %+d ms%s", w->rel == REL_CMD ? "clear" : w->rel == REL_DISABLE ? "0x32" : "auto", rel_ms,
                  w->rel_from_trip ? " from trip" : " from end");
     }
     char trip_txt[24];
