@@ -6,7 +6,7 @@
 
 static uint16_t prv_in_range(const km_turn_counter_t *t, uint16_t raw)
 {
-    return raw < t->counts ? raw : (uint16_t)(raw % t->counts);
+    return (uint16_t)(raw < t->counts ? raw : raw % t->counts);
 }
 
 void km_turn_counter_init(km_turn_counter_t *t, uint16_t counts_per_turn, uint16_t raw)

@@ -589,13 +589,16 @@ static void prv_copy_out(const km_parser_out_t *v, km_frame_t *out)
     out->id = v->frame.id;
     out->cmd = v->frame.cmd;
     out->body_len = v->frame.body_len;
-    memcpy(out->body, v->frame.body, v->frame.body_len);
+    if (v->frame.body_len > 0u) {
+        memcpy(out->body, v->frame.body, v->frame.body_len);
+    }
     out->end_tick = v->frame.end_tick;
 }
 
 unsigned km_parser_feed(km_parser_t *p, uint8_t byte, uint32_t now, km_frame_t *out)
 {
     km_parser_out_t v;
+    v.frame = (km_frame_view_t){0}; /* read only after a frame; zeroed for the analyzer */
     const unsigned events = prv_feed_one(p, byte, now, &v);
     if (events & KM_PARSE_FRAME) {
         prv_copy_out(&v, out);
@@ -619,6 +622,7 @@ unsigned km_parser_poll_view(km_parser_t *p, uint32_t now, km_parser_out_t *out)
 unsigned km_parser_poll(km_parser_t *p, uint32_t now, km_frame_t *out)
 {
     km_parser_out_t v;
+    v.frame = (km_frame_view_t){0}; /* read only after a frame; zeroed for the analyzer */
     const unsigned events = km_parser_poll_view(p, now, &v);
     if (events & KM_PARSE_FRAME) {
         prv_copy_out(&v, out);

@@ -39,7 +39,7 @@ typedef enum {
 /* How many registers are user data (P), at compile time, to size arrays. */
 enum {
     KM_REG_PERSISTED_COUNT = 0
-#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi) +(persisted)
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi) +(persisted) // NOLINT(bugprone-macro-parentheses)
 #include "km_registers.def"
 #undef KM_REG
 };
