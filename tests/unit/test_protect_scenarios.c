@@ -990,7 +990,13 @@ static void prv_run_row(const row_t *w)
     if (act_seen == ACT_HOLD) {
         printf(" (max %d.%d deg off)", hold_dev / 10, hold_dev % 10);
     }
-    printf("  release %s  0x64 -> %u", rel_txt, released == NO_TRIP ? 5u : r.live.torque_switch);
+    /* 0x64 at the end of the row (after the release, or 5 while still
+     * held); a row that never trips has nothing to report */
+    if (trip == NO_TRIP) {
+        printf("  release %s  0x64 -> -", rel_txt);
+    } else {
+        printf("  release %s  0x64 -> %u", rel_txt, (unsigned)r.live.torque_switch);
+    }
     /* the km_protect.h bound applies to an excursion sustained from a
      * clean start: steps and monotonic ramps, not noise or chatter; stall
      * excursions are not visible on one sensor (d stated in the rows) */
