@@ -1,7 +1,13 @@
-# docs/registers.md is generated from the register table by tools/regdoc.c;
-# this test fails (and prints the diff) when the checked-in file is stale.
-add_executable(km_regdoc ${CMAKE_SOURCE_DIR}/tools/regdoc.c)
+# docs/registers.md and docs/registers.json are generated from the register
+# table (protocol/km_registers.def, units and descriptions in
+# km_registers_doc.def) by tools/regdoc.c and tools/regdoc_json.c; these tests
+# fail (and print the diff) when a checked-in file is stale.
+add_executable(km_regdoc ${CMAKE_SOURCE_DIR}/tools/regdoc.c ${CMAKE_SOURCE_DIR}/tools/regdoc_table.c
+  ${CMAKE_SOURCE_DIR}/tools/regdoc_json.c)
+target_include_directories(km_regdoc PRIVATE ${CMAKE_SOURCE_DIR}/tools)
 target_link_libraries(km_regdoc PRIVATE km_protocol)
 add_test(NAME regdoc_up_to_date
   COMMAND sh -c "\"$<TARGET_FILE:km_regdoc>\" | diff -u \"${CMAKE_SOURCE_DIR}/docs/registers.md\" -")
-set_tests_properties(regdoc_up_to_date PROPERTIES LABELS docs)
+add_test(NAME regjson_up_to_date
+  COMMAND sh -c "\"$<TARGET_FILE:km_regdoc>\" --json | diff -u \"${CMAKE_SOURCE_DIR}/docs/registers.json\" -")
+set_tests_properties(regdoc_up_to_date regjson_up_to_date PROPERTIES LABELS docs)
