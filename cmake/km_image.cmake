@@ -3,8 +3,10 @@
 #   km_add_image(NAME <name> LINKER_SCRIPT <file.ld>
 #                SOURCES <src>... [LIBS <target>...] [DEFINES <def>...])
 #
-# Emits <name>.elf (the target, named <name>), <name>.bin, <name>.hex and
-# <name>.map next to it, and prints arm-none-eabi-size after each link.
+# Emits <name>.elf (the target, named <name>), <name>.bin, <name>.hex,
+# <name>.map and <name>.size next to it: the size report (arm-none-eabi-size
+# and the per-module flash/RAM table of tools/footprint), also printed after
+# each link, so the figures stay with the image they describe.
 # CPU and libc flags come from the board's board.cmake, not from here.
 #
 # Every image is then checked by tools/image-check (no heap linked; static
@@ -36,9 +38,11 @@ function(km_add_image)
   add_custom_command(TARGET ${IMG_NAME} POST_BUILD
     COMMAND ${CMAKE_OBJCOPY} -O binary $<TARGET_FILE:${IMG_NAME}> ${out}.bin
     COMMAND ${CMAKE_OBJCOPY} -O ihex $<TARGET_FILE:${IMG_NAME}> ${out}.hex
-    COMMAND ${CMAKE_SIZE} $<TARGET_FILE:${IMG_NAME}>
-    BYPRODUCTS ${out}.bin ${out}.hex ${out}.map
-    COMMENT "${IMG_NAME}: .bin, .hex, .map and size"
+    COMMAND ${CMAKE_SIZE} $<TARGET_FILE:${IMG_NAME}> > ${out}.size
+    COMMAND ${Python3_EXECUTABLE} ${CMAKE_SOURCE_DIR}/tools/footprint ${out}.map >> ${out}.size
+    COMMAND ${CMAKE_COMMAND} -E cat ${out}.size
+    BYPRODUCTS ${out}.bin ${out}.hex ${out}.map ${out}.size
+    COMMENT "${IMG_NAME}: .bin, .hex, .map and the size report .size"
     VERBATIM)
 
   set(check_cfg ${KM_BOARD_DIR}/image-check.json)
