@@ -1,0 +1,297 @@
+"""Registers by name with units (PROTOCOL.md §5), loaded from the
+machine-readable description the firmware's register list generates
+(docs/registers.json, `km_regdoc --json`): lookup by name or address,
+decoding by wire layout into values in units, encoding from units with
+type and range checks before anything is sent.
+
+    regs = RegisterMap.load()
+    regs["voltage"].decode(b"\\xE8\\x1C")  -> Value, str() "7.400 V"
+    regs["move_time"].encode("45, 500")   -> b"\\xC2\\x01\\xF4\\x01"
+    Registers(bus).get(1, "position")     -> Value, str() "45.0 °"
+"""
+
+import difflib
+import json
+import os
+
+from .errors import RangeError, RegisterError
+from .frame import status_words
+
+ENV_PATH = "KMX_REGISTERS"  # overrides where registers.json is read from
+_HERE = os.path.dirname(os.path.abspath(__file__))
+DEFAULT_PATHS = (
+    os.path.join(_HERE, "registers.json"),                     # shipped beside the package
+    os.path.join(_HERE, "..", "..", "docs", "registers.json"),  # the checkout (host/kmx -> docs)
+)
+
+_INT_TYPES = {  # wire type -> (bytes, signed)
+    "u8": (1, False), "bits8": (1, False), "i8": (1, True),
+    "u16": (2, False), "i16": (2, True), "u32": (4, False), "x16": (2, None),
+}
+
+
+def _decimals(scale):
+    """Digits after the point a scale needs: 0.1 -> 1, 0.001 -> 3, 100 -> 0."""
+    text = ("%.10f" % scale).rstrip("0")
+    return len(text.split(".")[1]) if "." in text else 0
+
+
+class Value:
+    """A decoded register value: raw (the wire integers, text or bytes),
+    fields (numbers in units) and a display text with units."""
+
+    def __init__(self, register, raw, fields, text):
+        self.register = register
+        self.raw = raw
+        self.fields = fields
+        self.text = text
+
+    @property
+    def value(self):
+        """The first field in units (the value most registers have)."""
+        return self.fields[0] if self.fields else None
+
+    def __str__(self):
+        return self.text
+
+    def __repr__(self):
+        return "<%s = %s>" % (self.register.name, self.text)
+
+
+class Register:
+    def __init__(self, d):
+        self.address = d["address"]
+        self.name = d["name"]
+        self.title = d["title"]
+        self.access = d["access"]
+        self.persisted = d["persisted"]
+        self.layout = d["layout"]
+        self.type = d["type"]
+        self.lengths = d["lengths"]
+        self.default = d["default"]
+        self.fields = d["fields"]
+        self.description = d["description"]
+
+    readable = property(lambda self: "R" in self.access)
+    writable = property(lambda self: "W" in self.access)
+
+    def __repr__(self):
+        return "<Register 0x%02X %s>" % (self.address, self.name)
+
+    # -- units ---------------------------------------------------------------
+    def unit(self, field=0):
+        return self.fields[field]["unit"] if field < len(self.fields) else ""
+
+    def _format_field(self, raw, field):
+        f = self.fields[field]
+        if f["type"] == "bits8":
+            return "0x%02X" % raw
+        if f["unit"] == "":
+            return "%d" % raw
+        d = _decimals(f["scale"])
+        return "%.*f %s" % (d, raw * f["scale"], f["unit"])
+
+    def _in_units(self, raw, field):
+        f = self.fields[field]
+        if f["unit"] == "":
+            return raw
+        v = raw * f["scale"]
+        return round(v, _decimals(f["scale"])) if _decimals(f["scale"]) else int(round(v))
+
+    # -- decoding --------------------------------------------------------------
+    def decode(self, data):
+        """Wire bytes of a read answer -> Value. Raises RangeError when the
+        length does not fit the layout."""
+        data = bytes(data)
+        if len(data) not in self.lengths:
+            raise RangeError("%s (0x%02X): answer of %d bytes, expected %s" % (
+                self.name, self.address, len(data), " or ".join(map(str, self.lengths))))
+        lay = self.layout
+        if lay == "text":
+            text = data.rstrip(b"\0").decode("ascii", "replace")
+            return Value(self, text, [text], text)
+        if lay == "magic":
+            return Value(self, data, [data], data.hex(" ").upper())
+        if lay == "status":
+            words = ", ".join(status_words(data[0]))
+            return Value(self, [data[0], data[1]], [data[0], data[1]],
+                         "0x%02X (%s), random 0x%02X" % (data[0], words, data[1]))
+        if lay == "u32":
+            v = int.from_bytes(data, "little")
+            text = ("0x%08X" % v) if self.fields[0]["unit"] == "" else self._format_field(v, 0)
+            return Value(self, [v], [self._in_units(v, 0)], text)
+        if lay == "pos":
+            v = int.from_bytes(data, "little", signed=True)
+            return Value(self, [v], [self._in_units(v, 0)], self._format_field(v, 0))
+        if lay == "adv":
+            raw = [data[0], int.from_bytes(data[1:3], "little"), int.from_bytes(data[3:5], "little")]
+            return Value(self, raw, raw, "0x%02X, %d, %d" % tuple(raw))
+        raw = []
+        pos = 0
+        for i, f in enumerate(self.fields):
+            size, signed = _INT_TYPES[f["type"]]
+            if pos + size > len(data):
+                break  # an optional second field left out
+            raw.append(int.from_bytes(data[pos:pos + size], "little", signed=bool(signed)))
+            pos += size
+        fields = [self._in_units(r, i) for i, r in enumerate(raw)]
+        text = ", ".join(self._format_field(r, i) for i, r in enumerate(raw))
+        return Value(self, raw, fields, text)
+
+    # -- encoding --------------------------------------------------------------
+    def _parse_number(self, v, field):
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            return v
+        s = str(v).strip()
+        unit = self.unit(field)
+        if unit and s.endswith(unit):
+            s = s[: -len(unit)].strip()
+        try:
+            return int(s, 0)
+        except ValueError:
+            pass
+        try:
+            return float(s)
+        except ValueError:
+            raise RangeError("%s: '%s' is not a number%s" % (
+                self.name, v, " (in %s)" % unit if unit else "")) from None
+
+    def _raw_of(self, v, field):
+        """A number in units -> the wire integer, checked against the type
+        and the register's range."""
+        f = self.fields[field]
+        scale = f["scale"] if f["unit"] else 1
+        num = self._parse_number(v, field)
+        raw = num / scale if scale != 1 else num
+        if isinstance(raw, float):
+            if abs(raw - round(raw)) > 1e-6:
+                if f["unit"] == "":
+                    raise RangeError("%s: %s is not a whole number" % (self.name, v))
+                step = "%.*f %s" % (_decimals(scale), scale, f["unit"])
+                raise RangeError("%s: %s is not a multiple of %s" % (self.name, v, step))
+            raw = int(round(raw))
+        size, signed = _INT_TYPES[f["type"]]
+        lo, hi = ((-(1 << (8 * size - 1)), (1 << (8 * size - 1)) - 1) if signed
+                  else (0, (1 << (8 * size)) - 1))
+        if signed is None:  # a 16-bit parameter of 0x67/0x70: either reading
+            lo, hi = -(1 << 15), (1 << 16) - 1
+        for key, cmp in (("min", max), ("max", min)):
+            b = f.get(key)
+            if isinstance(b, int):
+                if key == "min":
+                    lo = cmp(lo, b)
+                else:
+                    hi = cmp(hi, b)
+        if not lo <= raw <= hi:
+            raise RangeError("%s: %s is outside %s..%s" % (
+                self.name, self._format_field(raw, field) if f["unit"] else raw,
+                self._format_field(lo, field), self._format_field(hi, field)))
+        return raw, size
+
+    def encode(self, value):
+        """A value in units -> wire bytes: a number or text for one field;
+        a list, tuple or "a, b" text for several (0x65: "45, 500" = 45.0 °
+        in 500 ms). Raises RegisterError for a read-only register and
+        RangeError for a value it cannot take; nothing is sent."""
+        if not self.writable:
+            raise RegisterError("%s (0x%02X) is read-only" % (self.name, self.address))
+        if self.layout == "magic":
+            data = bytes(value) if isinstance(value, (bytes, bytearray)) else bytes.fromhex(str(value))
+            if len(data) != 4:
+                raise RangeError("%s: takes exactly 4 bytes" % self.name)
+            return data
+        if self.layout == "pos":
+            num = self._parse_number(value, 0)
+            raw = int(round(num / self.fields[0]["scale"]))
+            size = 2 if -(1 << 15) <= raw < (1 << 15) else 4
+            if not -(1 << 31) <= raw < (1 << 31):
+                raise RangeError("%s: %s does not fit i32" % (self.name, value))
+            return raw.to_bytes(size, "little", signed=True)
+        if isinstance(value, str):
+            units = {f["unit"] for f in self.fields if f["unit"]}
+            parts = [p for p in value.replace(",", " ").split() if p not in units]  # "45 °, 500 ms"
+        elif isinstance(value, (list, tuple)):
+            parts = list(value)
+        else:
+            parts = [value]
+        needed = sum(1 for f in self.fields if not f.get("optional"))
+        if not needed <= len(parts) <= len(self.fields):
+            raise RangeError("%s: takes %s value%s (%s), got %d" % (
+                self.name, needed if needed == len(self.fields) else "%d or %d" % (needed, len(self.fields)),
+                "" if len(self.fields) == 1 else "s", self.type, len(parts)))
+        out = b""
+        for i, p in enumerate(parts):
+            raw, size = self._raw_of(p, i)
+            signed = raw < 0
+            out += raw.to_bytes(size, "little", signed=signed)
+        return out
+
+
+class RegisterMap:
+    """All registers of docs/registers.json, by name and by address."""
+
+    def __init__(self, description):
+        self.registers = [Register(d) for d in description["registers"]]
+        self.by_name = {r.name: r for r in self.registers}
+        self.by_address = {r.address: r for r in self.registers}
+
+    @classmethod
+    def load(cls, path=None):
+        paths = [path] if path else ([os.environ[ENV_PATH]] if os.environ.get(ENV_PATH) else list(DEFAULT_PATHS))
+        for p in paths:
+            if os.path.isfile(p):
+                try:
+                    with open(p, encoding="utf-8") as f:
+                        return cls(json.load(f))
+                except (OSError, ValueError, KeyError) as e:
+                    raise RegisterError("register description %s is unreadable: %s" % (p, e)) from None
+        raise RegisterError("no register description found (looked in %s); set %s or regenerate "
+                            "docs/registers.json with km_regdoc --json" % (", ".join(paths), ENV_PATH))
+
+    def __iter__(self):
+        return iter(self.registers)
+
+    def __len__(self):
+        return len(self.registers)
+
+    def __getitem__(self, key):
+        return self.find(key)
+
+    def find(self, key):
+        """A register by name (any case, - or _), address (int) or "0x46"."""
+        if isinstance(key, int):
+            addr = key
+        else:
+            s = str(key).strip()
+            name = s.lower().replace("-", "_")
+            if name in self.by_name:
+                return self.by_name[name]
+            try:
+                addr = int(s, 0)
+            except ValueError:
+                close = difflib.get_close_matches(name, self.by_name, 3)
+                raise RegisterError("no register named '%s'%s" % (
+                    s, "; did you mean %s?" % ", ".join(close) if close else "")) from None
+        if addr in self.by_address:
+            return self.by_address[addr]
+        raise RegisterError("no register at address 0x%02X (reserved)" % addr if 0 <= addr <= 0xFF
+                            else "address %d is not a byte" % addr)
+
+
+class Registers:
+    """Register access by name with units over a Bus."""
+
+    def __init__(self, bus, regmap=None):
+        self.bus = bus
+        self.map = regmap or RegisterMap.load()
+
+    def get(self, dev_id, key, timeout=None):
+        reg = self.map.find(key)
+        if not reg.readable:
+            raise RegisterError("%s (0x%02X) is write-only" % (reg.name, reg.address))
+        return reg.decode(self.bus.read(dev_id, reg.address, timeout))
+
+    def set(self, dev_id, key, value, answer=False):
+        """Encodes (checks first) and writes; returns the status if answer=True."""
+        reg = self.map.find(key)
+        return self.bus.write(dev_id, reg.address, reg.encode(value), answer=answer)
