@@ -13,6 +13,7 @@ enum {
     CMD_READ = 0x02,
     CMD_WRITE = 0x03,
     CMD_SYNC_WRITE = 0x04,
+    CMD_MULTI_READ = 0x82,
     CMD_MULTI_WRITE = 0x83,
     CMD_SYNC_EXECUTE = 0x84,
 };
@@ -21,6 +22,13 @@ enum {
 #define TEXT_MAX 16u
 
 static const uint8_t s_restart_magic[4] = {0xE1, 0xE2, 0xE3, 0xE4};
+
+/* How an answer dealt with bits 5/6 ("Status bits 5 and 6"). */
+typedef enum {
+    PRV_UNANSWERED, /* no answer: this command's bits wait for a status answer */
+    PRV_OWN,        /* the answer carried this command's bits (or had no status byte) */
+    PRV_ALL,        /* the answer carried every unreported bit: they are cleared */
+} prv_report_t;
 
 /* ---- small helpers ---------------------------------------------------- */
 
@@ -126,13 +134,16 @@ static uint32_t prv_slot_us(const km_servo_t *s, uint16_t answer_bytes)
     return (bits * 1000000u + s->active_baud - 1u) / s->active_baud;
 }
 
+/* The answer's start after the frame: 0x12 alone, or the start of slot
+ * `slot` (the own ID for the super ID, the list position for 0x82). */
+static uint32_t prv_slot_delay_us(const km_servo_t *s, uint32_t slot, uint16_t max_answer_bytes)
+{
+    return prv_reg(s, KM_REG_RESPONSE_DELAY) + slot * prv_slot_us(s, max_answer_bytes);
+}
+
 static uint32_t prv_delay_us(const km_servo_t *s, uint8_t frame_id, uint16_t max_answer_bytes)
 {
-    const uint32_t base = prv_reg(s, KM_REG_RESPONSE_DELAY);
-    if (frame_id != KM_ID_SUPER) {
-        return base;
-    }
-    return base + km_servo_id(s) * prv_slot_us(s, max_answer_bytes);
+    return prv_slot_delay_us(s, frame_id == KM_ID_SUPER ? km_servo_id(s) : 0u, max_answer_bytes);
 }
 
 static void prv_answer_status(km_servo_t *s, uint8_t status, uint8_t frame_id, km_reply_t *reply)
@@ -404,21 +415,47 @@ static uint8_t prv_encode_value(km_servo_t *s, km_reg_index_t r, uint8_t *out)
     }
 }
 
-static void prv_read(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply)
+/* The readable register at `addr`, or -1 (unknown, or write-only). */
+static int prv_readable(uint8_t addr)
 {
-    /* "Malformed frames": a read carries exactly one address byte. */
-    const int r = f->body_len == 1 ? km_reg_find(f->body[0]) : -1;
-    if (r < 0 || !(km_reg_table[r].access & KM_R)) {
+    const int r = km_reg_find(addr);
+    return r >= 0 && (km_reg_table[r].access & KM_R) ? r : -1;
+}
+
+/* The longest answer a read of register r (-1: an error, the short
+ * response) can give: what the slots are cut for, the same on every servo. */
+static uint16_t prv_read_answer_max(int r)
+{
+    if (r < 0) {
+        return 6u;
+    }
+    return (uint16_t)(7u + prv_max_value_size((km_layout_t)km_reg_table[r].layout));
+}
+
+/* The answer to a read of register r (-1: bit 5 and the short response),
+ * started in slot `slot`. */
+static void prv_read_answer(km_servo_t *s, int r, uint8_t addr, uint32_t slot, km_reply_t *reply)
+{
+    const uint32_t delay = prv_slot_delay_us(s, slot, prv_read_answer_max(r));
+    if (r < 0) {
         prv_exception(s);
-        prv_answer_status(s, prv_own_status(s), f->id, reply);
+        reply->len = km_encode_status(reply->bytes, km_servo_id(s), prv_own_status(s));
+        reply->delay_us = delay;
         return;
     }
     uint8_t body[1 + TEXT_MAX];
-    body[0] = f->body[0];
+    body[0] = addr;
     const uint8_t n = prv_encode_value(s, (km_reg_index_t)r, &body[1]);
     reply->len = km_encode_response(reply->bytes, km_servo_id(s), CMD_READ, body, (uint8_t)(1u + n));
-    const uint8_t longest = prv_max_value_size((km_layout_t)km_reg_table[r].layout);
-    reply->delay_us = prv_delay_us(s, f->id, (uint16_t)(7u + longest));
+    reply->delay_us = delay;
+}
+
+static void prv_read(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply)
+{
+    /* "Malformed frames": a read carries exactly one address byte. */
+    const int r = f->body_len == 1 ? prv_readable(f->body[0]) : -1;
+    const uint32_t slot = f->id == KM_ID_SUPER ? km_servo_id(s) : 0u;
+    prv_read_answer(s, r, f->body_len == 1 ? f->body[0] : 0u, slot, reply);
 }
 
 /* ---- write ------------------------------------------------------------ */
@@ -800,6 +837,53 @@ static void prv_multi_write(km_servo_t *s, const km_frame_view_t *f)
     /* Not in the list: this servo does nothing at all. */
 }
 
+/* ---- multi-ID read 0x82 ------------------------------------------------ */
+
+/* "Multi-ID read 0x82": F9 FF FE len 82 addr id_0 .. id_n-1 cs. Every servo
+ * judges the frame; a listed servo answers exactly what a 0x02 read of addr
+ * answers, starting in slot j, j = its first position in the list. */
+static prv_report_t prv_multi_read(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply)
+{
+    if (f->body_len < 2u) {
+        /* No address, or no ID: a malformed frame, bit 5 on every servo
+         * (nobody can answer it); nothing else happens. */
+        prv_exception(s);
+        s->sync.full = false;
+        return PRV_UNANSWERED;
+    }
+    const uint8_t addr = f->body[0];
+    const int r = prv_readable(addr);
+    /* The scan over up to 249 IDs: the ID, the body and its end in locals
+     * (the loop's stores could alias them otherwise). */
+    const uint8_t own = km_servo_id(s);
+    const uint8_t *const ids = &f->body[1];
+    const uint8_t n = (uint8_t)(f->body_len - 1u);
+    const uint8_t *const end = ids + n;
+    const uint8_t *const end4 = ids + (n & ~3u); /* the whole groups of four */
+    const uint8_t *p = ids;
+    /* Four IDs a pass, then the rest: the scan is what a long list costs
+     * (tools/bench-m0); the answer is due j slots later anyway. */
+    while (p != end4 && p[0] != own && p[1] != own && p[2] != own && p[3] != own) {
+        p += 4;
+    }
+    while (p != end && *p != own) {
+        p++;
+    }
+    if (p == end) {
+        if (r < 0) {
+            /* §4: an address the read does not support is bit 5 on every
+             * servo, as for 0x83; unlisted servos report it at a ping. */
+            prv_exception(s);
+            s->sync.full = false;
+        }
+        return PRV_UNANSWERED; /* not listed: nothing else changes */
+    }
+    s->sync.full = false; /* a command to this servo (§3) */
+    prv_read_answer(s, r, addr, (uint32_t)(p - ids), reply);
+    /* As a read: the status register's value is the ping's status byte. */
+    return addr == 0x01 && !s->flags ? PRV_ALL : PRV_OWN;
+}
+
 /* ---- extension command 0x7F --------------------------------------------- */
 
 /* "Extension command 0x7F": a read in this firmware's own address space.
@@ -871,13 +955,6 @@ static void prv_ext_read(km_servo_t *s, const km_frame_view_t *f, km_reply_t *re
 }
 
 /* ---- dispatch --------------------------------------------------------- */
-
-/* How an answer dealt with bits 5/6 ("Status bits 5 and 6"). */
-typedef enum {
-    PRV_UNANSWERED, /* no answer: this command's bits wait for a status answer */
-    PRV_OWN,        /* the answer carried this command's bits (or had no status byte) */
-    PRV_ALL,        /* the answer carried every unreported bit: they are cleared */
-} prv_report_t;
 
 /* Runs one command addressed to this servo; fills *reply. */
 static prv_report_t prv_dispatch(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply)
@@ -959,7 +1036,7 @@ static prv_report_t prv_dispatch(km_servo_t *s, const km_frame_view_t *f, km_rep
         }
         return PRV_UNANSWERED; /* an empty buffer is nothing to do, not an error (§3) */
     default:
-        /* 0x82, 0x78, 0x7E and unknown commands: not supported. */
+        /* 0x78, 0x7E and unknown commands: not supported. */
         prv_exception(s);
         return PRV_UNANSWERED;
     }
@@ -983,14 +1060,15 @@ void km_servo_handle_view(km_servo_t *s, const km_frame_view_t *f, km_reply_t *r
     if (super && f->cmd != CMD_PING && f->cmd != CMD_READ && f->cmd != KM_CMD_EXT) {
         return;
     }
-    /* "Multi-ID write": broadcast only. To our own ID it is an exception;
-     * to the super ID, ignored (above). */
-    if (f->cmd == CMD_MULTI_WRITE && !broadcast) {
+    /* "Multi-ID write" and "Multi-ID read 0x82": broadcast only. To our own
+     * ID it is an exception; to the super ID, ignored (above). */
+    const bool multi = f->cmd == CMD_MULTI_WRITE || f->cmd == CMD_MULTI_READ;
+    if (multi && !broadcast) {
         s->unreported |= KM_ST_EXCEPTION;
         s->sync.full = false;
         return;
     }
-    if (f->cmd != CMD_SYNC_WRITE && f->cmd != CMD_SYNC_EXECUTE && f->cmd != CMD_MULTI_WRITE) {
+    if (f->cmd != CMD_SYNC_WRITE && f->cmd != CMD_SYNC_EXECUTE && !multi) {
         s->sync.full = false; /* §3: any other command clears the 0x04 buffer */
     }
     s->flags = 0u;
@@ -998,6 +1076,8 @@ void km_servo_handle_view(km_servo_t *s, const km_frame_view_t *f, km_reply_t *r
     if (f->cmd == CMD_MULTI_WRITE) {
         prv_multi_write(s, f);
         report = PRV_UNANSWERED;
+    } else if (f->cmd == CMD_MULTI_READ) {
+        report = prv_multi_read(s, f, reply);
     } else {
         report = prv_dispatch(s, f, reply);
     }

@@ -495,13 +495,14 @@ static void test_s3_read_broadcast_no_answer(void **state)
     }
 }
 
-/* §3/§7 and "Malformed frames": 0x82, 0x78, 0x7E and unknown commands: bit
- * 5, no answer, nothing else changes; the next ping reports it once. (0x7F
- * is the extension read: test_dispatch_commands.c.) */
+/* §3/§7 and "Malformed frames": 0x78, 0x7E and unknown commands: bit 5, no
+ * answer, nothing else changes; the next ping reports it once. (0x7F is the
+ * extension read: test_dispatch_commands.c; 0x82 the multi-ID read:
+ * test_dispatch_multi_read.c.) */
 static void test_s3_unsupported_commands(void **state)
 {
     (void)state;
-    static const uint8_t cmds[] = {0x82, 0x78, 0x7E, 0x00, 0x05, 0x7D, 0x80, 0xFF};
+    static const uint8_t cmds[] = {0x78, 0x7E, 0x00, 0x05, 0x7D, 0x80, 0xFF};
     for (unsigned i = 0; i < sizeof cmds; i++) {
         init_answering(kt_product_pot());
         kt_snap_t sn;

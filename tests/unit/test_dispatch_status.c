@@ -388,7 +388,15 @@ static const lc_case_t lc_cases[] = {
     {"0x83 unsupported address", 1, NULL, "F9 FF FE 06 83 13 01 01 05 5E", LC_NONE, KM_ST_EXCEPTION, NULL, false},
     {"0x83 malformed k", 1, NULL, "F9 FF FE 07 83 64 02 01 02 00 0E", LC_NONE, KM_ST_FAILED, NULL, false},
     {"0x83 to own ID", 1, NULL, "F9 FF 01 06 83 64 01 01 02 0D", LC_NONE, KM_ST_EXCEPTION, NULL, false},
-    {"unknown command 0x82", 1, NULL, "F9 FF 01 03 82 13 66", LC_NONE, KM_ST_EXCEPTION, NULL, false},
+    {"0x82 listing us", 0, NULL, "F9 FF FE 04 82 13 01 67", LC_VALUE, 0, "F9 F5 01 05 02 13 E8 03 F9", false},
+    {"0x82 listing us, 0x01", 0, NULL, "F9 FF FE 04 82 01 01 79", LC_ALL, 0, NULL, true},
+    {"0x82 listing us, reserved address", 0, NULL, "F9 FF FE 04 82 0D 01 6D", LC_OWN, KM_ST_EXCEPTION, NULL, false},
+    {"0x82 not listing us", 0, NULL, "F9 FF FE 04 82 13 02 66", LC_IGNORED, 0, NULL, false},
+    {"0x82 not listing us, reserved address", 0, NULL, "F9 FF FE 04 82 0D 02 6C", LC_NONE, KM_ST_EXCEPTION, NULL, false},
+    {"0x82 no IDs", 0, NULL, "F9 FF FE 03 82 13 69", LC_NONE, KM_ST_EXCEPTION, NULL, false},
+    {"0x82 to own ID", 0, NULL, "F9 FF 01 04 82 13 01 64", LC_NONE, KM_ST_EXCEPTION, NULL, false},
+    {"0x82 to super ID", 0, NULL, "F9 FF FD 04 82 13 01 68", LC_IGNORED, 0, NULL, false},
+    {"unknown command 0x78", 1, NULL, "F9 FF 01 03 78 13 70", LC_NONE, KM_ST_EXCEPTION, NULL, false},
     {"super-ID write", 1, NULL, "F9 FF FD 05 03 13 F4 01 F2", LC_IGNORED, 0, NULL, false},
 };
 

@@ -324,6 +324,16 @@ static void m0h_dispatcher(void)
         m0h_dispatch(entries == 3 ? "multi_write_0x83_3" : "multi_write_0x83_49", KM_ID_BROADCAST,
                      0x83, b, (uint8_t)(2u + 5u * entries), false, false);
     }
+    /* 0x82 of 0x46 naming 20 and 249 servos (the longest list), this one
+     * last, so the whole list is scanned and the last slot computed. */
+    for (unsigned ids = 20; ids <= 249; ids += 229) {
+        b[0] = 0x46;
+        for (unsigned i = 0; i < ids; i++) {
+            b[1 + i] = (uint8_t)(i + 1u == ids ? M0_ID : i + 1u);
+        }
+        m0h_dispatch(ids == 20 ? "multi_read_0x82_20" : "multi_read_0x82_249", KM_ID_BROADCAST,
+                     0x82, b, (uint8_t)(1u + ids), true, false);
+    }
     b[0] = 0x01; /* status */
     m0h_dispatch("read_status_0x01", M0_ID, 0x02, b, 1, true, false);
 }
