@@ -22,7 +22,7 @@ bool km_boot_crc(const km_flash_t *region, uint32_t from, uint32_t to, uint32_t 
 bool km_boot_check(const km_flash_t *region, const km_image_target_t *t, km_image_header_t *h)
 {
     uint8_t raw[KM_IMAGE_HEADER_SIZE];
-    km_image_header_t local;
+    km_image_header_t local = {0};
     km_image_header_t *d = h != 0 ? h : &local;
     if (region->read(region->ctx, 0u, raw, sizeof raw) != KM_FLASH_OK) {
         d->magic = 0u;

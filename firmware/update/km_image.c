@@ -23,7 +23,7 @@ void km_image_decode(const uint8_t raw[KM_IMAGE_HEADER_SIZE], km_image_header_t 
 km_image_verdict_t km_image_check(const uint8_t raw[KM_IMAGE_HEADER_SIZE],
                                   const km_image_target_t *t, km_image_header_t *h)
 {
-    km_image_header_t local;
+    km_image_header_t local = {0};
     km_image_header_t *d = h != 0 ? h : &local;
     km_image_decode(raw, d);
     if (d->magic != KM_IMAGE_MAGIC || km_crc32(0u, raw, 28u) != d->head_crc) {
