@@ -99,16 +99,23 @@ class Bus:
     def _ask(self, data, dev_id, accept, what, timeout=None):
         """One answer from dev_id that `accept` takes, with retries."""
         tries = 1 + self.retries
+        wait = self.timeout if timeout is None else timeout
         last = None
         for _ in range(tries):
-            for f in self.transact(data, 1, timeout):
-                if f.id != dev_id:
-                    last = BadAnswer("%s: answer from ID %d, asked ID %d" % (what, f.id, dev_id))
-                    continue
-                problem = accept(f)
-                if problem is None:
-                    return f
-                last = BadAnswer("%s: %s" % (what, problem))
+            frames = self.transact(data, 1, wait)
+            deadline = self.sent_at + wait
+            while frames:
+                for f in frames:
+                    if f.id != dev_id:
+                        last = BadAnswer("%s: answer from ID %d, asked ID %d" % (what, f.id, dev_id))
+                        continue
+                    problem = accept(f)
+                    if problem is None:
+                        return f
+                    last = BadAnswer("%s: %s" % (what, problem))
+                # a stray (a late answer to an earlier frame): keep listening
+                left = deadline - time.monotonic()
+                frames = self.listen(left, 1, {bytes(data)}) if left > 0 else []
         if last is not None:
             raise last
         raise NoAnswer("%s: no answer from ID %d within %.0f ms (%d tries)%s" %
@@ -143,7 +150,9 @@ class Bus:
     def write(self, dev_id, addr, value, answer=False, timeout=None):
         """Write (0x03), sent once. answer=True (response level 1, §5.1 0x11
         bit 3) waits for the short response and returns its status;
-        otherwise returns None at once."""
+        otherwise returns None at once. A short response names no command:
+        one that arrives late can be taken for the answer to the next
+        question, so with response level 1 pass answer=True."""
         data = fr.write(dev_id, addr, value)
         if not answer:
             self.transact(data)

@@ -87,7 +87,8 @@ class Register:
         if f["type"] == "bits8":
             return "0x%02X" % raw
         if f["unit"] == "":
-            return "%d" % raw
+            # a unit-less byte is a code or packed bit pairs (0x34): hex too
+            return "%d (0x%02X)" % (raw, raw) if f["type"] == "u8" and raw >= 10 else "%d" % raw
         d = _decimals(f["scale"])
         return "%.*f %s" % (d, raw * f["scale"], f["unit"])
 
@@ -183,9 +184,8 @@ class Register:
                 else:
                     hi = cmp(hi, b)
         if not lo <= raw <= hi:
-            raise RangeError("%s: %s is outside %s..%s" % (
-                self.name, self._format_field(raw, field) if f["unit"] else raw,
-                self._format_field(lo, field), self._format_field(hi, field)))
+            show = (lambda r: self._format_field(r, field)) if f["unit"] else str
+            raise RangeError("%s: %s is outside %s..%s" % (self.name, show(raw), show(lo), show(hi)))
         return raw, size
 
     def encode(self, value):

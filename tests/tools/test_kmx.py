@@ -183,7 +183,7 @@ class RegisterDescription(unittest.TestCase):
                  ("zero_increment", 10.5, RangeError, r"10.5 ° is outside -10.0 °..10.0 °"),
                  ("temp_limits", "60", RangeError, r"takes 2 values \(u8, u8\), got 1"),
                  ("move_time", "1, 2, 3", RangeError, "takes 1 or 2 values"),
-                 ("id", 251, RangeError, "outside 0..250"),
+                 ("id", 251, RangeError, "id: 251 is outside 0..250$"),
                  ("response_delay", -1, RangeError, "outside 0 µs..65535 µs"),
                  ("position", "far", RangeError, "'far' is not a number"),
                  ("firmware_version", 1, RegisterError, r"firmware_version \(0x0C\) is read-only")]

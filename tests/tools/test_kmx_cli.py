@@ -1,0 +1,137 @@
+"""The kmx command (tools/kmx -> host/kmx/cli.py) against a real host-sim
+servo over TCP and over a pseudo-terminal: scan, ping, get, set, dump, the
+--help of each subcommand, and each error's one-line message and exit code
+(never a traceback). Register names and units: docs/registers.json
+(PROTOCOL.md §5). About 6 s."""
+import os
+import re
+import socket
+import subprocess
+import sys
+import time
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from test_kmx import REPO, HostSim  # noqa: E402
+
+KMX = os.path.join(REPO, "tools", "kmx")
+
+
+def kmx(bus, *args, timeout=20):
+    r = subprocess.run([KMX, "--bus", bus, *args], capture_output=True, text=True, timeout=timeout)
+    if "Traceback" in r.stderr:
+        raise AssertionError("kmx %s printed a traceback:\n%s" % (" ".join(args), r.stderr))
+    return r
+
+
+class KmxOverTcp(unittest.TestCase):
+    def setUp(self):
+        self.sim = HostSim()
+        self.addCleanup(self.sim.close)
+
+    def ok(self, *args):
+        r = kmx(self.sim.spec, *args)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        return r.stdout
+
+    def fails(self, code, message, *args):
+        r = kmx(self.sim.spec, *args)
+        self.assertEqual(r.returncode, code, r.stdout + r.stderr)
+        self.assertIn(message, r.stderr)
+        self.assertEqual(len(r.stderr.strip().splitlines()), 1 if code == 1 else 2, r.stderr)
+
+    def test_scan_ping_get(self):
+        out = self.ok("scan", "--scan-ms", "300")
+        self.assertRegex(out, r"ID\s+baud\s+model\s+firmware\s+status")
+        self.assertRegex(out, r"\n0\s+115200\s+KM-SIM-P135\s+0x[0-9A-F]{8}\s+ok\n")
+        self.assertIn("1 servo on %s (super-ID scan" % self.sim.spec, out)
+        self.assertRegex(self.ok("ping", "0"), r"^ID 0: status 0x00 \(ok\), answered in \d+\.\d ms$")
+        out = self.ok("get", "0", "voltage", "0x0B", "position", "--raw")
+        self.assertEqual(out.splitlines(), ["voltage (0x4B) = 7.400 V  [E8 1C]",
+                                            "protocol_version (0x0B) = 0x05020000  [00 00 02 05]",
+                                            "position (0x46) = 0.0 °  [00 00]"])
+
+    def test_set_move_and_read_back(self):
+        self.assertEqual(self.ok("set", "0", "torque_switch", "2"), "torque_switch (0x64) = 2\n")
+        self.assertEqual(self.ok("set", "0", "temp_limits", "70", "5"), "temp_limits (0x3D) = 70 °C, 5 °C\n")
+        self.assertEqual(self.ok("set", "0", "move_time", "45", "300"),
+                         "move_time (0x65) <- 45.0 °, 300 ms  [C2 01 2C 01]\n")
+        deadline = time.monotonic() + 3
+        while True:
+            out = self.ok("get", "0", "position")
+            if out == "position (0x46) = 45.0 °\n" or time.monotonic() > deadline:
+                break
+            time.sleep(0.1)
+        self.assertEqual(out, "position (0x46) = 45.0 °\n")
+
+    def test_set_id_then_scan_finds_it(self):
+        self.assertEqual(self.ok("set", "0", "id", "5"), "id (0x0F) = 5  (the servo answers at ID 5 now)\n")
+        self.assertRegex(self.ok("scan", "--scan-ms", "300"), r"\n5\s+115200\s+KM-SIM-P135")
+        self.assertIn("takes effect after restart", self.ok("set", "5", "baud", "57600"))
+
+    def test_dump(self):
+        out = self.ok("dump", "0").splitlines()
+        self.assertRegex(out[0], r"^adr\s+name\s+value\s+meaning$")
+        self.assertEqual(len(out), 1 + 47)  # every register of PROTOCOL.md §5 this firmware has
+        rows = {re.split(r"\s{2,}", line)[1]: re.split(r"\s{2,}", line)[2] for line in out[1:]}
+        self.assertEqual(rows["voltage"], "7.400 V")
+        self.assertEqual(rows["temp_limits"], "60 °C, 5 °C")
+        self.assertEqual(rows["prot_state"], "84 (0x54)")
+        self.assertEqual(rows["move_time"], "(write-only)")
+        self.assertEqual(rows["product_info"], "KM-SIM-P135")
+
+    def test_errors(self):
+        self.fails(1, "kmx: ID 0 refused max_current (0x14) = 60000: status 0x40 (command failed)",
+                   "set", "0", "max_current", "60000")
+        self.fails(1, "kmx: torque_switch: 9 is outside 0..3", "set", "0", "torque_switch", "9")
+        self.fails(1, "kmx: firmware_version (0x0C) is read-only", "set", "0", "firmware_version", "1")
+        self.fails(1, "kmx: move_time (0x65) is write-only", "get", "0", "move_time")
+        self.fails(1, "kmx: no register named 'posiiton'; did you mean position?", "get", "0", "posiiton")
+        self.fails(1, "kmx: no register at address 0x20 (reserved)", "get", "0", "0x20")
+        self.fails(1, "kmx: ping ID 9: no answer from ID 9 within 100 ms (3 tries)", "ping", "9")
+        self.fails(2, "argument id: servo ID 300 is outside 0..250", "ping", "300")
+        self.fails(2, "the following arguments are required: VALUE", "set", "0", "id")
+
+
+class KmxErrorsWithoutServo(unittest.TestCase):
+    def test_bus_errors(self):
+        s = socket.socket()
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+        s.close()
+        cases = [("tcp:127.0.0.1:%d" % port, "kmx: tcp:127.0.0.1:%d: connection refused" % port),
+                 ("tcp:7000", "kmx: bus 'tcp:7000': tcp wants HOST:PORT"),
+                 ("com3", "kmx: bus 'com3': expected tcp:HOST:PORT, serial:/dev/ttyUSB0@115200 or pty:/dev/pts/N"),
+                 ("serial:/dev/ttyUSB97@115200", "kmx: serial:/dev/ttyUSB97@115200: no such device /dev/ttyUSB97"),
+                 ("serial:/dev/null", "kmx: serial:/dev/null: /dev/null is not a serial port")]
+        for bus, msg in cases:
+            with self.subTest(bus=bus):
+                r = kmx(bus, "scan")
+                self.assertEqual(r.returncode, 1)
+                self.assertTrue(r.stderr.startswith(msg), r.stderr)
+                self.assertEqual(len(r.stderr.splitlines()), 1, r.stderr)
+
+    def test_help_of_every_subcommand(self):
+        for sub in ("scan", "ping", "get", "set", "dump"):
+            with self.subTest(sub=sub):
+                r = subprocess.run([KMX, sub, "--help"], capture_output=True, text=True, timeout=10)
+                self.assertEqual(r.returncode, 0)
+                self.assertTrue(r.stdout.startswith("usage: kmx %s" % sub), r.stdout)
+        r = subprocess.run([KMX, "--help"], capture_output=True, text=True, timeout=10)
+        for sub in ("scan", "ping", "get", "set", "dump"):
+            self.assertIn(sub, r.stdout)
+
+
+class KmxOverPty(unittest.TestCase):
+    def test_scan_and_get(self):
+        sim = HostSim(pty=True)
+        self.addCleanup(sim.close)
+        r = kmx(sim.spec, "scan", "--scan-ms", "300")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertRegex(r.stdout, r"\n0\s+115200\s+KM-SIM-P135\s+0x[0-9A-F]{8}\s+ok\n")
+        r = kmx(sim.spec, "get", "0", "temperature")
+        self.assertEqual((r.returncode, r.stdout), (0, "temperature (0x4A) = 25 °C\n"))
+
+
+if __name__ == "__main__":
+    unittest.main()
