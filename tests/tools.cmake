@@ -1,6 +1,7 @@
 # Python tests of the host tools (tools/kmbus.py, tools/servo-bus) and the host
 # package host/kmx (test_kmx.py: codec, registers, transports, Bus against a
-# real host-sim servo over TCP and a pty, about 3 s; test_kmx_cli.py: the kmx command
+# real host-sim servo over TCP and a pty and on the 3-servo host-sim bus of
+# servo-bus, about 3 s; test_kmx_cli.py: the kmx command
 # against host-sim, about 5 s; both need the host-sim preset built).
 # unittest exits non-zero when any test fails or errors, which fails the CTest test;
 # FAIL_REGULAR_EXPRESSION also catches a run that collected no tests at all.

@@ -3,9 +3,10 @@ PROTOCOL.md §2 byte for byte, the stream parser on noise and checksum
 errors, registers by name with units and range refusal (from
 docs/registers.json), transport spec parsing and each open error's
 message, and the Bus against a real host-sim servo over TCP and over a
-pseudo-terminal. The host-sim image is the host-sim preset's
+pseudo-terminal, and on the 3-servo host-sim bus of tools/servo-bus
+(super-ID and 0x82 slot order). The host-sim image is the host-sim preset's
 (build/host-sim, or KM_BUILD_HOST_SIM); a missing image fails with the
-command that builds it. About 5 s."""
+command that builds it. About 8 s."""
 import os
 import re
 import socket
@@ -387,6 +388,9 @@ class BusOverTcp(unittest.TestCase):
         self.bus.execute()
         self.assertEqual(self.bus.read(0, 0x64), b"\x00")
 
+    def test_multi_read_one_servo(self):
+        self.assertEqual(self.bus.multi_read(0x4B, [3, 0]), {3: None, 0: h("E8 1C")})
+
     def test_multi_write(self):
         self.bus.multi_write(0x64, {0: b"\x02"})
         self.assertEqual(self.bus.read(0, 0x64), b"\x02")
@@ -405,6 +409,69 @@ class BusOverTcp(unittest.TestCase):
         self.assertEqual(self.bus.listen(0.2), [])  # §4: a bad checksum gets no answer
         st = self.bus.ping(0)
         self.assertTrue(st & 0x20, "bit 5 for the frame with our ID and a bad checksum (§4)")
+
+
+class ServoBus:
+    """Three real host-sim servos, IDs 1, 2, 3, on the emulated wire of
+    tools/servo-bus (answers reach the master in wire order)."""
+
+    def __init__(self, ids=(1, 2, 3)):
+        host_sim_image()
+        self.proc = subprocess.Popen(
+            [sys.executable, os.path.join(REPO, "tools", "servo-bus"), "--ids", ",".join(map(str, ids)),
+             "--port", "0", "--backend", "host-sim", "--gap-floor-us", "0"],
+            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+        line = self.proc.stdout.readline().split()
+        if line[:1] != ["ready"]:
+            self.close()
+            raise AssertionError("servo-bus did not start: %r" % line)
+        self.spec = "tcp:" + line[1]
+
+    def close(self):
+        self.proc.terminate()
+        try:
+            self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+        self.proc.stdout.close()
+
+
+class BusOnThreeServos(unittest.TestCase):
+    """Super-ID slot order (PROTOCOL.md §1, §3), multi-ID read 0x82 slot
+    order (docs/protocol-decisions.md), multi-ID write 0x83 and sync write
+    0x04/0x84 across servos, on the 3-servo host-sim bus."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.wire = ServoBus()
+        cls.bus = Bus(cls.wire.spec)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.bus.close()
+        cls.wire.close()
+
+    def test_scan_answers_in_id_order(self):
+        frames = self.bus.scan_frames(timeout=0.4)
+        self.assertEqual([(f.id, f.status) for f in frames], [(1, 0), (2, 0), (3, 0)])
+        self.assertEqual([f.time for f in frames], sorted(f.time for f in frames))
+
+    def test_multi_read_answers_in_list_order(self):
+        frames = self.bus.multi_read_frames(fr.REG_ID, [3, 1, 2])
+        self.assertEqual([(f.id, f.params) for f in frames], [(3, b"\x03"), (1, b"\x01"), (2, b"\x02")])
+        self.assertEqual(self.bus.multi_read(0x0B, [2, 7, 1]),
+                         {2: h("00 00 02 05"), 7: None, 1: h("00 00 02 05")})
+
+    def test_multi_write_then_multi_read(self):
+        self.bus.multi_write(0x64, {1: b"\x02", 2: b"\x01", 3: b"\x00"})
+        self.assertEqual(self.bus.multi_read(0x64, [1, 2, 3]), {1: b"\x02", 2: b"\x01", 3: b"\x00"})
+
+    def test_sync_write_interleaved_then_execute(self):
+        for dev_id, v in ((1, 0), (2, 1), (3, 2)):  # §3: frames for other IDs keep each buffer
+            self.bus.sync_write(dev_id, 0x64, bytes([v]))
+        self.bus.execute()
+        self.assertEqual(self.bus.multi_read(0x64, [1, 2, 3]), {1: b"\x00", 2: b"\x01", 3: b"\x02"})
 
 
 class BusOverPty(unittest.TestCase):
