@@ -6,6 +6,10 @@ by name, with units (names, units and ranges from docs/registers.json).
   kmx [--bus SPEC] get ID NAME...       e.g. kmx get 1 position voltage
   kmx [--bus SPEC] set ID NAME VALUE... e.g. kmx set 1 move_time 45 500
   kmx [--bus SPEC] dump ID              every register, decoded
+  kmx [--bus SPEC] torque ID on|off|brake
+  kmx [--bus SPEC] move ID ANGLE [--time MS | --speed DPS] [--wait]
+  kmx [--bus SPEC] monitor ID... [--interval MS] [--count N] [--csv]
+  kmx [--bus SPEC] set-id ID NEW        write the ID, restart, find it at NEW
 
 SPEC: tcp:HOST:PORT (tools/servo-bus, host-sim), serial:/dev/ttyUSB0@115200,
 pty:/dev/pts/N; default $KMX_BUS, else tcp:127.0.0.1:7000. Failures print
@@ -140,6 +144,115 @@ def cmd_dump(bus, regs, args):
     return 0
 
 
+TORQUE = {"off": 0, "brake": 1, "on": 2}  # §5.4 0x64
+TORQUE_WORDS = {0: "off, free", 1: "off, brake damping", 2: "on, holding", 3: "armed: on at the next move",
+                5: "off after a protection"}
+
+
+def _write_checked(bus, dev_id, reg, data, what):
+    """Writes and pings: §4 bit 6 (refused) or bit 5 (not supported) -> KmxError."""
+    bus.write(dev_id, reg.address, data)
+    status = bus.ping(dev_id)
+    if status & 0x60:
+        raise KmxError("ID %d refused %s: status 0x%02X (%s)" % (
+            dev_id, what, status, ", ".join(fr.status_words(status))))
+    return status
+
+
+def cmd_torque(bus, regs, args):
+    reg = regs.map.find("torque_switch")
+    _write_checked(bus, args.id, reg, bytes([TORQUE[args.state]]), "torque %s" % args.state)
+    v = bus.read(args.id, reg.address)[0]
+    print("ID %d: torque_switch (0x64) = %d (%s)" % (args.id, v, TORQUE_WORDS.get(v, "?")))
+    return 0
+
+
+def cmd_move(bus, regs, args):
+    if args.speed is not None:
+        reg = regs.map.find("move_speed")
+        data = reg.encode([args.angle, args.speed])
+    elif args.time is not None:
+        reg = regs.map.find("move_time")
+        data = reg.encode([args.angle, args.time])
+    else:
+        reg = regs.map.find("move_time")  # §5.4: time omitted = fastest
+        data = reg.encode([args.angle])
+    t0 = time.monotonic()
+    _write_checked(bus, args.id, reg, data, "%s = %s" % (reg.name, reg.decode(data)))
+    if not args.wait:
+        print("ID %d: %s <- %s" % (args.id, reg.name, reg.decode(data)))
+        return 0
+    pos = regs.map.find("position")
+    deadline = t0 + args.wait_s
+    while True:
+        running = bus.read(args.id, fr.REG_STATUS)[0] & 0x80  # §4 bit 7: executing a rotation command
+        if not running:
+            break
+        if time.monotonic() > deadline:
+            raise KmxError("ID %d: still moving after %.1f s (at %s)" % (
+                args.id, args.wait_s, pos.decode(bus.read(args.id, pos.address))))
+        time.sleep(0.02)
+    print("ID %d: %s <- %s; stopped at %s after %.0f ms" % (
+        args.id, reg.name, reg.decode(data), pos.decode(bus.read(args.id, pos.address)),
+        1000 * (time.monotonic() - t0)))
+    return 0
+
+
+MONITOR = ("position", "speed", "current", "temperature", "voltage")
+
+
+def cmd_monitor(bus, regs, args):
+    regs_shown = [regs.map.find(n) for n in MONITOR]
+    header = ["t_s", "id"] + ["%s_%s" % (r.name, r.unit().replace("°/s", "dps").replace("°C", "c")
+                                         .replace("°", "deg").lower()) for r in regs_shown] + ["status"]
+    live = not args.csv and sys.stdout.isatty()
+    if args.csv:
+        print(",".join(header), flush=True)
+    t0 = time.monotonic()
+    n = 0
+    try:
+        while args.count is None or n < args.count:
+            rows = []
+            t = time.monotonic() - t0
+            for dev_id in args.ids:
+                values = [r.decode(bus.read(dev_id, r.address)) for r in regs_shown]
+                status = bus.read(dev_id, fr.REG_STATUS)[0]
+                words = " ".join(w.replace(" ", "-") for w in fr.status_words(status))
+                if args.csv:
+                    rows.append(",".join(["%.3f" % t, str(dev_id)] + ["%.*f" % (r.decimals(), v.value) for r, v in zip(regs_shown, values)] + [words]))
+                else:
+                    rows.append([dev_id] + [str(v) for v in values] + [", ".join(fr.status_words(status))])
+            if args.csv:
+                print("\n".join(rows), flush=True)
+            else:
+                table = _table(rows, ["ID"] + list(MONITOR) + ["status"])
+                print(("\033[H\033[J" if live else "") + "t = %.2f s\n%s" % (t, table), flush=True)
+            n += 1
+            if args.count is None or n < args.count:
+                time.sleep(args.interval / 1000.0)
+    except KeyboardInterrupt:
+        pass  # the normal way out of a live monitor
+    return 0
+
+
+def cmd_set_id(bus, regs, args):
+    if args.new == args.id:
+        raise KmxError("ID %d already is %d" % (args.id, args.new))
+    bus.ping(args.id)  # it must be there
+    try:
+        bus.ping(args.new)
+        taken = True
+    except NoAnswer:
+        taken = False
+    if taken:
+        raise KmxError("ID %d is taken: another servo answers there" % args.new)
+    bus.write(args.id, fr.REG_ID, bytes([args.new]))
+    bus.ping(args.new)  # §3: the new ID applies right after the write
+    boot = bus.restart(args.new)  # and is stored: it survives the restart
+    print("ID %d -> %d: answers at ID %d after a restart (%.0f ms)" % (args.id, args.new, args.new, 1000 * boot))
+    return 0
+
+
 def build_parser():
     ap = argparse.ArgumentParser(prog="kmx", description=__doc__.split("\n\n")[0],
                                  epilog=__doc__.split("\n\n", 1)[1],
@@ -192,6 +305,45 @@ def build_parser():
     p.add_argument("id", type=servo_id, help="servo ID, 0..250")
     p.add_argument("--raw", action="store_true", help="also print the wire bytes")
     p.set_defaults(run=cmd_dump)
+
+    p = sub.add_parser("torque", help="torque on (hold), off (free) or brake",
+                       description="Writes the torque switch 0x64: on = 2 (hold the current position), "
+                                   "off = 0 (free), brake = 1 (off with brake damping); reads it back.")
+    p.add_argument("id", type=servo_id, help="servo ID, 0..250")
+    p.add_argument("state", choices=sorted(TORQUE), help="on, off or brake")
+    p.set_defaults(run=cmd_torque)
+
+    p = sub.add_parser("move", help="move to an angle (degrees), in a time or at a speed",
+                       description="Moves to ANGLE degrees: 0x65 with --time MS, 0x66 with --speed "
+                                   "DPS, else 0x65 without a time (as fast as allowed). The torque "
+                                   "switch must be on or armed (kmx torque ID on). --wait polls the "
+                                   "status until the move ends and prints where it stopped.")
+    p.add_argument("id", type=servo_id, help="servo ID, 0..250")
+    p.add_argument("angle", type=float, help="target, degrees (0.1 ° steps)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--time", type=float, metavar="MS", help="take this long, ms")
+    g.add_argument("--speed", type=float, metavar="DPS", help="at this speed, °/s")
+    p.add_argument("--wait", action="store_true", help="wait until the move ends")
+    p.add_argument("--wait-s", type=float, default=10.0, metavar="S", help="give up waiting after S s (default 10)")
+    p.set_defaults(run=cmd_move)
+
+    p = sub.add_parser("monitor", help="live table of position, speed, current, temperature, voltage, status",
+                       description="Reads position, speed, current, temperature, voltage and status of "
+                                   "each servo every --interval ms and prints them as a refreshing "
+                                   "table (a terminal), one table per sample (a pipe), or CSV rows "
+                                   "(--csv, values in the units of the header). Ctrl-C stops it.")
+    p.add_argument("ids", type=servo_id, nargs="+", metavar="ID", help="servo IDs")
+    p.add_argument("--interval", type=positive_ms, default=200, metavar="MS", help="sample period (default 200)")
+    p.add_argument("--count", type=int, metavar="N", help="stop after N samples (default: until Ctrl-C)")
+    p.add_argument("--csv", action="store_true", help="CSV rows instead of a table")
+    p.set_defaults(run=cmd_monitor)
+
+    p = sub.add_parser("set-id", help="change a servo's ID, restart it and find it at the new ID",
+                       description="Checks that NEW is free, writes the ID register 0x0F, restarts the "
+                                   "servo and pings it at NEW: the ID is stored user data.")
+    p.add_argument("id", type=servo_id, help="the servo's ID now")
+    p.add_argument("new", type=servo_id, help="its new ID, 0..250")
+    p.set_defaults(run=cmd_set_id)
     return ap
 
 

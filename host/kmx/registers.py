@@ -82,6 +82,11 @@ class Register:
     def unit(self, field=0):
         return self.fields[field]["unit"] if field < len(self.fields) else ""
 
+    def decimals(self, field=0):
+        """Digits after the point a value in units needs (position 1, voltage 3)."""
+        f = self.fields[field]
+        return _decimals(f["scale"]) if f["unit"] else 0
+
     def _format_field(self, raw, field):
         f = self.fields[field]
         if f["type"] == "bits8":

@@ -1,8 +1,9 @@
 """The kmx command (tools/kmx -> host/kmx/cli.py) against a real host-sim
-servo over TCP and over a pseudo-terminal: scan, ping, get, set, dump, the
---help of each subcommand, and each error's one-line message and exit code
+servo over TCP and over a pseudo-terminal, and on the 3-servo host-sim bus:
+scan, ping, get, set, dump, torque, move, monitor, set-id, the --help of
+each subcommand, and each error's one-line message and exit code
 (never a traceback). Register names and units: docs/registers.json
-(PROTOCOL.md §5). About 6 s."""
+(PROTOCOL.md §5). About 10 s."""
 import os
 import re
 import socket
@@ -12,9 +13,10 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_kmx import REPO, HostSim  # noqa: E402
+from test_kmx import REPO, HostSim, ServoBus  # noqa: E402
 
 KMX = os.path.join(REPO, "tools", "kmx")
+SUBCOMMANDS = ("scan", "ping", "get", "set", "dump", "torque", "move", "monitor", "set-id")
 
 
 def kmx(bus, *args, timeout=20):
@@ -80,6 +82,38 @@ class KmxOverTcp(unittest.TestCase):
         self.assertEqual(rows["move_time"], "(write-only)")
         self.assertEqual(rows["product_info"], "KM-SIM-P135")
 
+    def test_torque_and_move(self):
+        self.assertEqual(self.ok("torque", "0", "off"), "ID 0: torque_switch (0x64) = 0 (off, free)\n")
+        # §5.4: rotation commands run only with 0x64 = 2 or 3; §4 bit 6 otherwise
+        self.fails(1, "kmx: ID 0 refused move_time = 30.0 °, 300 ms: status 0x40 (command failed)",
+                   "move", "0", "30", "--time", "300")
+        self.assertEqual(self.ok("torque", "0", "on"), "ID 0: torque_switch (0x64) = 2 (on, holding)\n")
+        self.assertRegex(self.ok("move", "0", "30", "--time", "300", "--wait"),
+                         r"^ID 0: move_time <- 30.0 °, 300 ms; stopped at (29\.[5-9]|30\.[0-5]) ° after \d+ ms\n$")
+        self.assertRegex(self.ok("move", "0", "-20", "--speed", "200", "--wait"),
+                         r"^ID 0: move_speed <- -20.0 °, 200 °/s; stopped at -(19\.[5-9]|20\.[0-5]) ° after \d+ ms\n$")
+        self.assertEqual(self.ok("move", "0", "10"), "ID 0: move_time <- 10.0 °\n")
+        self.fails(1, "kmx: move_time: 3276.8 ° is outside -3276.8 °..3276.7 °", "move", "0", "3276.8")
+
+    def test_monitor(self):
+        out = self.ok("monitor", "0", "--csv", "--count", "3", "--interval", "50").splitlines()
+        self.assertEqual(out[0], "t_s,id,position_deg,speed_dps,current_ma,temperature_c,voltage_v,status")
+        self.assertEqual(len(out), 4)
+        for line in out[1:]:
+            t, dev_id, pos, speed, cur, temp, volt, status = line.split(",")
+            self.assertEqual((dev_id, temp, status), ("0", "25", "ok"))
+            self.assertRegex(pos, r"^-?\d+\.\d$")
+            self.assertRegex(volt, r"^\d+\.\d{3}$")
+        out = self.ok("monitor", "0", "--count", "2", "--interval", "50")
+        self.assertEqual(len(re.findall(r"^t = \d+\.\d\d s\nID\s+position\s+speed\s+current\s+temperature"
+                                        r"\s+voltage\s+status\n0\s+0\.0 °\s+0 °/s", out, re.M)), 2, out)
+
+    def test_set_id_survives_restart(self):
+        self.assertRegex(self.ok("set-id", "0", "4"), r"^ID 0 -> 4: answers at ID 4 after a restart \(\d+ ms\)\n$")
+        self.assertRegex(self.ok("scan", "--scan-ms", "300"), r"\n4\s+115200\s+KM-SIM-P135")
+        self.fails(1, "kmx: ID 4 already is 4", "set-id", "4", "4")
+        self.fails(1, "kmx: ping ID 7: no answer from ID 7 within 100 ms (3 tries)", "set-id", "7", "3")
+
     def test_errors(self):
         self.fails(1, "kmx: ID 0 refused max_current (0x14) = 60000: status 0x40 (command failed)",
                    "set", "0", "max_current", "60000")
@@ -91,6 +125,28 @@ class KmxOverTcp(unittest.TestCase):
         self.fails(1, "kmx: ping ID 9: no answer from ID 9 within 100 ms (3 tries)", "ping", "9")
         self.fails(2, "argument id: servo ID 300 is outside 0..250", "ping", "300")
         self.fails(2, "the following arguments are required: VALUE", "set", "0", "id")
+
+
+class KmxOnThreeServos(unittest.TestCase):
+    """The 3-servo host-sim bus of tools/servo-bus, IDs 1, 2, 3."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.wire = ServoBus()
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.wire.close()
+
+    def test_scan_monitor_set_id_taken(self):
+        r = kmx(self.wire.spec, "scan", "--scan-ms", "300")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual([line.split()[0] for line in r.stdout.splitlines()[1:4]], ["1", "2", "3"])
+        self.assertIn("3 servos on %s" % self.wire.spec, r.stdout)
+        r = kmx(self.wire.spec, "monitor", "1", "2", "3", "--csv", "--count", "1")
+        self.assertEqual([line.split(",")[1] for line in r.stdout.splitlines()[1:]], ["1", "2", "3"])
+        r = kmx(self.wire.spec, "set-id", "1", "2")
+        self.assertEqual((r.returncode, r.stderr), (1, "kmx: ID 2 is taken: another servo answers there\n"))
 
 
 class KmxErrorsWithoutServo(unittest.TestCase):
@@ -112,13 +168,13 @@ class KmxErrorsWithoutServo(unittest.TestCase):
                 self.assertEqual(len(r.stderr.splitlines()), 1, r.stderr)
 
     def test_help_of_every_subcommand(self):
-        for sub in ("scan", "ping", "get", "set", "dump"):
+        for sub in SUBCOMMANDS:
             with self.subTest(sub=sub):
                 r = subprocess.run([KMX, sub, "--help"], capture_output=True, text=True, timeout=10)
                 self.assertEqual(r.returncode, 0)
                 self.assertTrue(r.stdout.startswith("usage: kmx %s" % sub), r.stdout)
         r = subprocess.run([KMX, "--help"], capture_output=True, text=True, timeout=10)
-        for sub in ("scan", "ping", "get", "set", "dump"):
+        for sub in SUBCOMMANDS:
             self.assertIn(sub, r.stdout)
 
 
