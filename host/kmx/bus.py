@@ -143,6 +143,20 @@ class Bus:
         return self._ask(fr.read(dev_id, addr), dev_id, accept,
                          "read 0x%02X of ID %d" % (addr, dev_id), timeout)
 
+    def ext_read(self, dev_id, addr, timeout=None):
+        """Extension read (0x7F, our own: docs/protocol-decisions.md): the
+        value bytes of extension address addr (boot source, reset cause,
+        fault log)."""
+        def accept(f):
+            if f.is_status:
+                return "a status 0x%02X instead of the value (%s)" % (
+                    f.status, ", ".join(fr.status_words(f.status)))
+            if f.cmd != fr.EXTENSION or f.addr != addr:
+                return "answer to command 0x%02X, asked an extension read of 0x%02X" % (f.cmd, addr)
+            return None
+        return self._ask(fr.ext_read(dev_id, addr), dev_id, accept,
+                         "extension read 0x%02X of ID %d" % (addr, dev_id), timeout).params
+
     def read(self, dev_id, addr, timeout=None):
         """Read (0x02): the value bytes of register addr."""
         return self.read_frame(dev_id, addr, timeout).params

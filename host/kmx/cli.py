@@ -10,6 +10,7 @@ by name, with units (names, units and ranges from docs/registers.json).
   kmx [--bus SPEC] move ID ANGLE [--time MS | --speed DPS] [--wait]
   kmx [--bus SPEC] monitor ID... [--interval MS] [--count N] [--csv]
   kmx [--bus SPEC] set-id ID NEW        write the ID, restart, find it at NEW
+  kmx [--bus SPEC] fault-log ID         the last protection and self-test events
 
 SPEC: tcp:HOST:PORT (tools/servo-bus, host-sim), serial:/dev/ttyUSB0@115200,
 pty:/dev/pts/N; default $KMX_BUS, else tcp:127.0.0.1:7000. Failures print
@@ -21,6 +22,7 @@ import os
 import sys
 import time
 
+from . import faultlog
 from . import frame as fr
 from .bus import SCAN_TIMEOUT, Bus
 from .errors import KmxError, NoAnswer, RegisterError
@@ -253,6 +255,19 @@ def cmd_set_id(bus, regs, args):
     return 0
 
 
+def cmd_fault_log(bus, regs, args):
+    events, held, kept = faultlog.read_summary(bus, args.id)
+    source, cause = faultlog.read_boot(bus, args.id)
+    print("ID %d: %d event%s recorded, %d held (%d from before the last reset); last reset: %s; "
+          "user data: %s" % (args.id, events, "" if events == 1 else "s", held, kept, cause, source))
+    entries = faultlog.read_entries(bus, args.id, held)
+    if entries:
+        print(_table([e.row(i) for i, e in enumerate(entries)], faultlog.ROW_HEADER))
+    else:
+        print("no entries")
+    return 0
+
+
 def build_parser():
     ap = argparse.ArgumentParser(prog="kmx", description=__doc__.split("\n\n")[0],
                                  epilog=__doc__.split("\n\n", 1)[1],
@@ -344,6 +359,15 @@ def build_parser():
     p.add_argument("id", type=servo_id, help="the servo's ID now")
     p.add_argument("new", type=servo_id, help="its new ID, 0..250")
     p.set_defaults(run=cmd_set_id)
+
+    p = sub.add_parser("fault-log", help="the last protection and self-test events, newest first",
+                       description="Reads the fault log of one servo (our extension command 0x7F, "
+                                   "docs/protocol-decisions.md): each protection trip and release and "
+                                   "each self-test finding, newest first, with the supply, current, "
+                                   "temperature and position at that moment; plus why the servo last "
+                                   "reset and where its user data came from.")
+    p.add_argument("id", type=servo_id, help="servo ID, 0..250")
+    p.set_defaults(run=cmd_fault_log)
     return ap
 
 

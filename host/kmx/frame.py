@@ -24,6 +24,7 @@ SYNC_WRITE = 0x04
 MULTI_READ = 0x82    # our extension (docs/): broadcast, listed servos answer in list order
 MULTI_WRITE = 0x83
 SYNC_EXECUTE = 0x84
+EXTENSION = 0x7F     # our extension reads (docs/protocol-decisions.md "Extension command 0x7F")
 NO_ADDRESS = (PING, SYNC_EXECUTE)  # commands without an address byte (§2)
 MULTI_WRITE_ADDRESSES = (0x64, 0x65, 0x66, 0x68, 0x6E, 0x6F)  # §3: 0x83 only these
 
@@ -90,6 +91,11 @@ def read(dev_id, addr):
 
 def write(dev_id, addr, value):
     return encode_command(dev_id, WRITE, addr, value)
+
+
+def ext_read(dev_id, addr):
+    """Extension read 0x7F: laid out like a read (docs/protocol-decisions.md)."""
+    return encode_command(dev_id, EXTENSION, addr)
 
 
 def restart(dev_id):

@@ -19,6 +19,7 @@ from unittest import mock
 
 REPO = os.path.realpath(os.path.join(os.path.dirname(__file__), "..", ".."))
 sys.path.insert(0, os.path.join(REPO, "host"))
+from kmx import faultlog  # noqa: E402
 from kmx import frame as fr  # noqa: E402
 from kmx import transport as tp  # noqa: E402
 from kmx.bus import Bus  # noqa: E402
@@ -86,6 +87,24 @@ class WorkedFrames(unittest.TestCase):
     def test_status_words(self):
         self.assertEqual(fr.status_words(0), ["ok"])
         self.assertEqual(fr.status_words(0x41), ["command failed", "voltage protection"])
+
+
+class ExtensionFrames(unittest.TestCase):
+    """Our extension read 0x7F (docs/protocol-decisions.md): frame and fault-log entry layout."""
+
+    def test_ext_read_frame(self):
+        self.assertEqual(fr.ext_read(1, 0x12), h("F9 FF 01 03 7F 12 6A"))  # the document's example
+
+    def test_fault_log_entry(self):
+        e = faultlog.Entry(h("C5 02 00 00 02 02 00 00 E8 1C 9C FF FA 00 60 01 00 00"))
+        self.assertEqual((e.ms, e.kind_text, e.bits_text, e.boots_ago), (709, "released by itself", "current", 0))
+        self.assertEqual(e.row(0), [0, "this", 709, "released by itself", "current", "7.400 V", "-100 mA",
+                                    "25.0 °C", "35.2 °"])
+        hw = faultlog.Entry(h("01 00 00 00 04 21 01 00 00 00 00 00 00 00 00 00 00 00"))
+        self.assertEqual((hw.kind_text, hw.bits_text, hw.row(0)[1]),
+                         ("hardware faults found", "position sensor, crystal", "-1"))
+        with self.assertRaises(ValueError):
+            faultlog.Entry(b"\x00" * 17)
 
 
 class StreamParser(unittest.TestCase):

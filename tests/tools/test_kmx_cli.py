@@ -1,6 +1,6 @@
 """The kmx command (tools/kmx -> host/kmx/cli.py) against a real host-sim
 servo over TCP and over a pseudo-terminal, and on the 3-servo host-sim bus:
-scan, ping, get, set, dump, torque, move, monitor, set-id, the --help of
+scan, ping, get, set, dump, torque, move, monitor, set-id, fault-log, the --help of
 each subcommand, and each error's one-line message and exit code
 (never a traceback). Register names and units: docs/registers.json
 (PROTOCOL.md §5). About 10 s."""
@@ -16,7 +16,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from test_kmx import REPO, HostSim, ServoBus  # noqa: E402
 
 KMX = os.path.join(REPO, "tools", "kmx")
-SUBCOMMANDS = ("scan", "ping", "get", "set", "dump", "torque", "move", "monitor", "set-id")
+SUBCOMMANDS = ("scan", "ping", "get", "set", "dump", "torque", "move", "monitor", "set-id", "fault-log")
 
 
 def kmx(bus, *args, timeout=20):
@@ -113,6 +113,29 @@ class KmxOverTcp(unittest.TestCase):
         self.assertRegex(self.ok("scan", "--scan-ms", "300"), r"\n4\s+115200\s+KM-SIM-P135")
         self.fails(1, "kmx: ID 4 already is 4", "set-id", "4", "4")
         self.fails(1, "kmx: ping ID 7: no answer from ID 7 within 100 ms (3 tries)", "set-id", "7", "3")
+
+    def test_fault_log(self):
+        self.assertEqual(self.ok("fault-log", "0"),
+                         "ID 0: 0 events recorded, 0 held (0 from before the last reset); last reset: power-on; "
+                         "user data: product defaults: flash erased (first boot)\nno entries\n")
+        # §5.2: a current threshold of 100 mA over 0.1 s trips during a move
+        # (the sim's motor draws more while accelerating) and releases by
+        # itself (0x33 = 0) once the move is over
+        self.ok("set", "0", "current_limit", "100", "0.1")
+        self.ok("torque", "0", "on")
+        self.ok("move", "0", "90", "--time", "200")
+        deadline = time.monotonic() + 3
+        while True:
+            out = self.ok("fault-log", "0")
+            if "2 held" in out or time.monotonic() > deadline:
+                break
+            time.sleep(0.1)
+        lines = out.splitlines()
+        self.assertTrue(lines[0].startswith("ID 0: 2 events recorded, 2 held (0 from before the last reset)"), out)
+        self.assertRegex(lines[1], r"^#\s+boot\s+t_ms\s+event\s+what\s+supply\s+current\s+temperature\s+position$")
+        self.assertRegex(lines[2], r"^0\s+this\s+\d+\s+released by itself\s+current\s+\d\.\d{3} V\s+-?\d+ mA\s+25\.0 °C")
+        self.assertRegex(lines[3], r"^1\s+this\s+\d+\s+tripped\s+current\s+\d\.\d{3} V\s+(\d+) mA\s+25\.0 °C")
+        self.assertGreater(int(re.search(r"(\d+) mA", lines[3]).group(1)), 100)  # above the threshold
 
     def test_errors(self):
         self.fails(1, "kmx: ID 0 refused max_current (0x14) = 60000: status 0x40 (command failed)",
