@@ -11,6 +11,7 @@ by name, with units (names, units and ranges from docs/registers.json).
   kmx [--bus SPEC] monitor ID... [--interval MS] [--count N] [--csv]
   kmx [--bus SPEC] set-id ID NEW        write the ID, restart, find it at NEW
   kmx [--bus SPEC] fault-log ID         the last protection and self-test events
+  kmx [--bus SPEC] plot ID --out F.png [--seconds S] [--step ANGLE [--time MS | --speed DPS]]
 
 SPEC: tcp:HOST:PORT (tools/servo-bus, host-sim), serial:/dev/ttyUSB0@115200,
 pty:/dev/pts/N; default $KMX_BUS, else tcp:127.0.0.1:7000. Failures print
@@ -24,6 +25,7 @@ import time
 
 from . import faultlog
 from . import frame as fr
+from . import plot
 from .bus import SCAN_TIMEOUT, Bus
 from .errors import KmxError, NoAnswer, RegisterError
 from .registers import RegisterMap, Registers
@@ -268,6 +270,30 @@ def cmd_fault_log(bus, regs, args):
     return 0
 
 
+def cmd_plot(bus, regs, args):
+    target = None
+    t0 = time.monotonic()
+    if args.step is not None:
+        if args.speed is not None:
+            reg, vals = regs.map.find("move_speed"), [args.step, args.speed]
+        else:
+            reg, vals = regs.map.find("move_time"), [args.step] + ([args.time] if args.time is not None else [])
+        data = reg.encode(vals)
+        t0 = time.monotonic()
+        _write_checked(bus, args.id, reg, data, "%s = %s" % (reg.name, reg.decode(data)))
+        target = reg.decode(data).value
+    trace = plot.record(bus, regs, args.id, args.seconds, args.interval / 1000.0, t0, target)
+    title = "ID %d: %s" % (args.id, "step to %.1f °" % target if target is not None else "trace")
+    plot.render(trace, args.out, title)
+    line = "wrote %s: %d samples of position, speed, current over %.1f s" % (args.out, len(trace), args.seconds)
+    if target is not None:
+        at = trace.settled_at()
+        line += "; %s" % ("within %.1f ° of %.1f ° from %.0f ms" % (plot.SETTLE_DEG, target, 1000 * at)
+                          if at is not None else "did not settle at %.1f °" % target)
+    print(line)
+    return 0
+
+
 def build_parser():
     ap = argparse.ArgumentParser(prog="kmx", description=__doc__.split("\n\n")[0],
                                  epilog=__doc__.split("\n\n", 1)[1],
@@ -368,6 +394,22 @@ def build_parser():
                                    "reset and where its user data came from.")
     p.add_argument("id", type=servo_id, help="servo ID, 0..250")
     p.set_defaults(run=cmd_fault_log)
+
+    p = sub.add_parser("plot", help="a trace or a step response to a PNG (python3-matplotlib)",
+                       description="Samples position, speed and current of one servo every --interval "
+                                   "ms for --seconds and draws them to a PNG. With --step ANGLE it "
+                                   "first commands a move (0x65, or 0x66 with --speed; the torque "
+                                   "switch must be on or armed) and draws the step response with its "
+                                   "target. Needs Debian's python3-matplotlib.")
+    p.add_argument("id", type=servo_id, help="servo ID, 0..250")
+    p.add_argument("--out", required=True, metavar="FILE.png", help="the picture to write")
+    p.add_argument("--seconds", type=float, default=2.0, metavar="S", help="record this long (default 2)")
+    p.add_argument("--interval", type=positive_ms, default=20, metavar="MS", help="sample period (default 20)")
+    p.add_argument("--step", type=float, metavar="ANGLE", help="move to ANGLE degrees first")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--time", type=float, metavar="MS", help="the step takes this long, ms")
+    g.add_argument("--speed", type=float, metavar="DPS", help="the step at this speed, °/s")
+    p.set_defaults(run=cmd_plot)
     return ap
 
 

@@ -14,14 +14,13 @@ import os
 import select
 import socket
 import stat
-import sys
 
+from .deps import import_debian
 from .errors import (ConnectionRefused, MissingPackage, NoSuchDevice, NotASerialPort,
                      PortBusy, SpecError, TransportError)
 
 DEFAULT_BAUD = 115200
 SPEC_FORMS = "tcp:HOST:PORT, serial:/dev/ttyUSB0@115200 or pty:/dev/pts/N"
-DEBIAN_DIST_PACKAGES = "/usr/lib/python3/dist-packages"
 
 
 def parse_spec(spec):
@@ -52,23 +51,8 @@ def parse_spec(spec):
 
 
 def import_serial():
-    """pyserial, from this interpreter or else from Debian's python3-serial
-    (a pyenv or venv python3 does not see /usr/lib/python3/dist-packages;
-    pyserial is pure Python, so Debian's copy works under it). Raises
-    MissingPackage naming the package to install."""
-    try:
-        import serial  # noqa: F401
-        return serial
-    except ImportError:
-        pass
-    if os.path.isdir(os.path.join(DEBIAN_DIST_PACKAGES, "serial")) and DEBIAN_DIST_PACKAGES not in sys.path:
-        sys.path.append(DEBIAN_DIST_PACKAGES)  # last: never shadows this interpreter's own packages
-        try:
-            import serial  # noqa: F401
-            return serial
-        except ImportError:
-            pass
-    raise MissingPackage("serial ports and ptys need pyserial: apt-get install python3-serial")
+    """pyserial, from this interpreter or Debian's python3-serial (kmx/deps.py)."""
+    return import_debian("serial", "python3-serial", "serial ports and ptys need pyserial")
 
 
 class Transport:

@@ -19,7 +19,7 @@ from unittest import mock
 
 REPO = os.path.realpath(os.path.join(os.path.dirname(__file__), "..", ".."))
 sys.path.insert(0, os.path.join(REPO, "host"))
-from kmx import faultlog  # noqa: E402
+from kmx import deps, faultlog  # noqa: E402
 from kmx import frame as fr  # noqa: E402
 from kmx import transport as tp  # noqa: E402
 from kmx.bus import Bus  # noqa: E402
@@ -265,8 +265,9 @@ class TransportSpecs(unittest.TestCase):
 
     def test_missing_pyserial_names_the_package(self):
         with mock.patch.dict(sys.modules, {"serial": None}), \
-                mock.patch.object(tp, "DEBIAN_DIST_PACKAGES", "/nonexistent"):
-            with self.assertRaisesRegex(MissingPackage, "apt-get install python3-serial"):
+                mock.patch.object(deps, "DEBIAN_DIST_PACKAGES", "/nonexistent"):
+            with self.assertRaisesRegex(MissingPackage, "^serial ports and ptys need pyserial: apt-get install "
+                                                        r"python3-serial \(and run with /usr/bin/python3\)$"):
                 tp.open_transport("serial:/dev/ttyUSB0@115200")
 
     def test_every_error_is_a_kmx_error(self):

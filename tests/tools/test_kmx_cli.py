@@ -1,22 +1,27 @@
 """The kmx command (tools/kmx -> host/kmx/cli.py) against a real host-sim
 servo over TCP and over a pseudo-terminal, and on the 3-servo host-sim bus:
-scan, ping, get, set, dump, torque, move, monitor, set-id, fault-log, the --help of
+scan, ping, get, set, dump, torque, move, monitor, set-id, fault-log, plot, the --help of
 each subcommand, and each error's one-line message and exit code
 (never a traceback). Register names and units: docs/registers.json
-(PROTOCOL.md §5). About 10 s."""
+(PROTOCOL.md §5). About 12 s."""
+import contextlib
+import io
 import os
 import re
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 import unittest
+from unittest import mock
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from test_kmx import REPO, HostSim, ServoBus  # noqa: E402
+from kmx import cli, deps  # noqa: E402  (host/ is on sys.path through test_kmx)
 
 KMX = os.path.join(REPO, "tools", "kmx")
-SUBCOMMANDS = ("scan", "ping", "get", "set", "dump", "torque", "move", "monitor", "set-id", "fault-log")
+SUBCOMMANDS = ("scan", "ping", "get", "set", "dump", "torque", "move", "monitor", "set-id", "fault-log", "plot")
 
 
 def kmx(bus, *args, timeout=20):
@@ -136,6 +141,32 @@ class KmxOverTcp(unittest.TestCase):
         self.assertRegex(lines[2], r"^0\s+this\s+\d+\s+released by itself\s+current\s+\d\.\d{3} V\s+-?\d+ mA\s+25\.0 °C")
         self.assertRegex(lines[3], r"^1\s+this\s+\d+\s+tripped\s+current\s+\d\.\d{3} V\s+(\d+) mA\s+25\.0 °C")
         self.assertGreater(int(re.search(r"(\d+) mA", lines[3]).group(1)), 100)  # above the threshold
+
+    def test_plot_step_and_trace(self):
+        self.ok("torque", "0", "on")
+        with tempfile.TemporaryDirectory() as d:
+            png = os.path.join(d, "step.png")
+            self.assertRegex(self.ok("plot", "0", "--out", png, "--seconds", "0.8", "--step", "45", "--time", "300"),
+                             r"^wrote %s: \d+ samples of position, speed, current over 0\.8 s; "
+                             r"within 0\.5 ° of 45\.0 ° from \d+ ms\n$" % re.escape(png))
+            with open(png, "rb") as f:
+                self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
+            self.assertGreater(os.path.getsize(png), 10000)
+            png = os.path.join(d, "trace.png")
+            self.assertRegex(self.ok("plot", "0", "--out", png, "--seconds", "0.2"),
+                             r"^wrote .*trace.png: \d+ samples of position, speed, current over 0\.2 s\n$")
+            self.assertTrue(os.path.isfile(png))
+
+    def test_plot_without_matplotlib_names_the_package(self):
+        err = io.StringIO()
+        with mock.patch.dict(sys.modules, {"matplotlib": None, "matplotlib.pyplot": None}), \
+                mock.patch.object(deps, "DEBIAN_DIST_PACKAGES", "/nonexistent"), \
+                contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()), \
+                tempfile.TemporaryDirectory() as d:
+            code = cli.main(["--bus", self.sim.spec, "plot", "0", "--out", os.path.join(d, "x.png"),
+                             "--seconds", "0.05"])
+        self.assertEqual((code, err.getvalue()), (1, "kmx: plot needs matplotlib: apt-get install "
+                                                      "python3-matplotlib (and run with /usr/bin/python3)\n"))
 
     def test_errors(self):
         self.fails(1, "kmx: ID 0 refused max_current (0x14) = 60000: status 0x40 (command failed)",
