@@ -22,7 +22,7 @@ BOOT_TIMEOUT = 3.0         # a restarted servo answers pings again within this
 
 
 class Bus:
-    def __init__(self, transport, timeout=DEFAULT_TIMEOUT, retries=DEFAULT_RETRIES):
+    def __init__(self, transport, timeout=DEFAULT_TIMEOUT, retries=DEFAULT_RETRIES, trace=None):
         if isinstance(transport, str):
             transport = open_transport(transport)
         self.transport = transport
@@ -32,6 +32,9 @@ class Bus:
         self.echoes = 0           # own command frames heard back
         self.foreign_commands = 0  # command frames we did not send (another master?)
         self.transactions = 0
+        # trace(direction, item): ("tx", bytes) for every frame sent,
+        # ("rx", Frame) for every answer taken; for session logs (--trace)
+        self.trace = trace
 
     # -- context manager ---------------------------------------------------
     def __enter__(self):
@@ -50,6 +53,8 @@ class Bus:
     # -- raw ---------------------------------------------------------------
     def send_bytes(self, data):
         """Writes raw bytes (any frame, valid or not) as they are."""
+        if self.trace:
+            self.trace("tx", bytes(data))
         self.transport.write(bytes(data))
 
     def _answers_from(self, chunk, sent, now):
@@ -62,6 +67,8 @@ class Bus:
                     self.foreign_commands += 1
                 continue
             f.time = now
+            if self.trace:
+                self.trace("rx", f)
             out.append(f)
         return out
 
@@ -89,6 +96,8 @@ class Bus:
         self.parser.buf.clear()  # a partial frame from before is stale
         self.transactions += 1
         for f in frames:
+            if self.trace:
+                self.trace("tx", f)
             self.transport.write(f)
         self.sent_at = time.monotonic()
         if answers == 0 and timeout is None:

@@ -294,6 +294,11 @@ def cmd_plot(bus, regs, args):
     return 0
 
 
+def trace_to_stderr(direction, item):
+    data = item if direction == "tx" else item.to_bytes()
+    print("%s %s" % (">" if direction == "tx" else "<", data.hex(" ").upper()), file=sys.stderr)
+
+
 def build_parser():
     ap = argparse.ArgumentParser(prog="kmx", description=__doc__.split("\n\n")[0],
                                  epilog=__doc__.split("\n\n", 1)[1],
@@ -305,6 +310,7 @@ def build_parser():
                     help="wait for one answer, ms (default 100)")
     ap.add_argument("--retries", type=int, default=2, choices=range(0, 10), metavar="N",
                     help="extra tries of a read or ping (default 2)")
+    ap.add_argument("--trace", action="store_true", help="print every frame sent and received (stderr)")
     sub = ap.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
     p = sub.add_parser("scan", help="find every servo (super-ID ping) with its baud, model, firmware, status",
@@ -418,7 +424,8 @@ def main(argv=None):
     bus = None
     try:
         regs_map = RegisterMap.load()
-        bus = Bus(args.bus, timeout=args.timeout / 1000.0, retries=args.retries)
+        bus = Bus(args.bus, timeout=args.timeout / 1000.0, retries=args.retries,
+                  trace=trace_to_stderr if args.trace else None)
         return args.run(bus, Registers(bus, regs_map), args)
     except KmxError as e:
         print("kmx: %s" % e, file=sys.stderr)

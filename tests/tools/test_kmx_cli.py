@@ -203,6 +203,25 @@ class KmxOnThreeServos(unittest.TestCase):
         self.assertEqual((r.returncode, r.stderr), (1, "kmx: ID 2 is taken: another servo answers there\n"))
 
 
+    def test_servo_session_decodes_with_units(self):
+        """tools/servo-session (the demo's session) on kmx: frames and decoded answers."""
+        r = subprocess.run([os.path.join(REPO, "tools", "servo-session"), "--tcp", self.wire.spec[len("tcp:"):]],
+                           capture_output=True, text=True, timeout=60)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertNotIn("Traceback", r.stderr)
+        out = r.stdout
+        self.assertIn("< F9 F5 01 02 00 FC   id 1 status 0x00 ok", out)
+        self.assertRegex(out, r"< F9 F5 02 07 02 0B 00 00 02 05 E2   id 2 protocol_version \(0x0B\) = 0x05020000")
+        self.assertIn("id 1 response_delay (0x12) = 250 µs", out)
+        self.assertIn("-- id 1 arrived: 45.0 ° (asked 45.0 ° in 500 ms)", out)
+        self.assertRegex(out, r"-- id 1 arrived: -?0\.\d ° \(asked 0\.0 ° at 180 °/s\)")
+        for i in (1, 2, 3):
+            self.assertRegex(out, r"-- id %d arrived: .* \(asked -?\d+\.0 °\)" % i)
+            self.assertIn("id %d voltage (0x4B) = 7.400 V" % i, out)
+        self.assertNotIn("(no answer)", out)
+        self.assertNotIn("did not arrive", out)
+
+
 class KmxErrorsWithoutServo(unittest.TestCase):
     def test_bus_errors(self):
         s = socket.socket()
