@@ -17,8 +17,23 @@ from .transport import open_transport
 
 DEFAULT_TIMEOUT = 0.1      # one answer at any standard baud, with host slack
 DEFAULT_RETRIES = 2        # extra attempts of a read or ping
-SCAN_TIMEOUT = 0.5         # super-ID: ID 250 answers about 250 slots late
 BOOT_TIMEOUT = 3.0         # a restarted servo answers pings again within this
+DEFAULT_DELAY_US = 200     # 0x12 response delay, a fresh servo's (§5.1)
+PING_ANSWER = 6            # bytes of a short response (§2)
+READ_ANSWER_MAX = 7 + 16   # the longest read answer (0x0A, 16 B of text)
+
+
+def slot_us(answer_bytes, baud):
+    """One answer slot (docs/protocol-decisions.md "Super-ID answer slots"):
+    the longest answer plus 2 guard bytes at 10 bits a byte, rounded up."""
+    return -(-(answer_bytes + 2) * 10 * 1000000 // baud)
+
+
+def slots_window_s(count, answer_bytes, baud, delay_us=DEFAULT_DELAY_US):
+    """Seconds from the end of a super-ID or 0x82 question until the answer
+    in slot count-1 has ended: 0x12 + (count - 1) x slot + the answer."""
+    return (delay_us + (count - 1) * slot_us(answer_bytes, baud)
+            + answer_bytes * 10 * 1000000 / baud) / 1e6
 
 
 class Bus:
@@ -202,16 +217,28 @@ class Bus:
                 return time.monotonic() - t0
         raise NoAnswer("restart of ID %d: no answer within %.1f s after it" % (dev_id, boot_timeout))
 
-    def scan(self, timeout=SCAN_TIMEOUT, expect=None):
+    @property
+    def baud(self):
+        """The line rate answers travel at: the serial port's, else the
+        emulated bus's nominal 115200 (a fresh servo's, §1)."""
+        return getattr(self.transport, "baud", None) or 115200
+
+    def scan_window(self):
+        """How long ID 250's super-ID ping answer may take at this baud with
+        a fresh servo's response delay, plus the bus timeout as host slack:
+        0.27 s at 115200, 2.2 s at 9600."""
+        return slots_window_s(fr.ID_MAX + 1, PING_ANSWER, self.baud) + self.timeout
+
+    def scan(self, timeout=None, expect=None):
         """Super-ID ping (0xFD, §1): every servo answers in its slot, ID
         order. Returns [(id, status)] in arrival order; listens `timeout`
-        seconds, or until `expect` servos answered."""
-        got = self.transact(fr.ping(fr.ID_SUPER), expect or fr.ID_MAX + 1, timeout)
-        return [(f.id, f.status) for f in got if f.is_status]
+        seconds (default scan_window()), or until `expect` servos answered."""
+        return [(f.id, f.status) for f in self.scan_frames(timeout, expect)]
 
-    def scan_frames(self, timeout=SCAN_TIMEOUT, expect=None):
+    def scan_frames(self, timeout=None, expect=None):
         """The same, as the answer frames with their arrival times."""
-        return [f for f in self.transact(fr.ping(fr.ID_SUPER), expect or fr.ID_MAX + 1, timeout)
+        return [f for f in self.transact(fr.ping(fr.ID_SUPER), expect or fr.ID_MAX + 1,
+                                         self.scan_window() if timeout is None else timeout)
                 if f.is_status]
 
     def sync_write(self, dev_id, addr, value):
@@ -232,8 +259,7 @@ class Bus:
         answers its read answer in the slot of its list position. Returns
         {id: value bytes}, None for a servo that did not answer."""
         ids = list(ids)
-        got = self.transact(fr.multi_read(addr, ids), len(ids),
-                            timeout if timeout is not None else self.timeout + 0.01 * len(ids))
+        got = self.multi_read_frames(addr, ids, timeout)
         out = {i: None for i in ids}
         for f in got:
             if f.id in out and not f.is_status and f.cmd == fr.READ and f.addr == addr:
@@ -243,5 +269,6 @@ class Bus:
     def multi_read_frames(self, addr, ids, timeout=None):
         """The same, as the answer frames in arrival order."""
         ids = list(ids)
-        return self.transact(fr.multi_read(addr, ids), len(ids),
-                             timeout if timeout is not None else self.timeout + 0.01 * len(ids))
+        if timeout is None:  # the last slot's answer, cut for the longest read, plus host slack
+            timeout = slots_window_s(len(ids), READ_ANSWER_MAX, self.baud) + self.timeout
+        return self.transact(fr.multi_read(addr, ids), len(ids), timeout)

@@ -26,7 +26,7 @@ import time
 from . import faultlog
 from . import frame as fr
 from . import plot
-from .bus import SCAN_TIMEOUT, Bus
+from .bus import Bus
 from .errors import KmxError, NoAnswer, RegisterError
 from .registers import RegisterMap, Registers
 
@@ -61,10 +61,11 @@ def _table(rows, header):
 
 def cmd_scan(bus, regs, args):
     t0 = time.monotonic()
-    found = bus.scan(timeout=args.scan_ms / 1000.0)
+    window = bus.scan_window() if args.scan_ms is None else args.scan_ms / 1000.0
+    found = bus.scan(timeout=window)
     if not found:
         raise NoAnswer("no servo answered the super-ID ping within %.0f ms on %s"
-                       % (args.scan_ms, bus.transport.spec))
+                       % (1000 * window, bus.transport.spec))
     rows = []
     for dev_id, status in found:
         row = [dev_id]
@@ -316,8 +317,9 @@ def build_parser():
     p = sub.add_parser("scan", help="find every servo (super-ID ping) with its baud, model, firmware, status",
                        description="Pings the super ID (0xFD): every servo answers in its own slot, in ID "
                                    "order; then reads each one's baud, model and firmware.")
-    p.add_argument("--scan-ms", type=positive_ms, default=SCAN_TIMEOUT * 1000, metavar="MS",
-                   help="listen this long for answers (default %.0f; ID 250 answers last)" % (SCAN_TIMEOUT * 1000))
+    p.add_argument("--scan-ms", type=positive_ms, metavar="MS",
+                   help="listen this long for answers (default: until ID 250's slot has passed at the "
+                        "bus baud, 270 ms at 115200)")
     p.set_defaults(run=cmd_scan)
 
     p = sub.add_parser("ping", help="ping one servo: its status in words",

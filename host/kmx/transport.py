@@ -72,6 +72,8 @@ class Transport:
 
 
 class TcpTransport(Transport):
+    baud = None  # the emulated bus carries bytes, not a line rate
+
     def __init__(self, host, port, spec=None, connect_timeout=3.0):
         self.spec = spec or "tcp:%s:%d" % (host, port)
         try:
@@ -132,6 +134,7 @@ class SerialTransport(Transport):
 
     def __init__(self, path, baud=DEFAULT_BAUD, spec=None):
         self.spec = spec or "serial:%s@%d" % (path, baud)
+        self.baud = baud
         serial = import_serial()
         try:
             st = os.stat(path)

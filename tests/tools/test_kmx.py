@@ -22,6 +22,7 @@ sys.path.insert(0, os.path.join(REPO, "host"))
 from kmx import deps, faultlog  # noqa: E402
 from kmx import frame as fr  # noqa: E402
 from kmx import transport as tp  # noqa: E402
+from kmx import bus as bus_mod  # noqa: E402
 from kmx.bus import Bus  # noqa: E402
 from kmx.errors import (ConnectionRefused, KmxError, MissingPackage, NoAnswer,  # noqa: E402
                         NoSuchDevice, NotASerialPort, PortBusy, RangeError, RegisterError,
@@ -87,6 +88,21 @@ class WorkedFrames(unittest.TestCase):
     def test_status_words(self):
         self.assertEqual(fr.status_words(0), ["ok"])
         self.assertEqual(fr.status_words(0x41), ["command failed", "voltage protection"])
+
+
+class AnswerSlots(unittest.TestCase):
+    """docs/protocol-decisions.md "Super-ID answer slots": the Bus listens
+    until the last slot's answer has ended at the bus baud."""
+
+    def test_worked_table(self):
+        self.assertEqual(bus_mod.slot_us(6, 115200), 695)    # ping
+        self.assertEqual(bus_mod.slot_us(11, 115200), 1129)  # read 0x46
+        self.assertAlmostEqual(bus_mod.slots_window_s(4, 6, 115200), (200 + 3 * 695 + 6 * 10e6 / 115200) / 1e6)
+
+    def test_scan_window_follows_the_baud(self):
+        self.assertAlmostEqual(bus_mod.slots_window_s(251, 6, 115200), 0.1745, places=4)
+        self.assertGreater(bus_mod.slots_window_s(251, 6, 9600), 2.0)  # 12 x longer: 0.5 s would miss IDs > 60
+        self.assertLess(bus_mod.slots_window_s(251, 6, 1000000), 0.025)
 
 
 class ExtensionFrames(unittest.TestCase):
@@ -477,7 +493,8 @@ class BusOnThreeServos(unittest.TestCase):
         cls.wire.close()
 
     def test_scan_collects_every_answer(self):
-        frames = self.bus.scan_frames(timeout=0.4)
+        self.assertAlmostEqual(self.bus.scan_window(), 0.1745 + 0.1, places=3)  # 115200 on the emulated bus
+        frames = self.bus.scan_frames()
         self.assertEqual(sorted((f.id, f.status) for f in frames), [(1, 0), (2, 0), (3, 0)])
         self.assertEqual([f.time for f in frames], sorted(f.time for f in frames))  # arrival order
         self.assertTrue(all(f.time > self.bus.sent_at for f in frames))

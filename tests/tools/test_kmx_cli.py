@@ -24,11 +24,27 @@ KMX = os.path.join(REPO, "tools", "kmx")
 SUBCOMMANDS = ("scan", "ping", "get", "set", "dump", "torque", "move", "monitor", "set-id", "fault-log", "plot")
 
 
-def kmx(bus, *args, timeout=20):
-    r = subprocess.run([KMX, "--bus", bus, *args], capture_output=True, text=True, timeout=timeout)
-    if "Traceback" in r.stderr:
-        raise AssertionError("kmx %s printed a traceback:\n%s" % (" ".join(args), r.stderr))
-    return r
+class Result:
+    def __init__(self, returncode, stdout, stderr):
+        self.returncode, self.stdout, self.stderr = returncode, stdout, stderr
+
+
+def kmx(bus, *args, process=False, timeout=30):
+    """Runs `kmx --bus BUS ARGS`: in this process through cli.main (fast;
+    an exception kmx lets escape fails the test), or with process=True as
+    the installed-style command tools/kmx (its shebang, Debian's python3)."""
+    if process:
+        r = subprocess.run([KMX, "--bus", bus, *args], capture_output=True, text=True, timeout=timeout)
+        if "Traceback" in r.stderr:
+            raise AssertionError("kmx %s printed a traceback:\n%s" % (" ".join(args), r.stderr))
+        return Result(r.returncode, r.stdout, r.stderr)
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = cli.main(["--bus", bus, *args])
+        except SystemExit as e:  # argparse: bad command line
+            code = e.code
+    return Result(code, out.getvalue(), err.getvalue())
 
 
 class KmxOverTcp(unittest.TestCase):
@@ -36,8 +52,8 @@ class KmxOverTcp(unittest.TestCase):
         self.sim = HostSim()
         self.addCleanup(self.sim.close)
 
-    def ok(self, *args):
-        r = kmx(self.sim.spec, *args)
+    def ok(self, *args, process=False):
+        r = kmx(self.sim.spec, *args, process=process)
         self.assertEqual(r.returncode, 0, r.stderr)
         return r.stdout
 
@@ -48,7 +64,7 @@ class KmxOverTcp(unittest.TestCase):
         self.assertEqual(len(r.stderr.strip().splitlines()), 1 if code == 1 else 2, r.stderr)
 
     def test_scan_ping_get(self):
-        out = self.ok("scan", "--scan-ms", "300")
+        out = self.ok("scan", "--scan-ms", "300", process=True)
         self.assertRegex(out, r"ID\s+baud\s+model\s+firmware\s+status")
         self.assertRegex(out, r"\n0\s+115200\s+KM-SIM-P135\s+0x[0-9A-F]{8}\s+ok\n")
         self.assertIn("1 servo on %s (super-ID scan" % self.sim.spec, out)
@@ -146,14 +162,15 @@ class KmxOverTcp(unittest.TestCase):
         self.ok("torque", "0", "on")
         with tempfile.TemporaryDirectory() as d:
             png = os.path.join(d, "step.png")
-            self.assertRegex(self.ok("plot", "0", "--out", png, "--seconds", "0.8", "--step", "45", "--time", "300"),
+            self.assertRegex(self.ok("plot", "0", "--out", png, "--seconds", "0.8", "--step", "45", "--time", "300",
+                                     process=True),
                              r"^wrote %s: \d+ samples of position, speed, current over 0\.8 s; "
                              r"within 0\.5 ° of 45\.0 ° from \d+ ms\n$" % re.escape(png))
             with open(png, "rb") as f:
                 self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
             self.assertGreater(os.path.getsize(png), 10000)
             png = os.path.join(d, "trace.png")
-            self.assertRegex(self.ok("plot", "0", "--out", png, "--seconds", "0.2"),
+            self.assertRegex(self.ok("plot", "0", "--out", png, "--seconds", "0.2", process=True),
                              r"^wrote .*trace.png: \d+ samples of position, speed, current over 0\.2 s\n$")
             self.assertTrue(os.path.isfile(png))
 
@@ -235,7 +252,7 @@ class KmxErrorsWithoutServo(unittest.TestCase):
                  ("serial:/dev/null", "kmx: serial:/dev/null: /dev/null is not a serial port")]
         for bus, msg in cases:
             with self.subTest(bus=bus):
-                r = kmx(bus, "scan")
+                r = kmx(bus, "scan", process=True)
                 self.assertEqual(r.returncode, 1)
                 self.assertTrue(r.stderr.startswith(msg), r.stderr)
                 self.assertEqual(len(r.stderr.splitlines()), 1, r.stderr)
@@ -243,10 +260,13 @@ class KmxErrorsWithoutServo(unittest.TestCase):
     def test_help_of_every_subcommand(self):
         for sub in SUBCOMMANDS:
             with self.subTest(sub=sub):
-                r = subprocess.run([KMX, sub, "--help"], capture_output=True, text=True, timeout=10)
-                self.assertEqual(r.returncode, 0)
-                self.assertTrue(r.stdout.startswith("usage: kmx %s" % sub), r.stdout)
+                out = io.StringIO()
+                with contextlib.redirect_stdout(out), self.assertRaises(SystemExit) as cm:
+                    cli.main([sub, "--help"])
+                self.assertEqual(cm.exception.code, 0)
+                self.assertTrue(out.getvalue().startswith("usage: kmx %s" % sub), out.getvalue())
         r = subprocess.run([KMX, "--help"], capture_output=True, text=True, timeout=10)
+        self.assertEqual(r.returncode, 0)
         for sub in SUBCOMMANDS:
             self.assertIn(sub, r.stdout)
 
