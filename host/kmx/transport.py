@@ -16,7 +16,7 @@ import socket
 import stat
 
 from .deps import import_debian
-from .errors import (ConnectionRefused, MissingPackage, NoSuchDevice, NotASerialPort,
+from .errors import (ConnectionRefused, NoSuchDevice, NotASerialPort,
                      PortBusy, SpecError, TransportError)
 
 DEFAULT_BAUD = 115200

@@ -8,6 +8,7 @@ import contextlib
 import io
 import os
 import re
+import signal
 import socket
 import subprocess
 import sys
@@ -185,6 +186,22 @@ class KmxOverTcp(unittest.TestCase):
         self.assertEqual((code, err.getvalue()), (1, "kmx: plot needs matplotlib: apt-get install "
                                                       "python3-matplotlib (and run with /usr/bin/python3)\n"))
 
+    def test_ctrl_c(self):
+        """Ctrl-C ends a live monitor quietly (exit 0) and any other command
+        with one line, `kmx: interrupted` (exit 130), never a traceback."""
+        p = subprocess.Popen([KMX, "--bus", self.sim.spec, "monitor", "0", "--interval", "50"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        p.stdout.readline()  # the first table is out: it is in its loop
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=10)
+        self.assertEqual((p.returncode, err), (0, ""))
+        p = subprocess.Popen([KMX, "--bus", self.sim.spec, "--timeout", "2000", "--retries", "9", "ping", "9"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(1.0)  # past start-up, waiting for an answer that does not come
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=10)
+        self.assertEqual((p.returncode, out, err), (130, "", "kmx: interrupted\n"))
+
     def test_errors(self):
         self.fails(1, "kmx: ID 0 refused max_current (0x14) = 60000: status 0x40 (command failed)",
                    "set", "0", "max_current", "60000")
@@ -256,6 +273,17 @@ class KmxErrorsWithoutServo(unittest.TestCase):
                 self.assertEqual(r.returncode, 1)
                 self.assertTrue(r.stderr.startswith(msg), r.stderr)
                 self.assertEqual(len(r.stderr.splitlines()), 1, r.stderr)
+
+    def test_option_without_value_and_unknown_command(self):
+        for argv, msg in ((["--bus"], "argument --bus: expected one argument"),
+                          (["scan", "--scan-ms"], "argument --scan-ms: expected one argument"),
+                          (["frobnicate"], "argument COMMAND: invalid choice: 'frobnicate'"),
+                          (["get", "1"], "the following arguments are required: NAME")):
+            err = io.StringIO()
+            with self.subTest(argv=argv), contextlib.redirect_stderr(err), self.assertRaises(SystemExit) as cm:
+                cli.main(argv)
+            self.assertEqual(cm.exception.code, 2)
+            self.assertIn(msg, err.getvalue())
 
     def test_help_of_every_subcommand(self):
         for sub in SUBCOMMANDS:
