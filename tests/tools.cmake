@@ -13,3 +13,12 @@ if(KM_PYTHON3)
     LABELS tools TIMEOUT 300
     FAIL_REGULAR_EXPRESSION "Ran 0 tests;FAILED")
 endif()
+
+# host/ installs with pip from the checkout without network, into a venv of
+# Debian's python3 that sees python3-serial; the installed kmx command runs
+# (tests/tools/kmx_install_check.sh, about 10 s).
+if(EXISTS /usr/bin/python3)
+  add_test(NAME kmx_pip_install COMMAND sh ${CMAKE_SOURCE_DIR}/tests/tools/kmx_install_check.sh)
+  set_tests_properties(kmx_pip_install PROPERTIES LABELS tools TIMEOUT 120
+    PASS_REGULAR_EXPRESSION "kmx_pip_install: ok")
+endif()
