@@ -43,13 +43,29 @@ def servo_id(text):
     return v
 
 
-def positive_ms(text):
+def _positive(what):
+    def parse(text):
+        try:
+            v = float(text)
+        except ValueError:
+            v = float("nan")
+        if not v > 0 or v == float("inf"):
+            raise argparse.ArgumentTypeError("'%s' is not a positive number of %s" % (text, what))
+        return v
+    return parse
+
+
+positive_ms = _positive("milliseconds")
+positive_s = _positive("seconds")
+
+
+def count(text):
     try:
-        v = float(text)
+        v = int(text)
     except ValueError:
-        v = -1
-    if v <= 0:
-        raise argparse.ArgumentTypeError("'%s' is not a positive number of milliseconds" % text)
+        v = 0
+    if v < 1:
+        raise argparse.ArgumentTypeError("'%s' is not a count of 1 or more" % text)
     return v
 
 
@@ -373,7 +389,7 @@ def build_parser():
     g.add_argument("--time", type=float, metavar="MS", help="take this long, ms")
     g.add_argument("--speed", type=float, metavar="DPS", help="at this speed, °/s")
     p.add_argument("--wait", action="store_true", help="wait until the move ends")
-    p.add_argument("--wait-s", type=float, default=10.0, metavar="S", help="give up waiting after S s (default 10)")
+    p.add_argument("--wait-s", type=positive_s, default=10.0, metavar="S", help="give up waiting after S s (default 10)")
     p.set_defaults(run=cmd_move)
 
     p = sub.add_parser("monitor", help="live table of position, speed, current, temperature, voltage, status",
@@ -383,7 +399,7 @@ def build_parser():
                                    "(--csv, values in the units of the header). Ctrl-C stops it.")
     p.add_argument("ids", type=servo_id, nargs="+", metavar="ID", help="servo IDs")
     p.add_argument("--interval", type=positive_ms, default=200, metavar="MS", help="sample period (default 200)")
-    p.add_argument("--count", type=int, metavar="N", help="stop after N samples (default: until Ctrl-C)")
+    p.add_argument("--count", type=count, metavar="N", help="stop after N samples (default: until Ctrl-C)")
     p.add_argument("--csv", action="store_true", help="CSV rows instead of a table")
     p.set_defaults(run=cmd_monitor)
 
@@ -411,7 +427,7 @@ def build_parser():
                                    "target. Needs Debian's python3-matplotlib.")
     p.add_argument("id", type=servo_id, help="servo ID, 0..250")
     p.add_argument("--out", required=True, metavar="FILE.png", help="the picture to write")
-    p.add_argument("--seconds", type=float, default=2.0, metavar="S", help="record this long (default 2)")
+    p.add_argument("--seconds", type=positive_s, default=2.0, metavar="S", help="record this long (default 2)")
     p.add_argument("--interval", type=positive_ms, default=20, metavar="MS", help="sample period (default 20)")
     p.add_argument("--step", type=float, metavar="ANGLE", help="move to ANGLE degrees first")
     g = p.add_mutually_exclusive_group()

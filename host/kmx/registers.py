@@ -12,6 +12,7 @@ type and range checks before anything is sent.
 
 import difflib
 import json
+import math
 import os
 
 from .errors import RangeError, RegisterError
@@ -146,21 +147,24 @@ class Register:
 
     # -- encoding --------------------------------------------------------------
     def _parse_number(self, v, field):
-        if isinstance(v, (int, float)) and not isinstance(v, bool):
-            return v
-        s = str(v).strip()
         unit = self.unit(field)
-        if unit and s.endswith(unit):
-            s = s[: -len(unit)].strip()
-        try:
-            return int(s, 0)
-        except ValueError:
-            pass
-        try:
-            return float(s)
-        except ValueError:
-            raise RangeError("%s: '%s' is not a number%s" % (
-                self.name, v, " (in %s)" % unit if unit else "")) from None
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            num = v
+        else:
+            s = str(v).strip()
+            if unit and s.endswith(unit):
+                s = s[: -len(unit)].strip()
+            try:
+                num = int(s, 0)
+            except ValueError:
+                try:
+                    num = float(s)
+                except ValueError:
+                    raise RangeError("%s: '%s' is not a number%s" % (
+                        self.name, v, " (in %s)" % unit if unit else "")) from None
+        if isinstance(num, float) and not math.isfinite(num):
+            raise RangeError("%s: %s is not a finite number" % (self.name, v))
+        return num
 
     def _raw_of(self, v, field):
         """A number in units -> the wire integer, checked against the type
@@ -201,9 +205,16 @@ class Register:
         if not self.writable:
             raise RegisterError("%s (0x%02X) is read-only" % (self.name, self.address))
         if self.layout == "magic":
-            data = bytes(value) if isinstance(value, (bytes, bytearray)) else bytes.fromhex(str(value))
+            if isinstance(value, (bytes, bytearray)):
+                data = bytes(value)
+            else:
+                text = " ".join(map(str, value)) if isinstance(value, (list, tuple)) else str(value)
+                try:
+                    data = bytes.fromhex(text)
+                except ValueError:
+                    data = b""
             if len(data) != 4:
-                raise RangeError("%s: takes exactly 4 bytes" % self.name)
+                raise RangeError("%s: takes exactly 4 bytes in hex (E1 E2 E3 E4), got '%s'" % (self.name, value))
             return data
         if self.layout == "pos":
             num = self._parse_number(value, 0)

@@ -227,6 +227,30 @@ class RegisterDescription(unittest.TestCase):
             with self.subTest(name=name), self.assertRaisesRegex(exc, msg):
                 self.m[name].encode(value)
 
+    def test_bad_values_refused_with_a_kmx_error(self):
+        """Every bad input has a defined outcome: a KmxError, never another exception."""
+        junk = ["", "x", "1 2 3 4 5", "0x", "1e9", "-1e9", "nan", "inf", "-inf", [], ["1"] * 6, 1.5, -1,
+                float("nan"), float("inf"), "45 °", "°", None, True, "E1 E2 E3", b"\x01"]
+        for reg in self.m:
+            for v in junk:
+                with self.subTest(reg=reg.name, value=v):
+                    try:
+                        out = reg.encode(v)
+                    except KmxError:
+                        continue
+                    self.assertIn(len(out), reg.lengths)
+            for data in (b"", b"\x00" * 30, b"\x01", b"\x00" * 5):
+                with self.subTest(reg=reg.name, data=data):
+                    try:
+                        reg.decode(data)
+                    except KmxError:
+                        pass
+        with self.assertRaisesRegex(RangeError, "position: nan is not a finite number"):
+            self.m["position"].encode("nan")
+        with self.assertRaisesRegex(RangeError, r"restart: takes exactly 4 bytes in hex \(E1 E2 E3 E4\)"):
+            self.m["restart"].encode("E1 E2")
+        self.assertEqual(self.m["restart"].encode(["E1", "E2", "E3", "E4"]), fr.RESTART_MAGIC)
+
     def test_product_bound_left_to_the_servo(self):
         self.assertEqual(self.m["max_current"].fields[0]["max"], "product")
         self.assertEqual(self.m["max_current"].encode(5000), (5000).to_bytes(2, "little"))

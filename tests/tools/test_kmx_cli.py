@@ -278,7 +278,10 @@ class KmxErrorsWithoutServo(unittest.TestCase):
         for argv, msg in ((["--bus"], "argument --bus: expected one argument"),
                           (["scan", "--scan-ms"], "argument --scan-ms: expected one argument"),
                           (["frobnicate"], "argument COMMAND: invalid choice: 'frobnicate'"),
-                          (["get", "1"], "the following arguments are required: NAME")):
+                          (["get", "1"], "the following arguments are required: NAME"),
+                          (["monitor", "1", "--count", "0"], "'0' is not a count of 1 or more"),
+                          (["plot", "1", "--out", "x.png", "--seconds", "-1"], "'-1' is not a positive number of seconds"),
+                          (["--timeout", "nan", "ping", "1"], "'nan' is not a positive number of milliseconds")):
             err = io.StringIO()
             with self.subTest(argv=argv), contextlib.redirect_stderr(err), self.assertRaises(SystemExit) as cm:
                 cli.main(argv)
