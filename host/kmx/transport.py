@@ -14,6 +14,7 @@ import os
 import select
 import socket
 import stat
+import termios
 
 from .deps import import_debian
 from .errors import (ConnectionRefused, NoSuchDevice, NotASerialPort,
@@ -162,14 +163,16 @@ class SerialTransport(Transport):
             raise TransportError("%s: cannot open %s: %s" % (self.spec, path, text)) from None
         except (OSError, ValueError) as e:
             raise TransportError("%s: cannot open %s: %s" % (self.spec, path, e)) from None
-        self._serial = serial
+        # what pyserial lets through when the device goes away (a pty whose
+        # other side closed answers tcflush with termios.error EIO)
+        self._errors = (serial.SerialException, OSError, termios.error, ValueError)
 
     def write(self, data):
         try:
             self.port.write(bytes(data))
             self.port.flush()
-        except (self._serial.SerialException, OSError) as e:
-            raise TransportError("%s: write failed: %s" % (self.spec, e)) from None
+        except self._errors as e:
+            raise TransportError("%s: write failed (device gone?): %s" % (self.spec, e)) from None
 
     def read(self, timeout):
         try:
@@ -179,14 +182,14 @@ class SerialTransport(Transport):
             return self.port.read(max(1, self.port.in_waiting))
         except InterruptedError:
             return b""
-        except (self._serial.SerialException, OSError) as e:
+        except self._errors as e:
             raise TransportError("%s: read failed (device gone?): %s" % (self.spec, e)) from None
 
     def flush_input(self):
         try:
             self.port.reset_input_buffer()
-        except (self._serial.SerialException, OSError):
-            pass
+        except self._errors as e:
+            raise TransportError("%s: the device is gone: %s" % (self.spec, e)) from None
 
     def close(self):
         if self.port is not None:

@@ -26,7 +26,7 @@ from kmx import bus as bus_mod  # noqa: E402
 from kmx.bus import Bus  # noqa: E402
 from kmx.errors import (ConnectionRefused, KmxError, MissingPackage, NoAnswer,  # noqa: E402
                         NoSuchDevice, NotASerialPort, PortBusy, RangeError, RegisterError,
-                        SpecError)
+                        SpecError, TransportError)
 from kmx.registers import RegisterMap, Registers  # noqa: E402
 
 
@@ -462,6 +462,13 @@ class BusOverTcp(unittest.TestCase):
         self.assertEqual(bus.scan(timeout=0.3), [(0, 0)])
         self.assertEqual((bus.echoes, bus.foreign_commands, bus.checksum_errors), (3, 0, 0))
 
+    def test_servo_gone(self):
+        self.assertEqual(self.bus.ping(0), 0)
+        self.sim.proc.kill()
+        self.sim.proc.wait()
+        with self.assertRaisesRegex(TransportError, "^%s: the bus closed the connection$" % re.escape(self.sim.spec)):
+            self.bus.ping(0)
+
     def test_raw_bytes_bad_checksum_gets_no_answer(self):
         bad = bytearray(fr.ping(0))
         bad[-1] ^= 0x55
@@ -553,6 +560,15 @@ class BusOverPty(unittest.TestCase):
             self.assertEqual(bus.ping(0), 0)
             self.assertEqual(str(Registers(bus).get(0, "product_info")), "KM-SIM-P135")
             self.assertEqual(bus.scan(timeout=0.3), [(0, 0)])
+
+    def test_servo_gone(self):
+        """The servo program ends (its pty closes): a TransportError, not pyserial's termios.error."""
+        with Bus(self.sim.spec) as bus:
+            self.assertEqual(bus.ping(0), 0)
+            self.sim.proc.kill()
+            self.sim.proc.wait()
+            with self.assertRaisesRegex(TransportError, "^%s: .*(gone|failed)" % re.escape(self.sim.spec)):
+                bus.ping(0)
 
     def test_busy_port(self):
         with Bus(self.sim.spec):
