@@ -387,6 +387,24 @@ class EchoWire:
         self.inner.close()
 
 
+class NoisyWire(EchoWire):
+    """A wire that corrupts the checksum byte of every 6-byte short
+    response the servo sends (counted over the stream, however it is cut
+    into chunks): every ping answer fails its checksum."""
+
+    def __init__(self, inner):
+        super().__init__(inner)
+        self.offset = 0
+
+    def read(self, timeout):
+        data = bytearray(self.inner.read(timeout))
+        for i in range(len(data)):
+            if (self.offset + i) % 6 == 5:
+                data[i] ^= 0x5A
+        self.offset += len(data)
+        return bytes(data)
+
+
 class BusOverTcp(unittest.TestCase):
     """Bus against host-sim over TCP: PROTOCOL.md §3 commands, §1 super ID."""
 
@@ -468,6 +486,12 @@ class BusOverTcp(unittest.TestCase):
         self.sim.proc.wait()
         with self.assertRaisesRegex(TransportError, "^%s: the bus closed the connection$" % re.escape(self.sim.spec)):
             self.bus.ping(0)
+
+    def test_checksum_errors_reported(self):
+        bus = Bus(NoisyWire(self.bus.transport))
+        with self.assertRaisesRegex(NoAnswer, r"ping ID 0: no answer from ID 0 within 100 ms \(3 tries\); "
+                                              r"3 checksum errors heard"):
+            bus.ping(0)
 
     def test_raw_bytes_bad_checksum_gets_no_answer(self):
         bad = bytearray(fr.ping(0))
