@@ -127,11 +127,13 @@ static uint8_t prv_own_status(const km_servo_t *s)
 
 /* "Super-ID answer slots": servo i starts response_delay + i * slot after
  * the frame, slot = the longest answer this read can give on the wire at
- * the active baud plus a guard of 2 byte times, rounded up to 1 us. */
+ * the active baud plus a guard of 2 byte times, rounded up to 1 us; at
+ * least the board's slot floor ("Answer slots on emulated buses"). */
 static uint32_t prv_slot_us(const km_servo_t *s, uint16_t answer_bytes)
 {
     const uint32_t bits = (uint32_t)(answer_bytes + 2u) * 10u;
-    return (bits * 1000000u + s->active_baud - 1u) / s->active_baud;
+    const uint32_t slot = (bits * 1000000u + s->active_baud - 1u) / s->active_baud;
+    return slot < s->slot_floor_us ? s->slot_floor_us : slot;
 }
 
 /* The answer's start after the frame: 0x12 alone, or the start of slot
@@ -341,6 +343,11 @@ void km_servo_set_reset_cause(km_servo_t *s, uint8_t cause)
 void km_servo_set_active_baud(km_servo_t *s, uint32_t baud)
 {
     s->active_baud = baud;
+}
+
+void km_servo_set_slot_floor_us(km_servo_t *s, uint32_t us)
+{
+    s->slot_floor_us = us > KM_SLOT_FLOOR_MAX_US ? KM_SLOT_FLOOR_MAX_US : us;
 }
 
 /* ---- read ------------------------------------------------------------- */

@@ -51,6 +51,7 @@ typedef struct {
     uint32_t value[KM_REG_COUNT]; /* register file, wire bytes packed LE */
     uint32_t active_baud;         /* bps in force until restart (0x10 applies then) */
     uint32_t prng;                /* xorshift32 state for the 0x01 random byte */
+    uint32_t slot_floor_us;       /* least answer slot (emulated boards; 0 = the rule) */
     km_live_t live;
     uint8_t flags;                /* bits 5/6 of the command being handled */
     uint8_t unreported;           /* bits 5/6 no status answer has carried yet */
@@ -132,6 +133,13 @@ void km_servo_set_reset_cause(km_servo_t *s, uint8_t cause);
 /* The bus runs at another baud than 0x10 asks (the board cannot make it):
  * the super-ID slots and extension 0x03 follow the baud in force. */
 void km_servo_set_active_baud(km_servo_t *s, uint32_t baud);
+
+/* docs/protocol-decisions.md "Answer slots on emulated buses": the super-ID
+ * and 0x82 slots are at least `us` (km_hal_uart_slot_floor_us(); 0 on real
+ * boards: the slot rule alone). Capped at KM_SLOT_FLOOR_MAX_US, so the
+ * last slot (250 x floor) still fits the 32-bit delay. */
+#define KM_SLOT_FLOOR_MAX_US 1000000u
+void km_servo_set_slot_floor_us(km_servo_t *s, uint32_t us);
 
 uint8_t km_servo_id(const km_servo_t *s);
 uint32_t km_servo_active_baud(const km_servo_t *s);

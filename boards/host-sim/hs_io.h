@@ -26,6 +26,8 @@ bool hs_scenario_load(const char *path);
  * HS_GAP_FLOOR_DEFAULT_US). */
 #define HS_GAP_FLOOR_DEFAULT_US 20000u
 void hs_uart_set_gap_floor_us(uint32_t us);
+/* --slot-floor-us: what km_hal_uart_slot_floor_us() reports (default 0). */
+void hs_uart_set_slot_floor_us(uint32_t us);
 
 /* File descriptor to poll for bus input (-1 when none, or when the host-side
  * receive buffer is full: the socket then keeps the rest, TCP flow control

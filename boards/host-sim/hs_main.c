@@ -1,6 +1,6 @@
 /* host-sim: the firmware as a native Linux program (software in the loop).
  *   km-servo-host-sim --listen 127.0.0.1:7001 --flash servo1.flash
- *   km-servo-host-sim --pty --flash servo1.flash [--gap-floor-us 0]
+ *   km-servo-host-sim --pty --flash servo1.flash [--gap-floor-us 0] [--slot-floor-us N]
  * The bus is a TCP socket (one client at a time) or a pseudo-terminal, paced
  * at the servo's baud rate (hs_uart.c); the user-data flash is a file with
  * NOR rules; sensors read the simulated plant.
@@ -12,6 +12,10 @@
  * the real gap would drop a frame that was whole on the wire. 0 gives the
  * real rule, for tests on a quiet host. A restart re-executes with the same
  * arguments, so the option survives it.
+ *
+ * --slot-floor-us N: the least super-ID and 0x82 answer slot, in µs
+ * (km_hal_uart_slot_floor_us(), docs/protocol-decisions.md "Answer slots on
+ * emulated buses"); default 0, the slot rule alone. Survives a restart.
  *
  * --product pot|encoder: the product emulated (boards/sim-common/
  * km_sim_product.c): "KM-SIM-P135" potentiometer (default) or
@@ -45,6 +49,8 @@ static int prv_usage(const char *argv0)
             "  --gap-floor-us N  least silence inside a frame that drops it, in us, when it\n"
             "                    exceeds the parser's max(10 byte times, 1 ms); default %u\n"
             "                    (host scheduling stalls); 0 = the real rule\n"
+            "  --slot-floor-us N least super-ID / 0x82 answer slot, in us; default 0 (the\n"
+            "                    slot rule alone)\n"
             "  --product P       pot (default, KM-SIM-P135) or encoder (KM-SIM-ENCODER,\n"
             "                    multi-turn); a restart keeps it and the shaft where it\n"
             "                    is; the encoder then reads its angle within one turn\n"
@@ -87,6 +93,12 @@ int main(int argc, char **argv)
                 return prv_usage(argv[0]);
             }
             hs_uart_set_gap_floor_us(us);
+        } else if (strcmp(argv[i], "--slot-floor-us") == 0 && i + 1 < argc) {
+            uint32_t us;
+            if (!prv_parse_u32(argv[++i], &us)) {
+                return prv_usage(argv[0]);
+            }
+            hs_uart_set_slot_floor_us(us);
         } else if (strcmp(argv[i], "--product") == 0 && i + 1 < argc) {
             const char *p = argv[++i];
             if (strcmp(p, "pot") == 0) {

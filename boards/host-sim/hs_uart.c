@@ -69,9 +69,23 @@ static uint64_t s_tx_end_ns;            /* the last answer's last stop bit */
 static bool s_tx_busy;                  /* what tx_busy() last told the app */
 static uint32_t s_gap_floor_us = HS_GAP_FLOOR_DEFAULT_US;
 
+static uint32_t s_slot_floor_us;
+
 void hs_uart_set_gap_floor_us(uint32_t us)
 {
     s_gap_floor_us = us;
+}
+
+void hs_uart_set_slot_floor_us(uint32_t us)
+{
+    s_slot_floor_us = us;
+}
+
+/* The run-time option --slot-floor-us (default 0: the slot rule alone;
+ * docs/protocol-decisions.md "Answer slots on emulated buses"). */
+uint32_t km_hal_uart_slot_floor_us(void)
+{
+    return s_slot_floor_us;
 }
 
 /* The run-time option (--gap-floor-us, default 20 ms). This UART paces bytes

@@ -112,6 +112,12 @@ uint32_t km_hal_uart_gap_floor_us(void)
     return 0u;
 }
 
+/* 0: a real bus, the slot rule alone. */
+uint32_t km_hal_uart_slot_floor_us(void)
+{
+    return 0u;
+}
+
 static void prv_rx(uint32_t isr, uint32_t cr1)
 {
     if ((isr & (USART_ISR_ORE | USART_ISR_FE | USART_ISR_NE | USART_ISR_PE)) != 0u) {

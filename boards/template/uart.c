@@ -39,3 +39,11 @@ uint32_t km_hal_uart_gap_floor_us(void)
 {
     return 0u;
 }
+
+/* 0 on a real UART: answers start when the servo's own timer says, so the
+ * slot rule holds as written. Only an emulated bus, whose servos the host
+ * schedules, may need a longer slot. */
+uint32_t km_hal_uart_slot_floor_us(void)
+{
+    return 0u;
+}

@@ -352,6 +352,9 @@ void km_app_init(void)
     km_rx_queue_init(&s_rxq);
     const uint32_t baud = prv_open_bus(km_servo_active_baud(&s_servo));
     km_servo_set_active_baud(&s_servo, baud);
+    /* docs/protocol-decisions.md "Answer slots on emulated buses": 0 on a
+     * real UART, an option on emulated boards. */
+    km_servo_set_slot_floor_us(&s_servo, km_hal_uart_slot_floor_us());
     /* docs/protocol-decisions.md "Inter-byte gap": the parser's rule, or
      * the UART's delivery floor on an emulated board, whichever is longer. */
     uint32_t gap_us = km_parser_default_gap_us(baud);

@@ -125,6 +125,22 @@ static void test_mread_slot_start_1mbit(void **state)
     }
 }
 
+/* "Answer slots on emulated buses": the board's slot floor
+ * (km_hal_uart_slot_floor_us) reaches the dispatcher at start: with 5 ms,
+ * position 2 answers 200 + 2 x 5000 us after the frame. */
+static void test_mread_slot_floor_from_the_hal(void **state)
+{
+    (void)state;
+    kf_power_on();
+    kf_world.slot_floor_us = 5000u;
+    kf_boot(KM_RESET_POWER_ON);
+    run_ms(2);
+    const uint32_t end = send_mread(0x46, 3, 2);
+    run_ms(30);
+    const uint32_t start = kf_tx_tick(take_read_answer(0x46));
+    assert_true(start >= end + 200u + 2u * 5000u && start <= end + 200u + 2u * 5000u + 5u);
+}
+
 /* The longest list: 249 IDs (length 252), ours last: slot 248, 280 ms
  * after the frame at 115200. One ID more needs length 253 (§2: at most
  * 252): the parser takes no frame from those bytes, nothing answers, and
@@ -207,6 +223,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_mread_slot_start_on_the_wire),
         cmocka_unit_test(test_mread_slot_start_1mbit),
+        cmocka_unit_test(test_mread_slot_floor_from_the_hal),
         cmocka_unit_test(test_mread_longest_list_and_one_more),
         cmocka_unit_test(test_mread_figure_20_servos_1mbit),
     };

@@ -440,6 +440,12 @@ bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx)
     return true;
 }
 
+uint32_t km_hal_uart_slot_floor_us(void)
+{
+    prv_call();
+    return kf_world.slot_floor_us;
+}
+
 uint32_t km_hal_uart_gap_floor_us(void)
 {
     return kf_world.gap_floor_us;

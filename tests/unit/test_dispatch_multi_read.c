@@ -134,6 +134,34 @@ static void test_mread_longest_list(void **state)
     assert_int_equal(bus[0].reply.delay_us, 200u + 248u * 1129u);
 }
 
+/* "Answer slots on emulated buses": a slot floor lengthens every slot
+ * shorter than it, super ID and 0x82 alike, and leaves longer slots and
+ * the own-ID answer alone; it is capped at KM_SLOT_FLOOR_MAX_US. */
+static void test_mread_and_super_slot_floor(void **state)
+{
+    (void)state;
+    kt_init(&bus[3], kt_product_pot(), 3);
+    km_servo_set_slot_floor_us(&bus[3].s, 3000u);
+    const uint8_t body[] = {0x46, 1, 2, 3};
+    kt_send(&bus[3], KM_ID_BROADCAST, 0x82, body, sizeof body);
+    assert_int_equal(bus[3].reply.delay_us, 200u + 2u * 3000u);
+    kt_ping(&bus[3], KM_ID_SUPER);
+    assert_int_equal(bus[3].reply.delay_us, 200u + 3u * 3000u);
+    kt_read(&bus[3], KM_ID_SUPER, 0x46);
+    assert_int_equal(bus[3].reply.delay_us, 200u + 3u * 3000u);
+    kt_read(&bus[3], 3, 0x46);
+    assert_int_equal(bus[3].reply.delay_us, 200u); /* own ID: no slot */
+    km_servo_set_active_baud(&bus[3].s, 9600u); /* 0x0A: 26042 us, above the floor */
+    kt_read(&bus[3], KM_ID_SUPER, 0x0A);
+    assert_int_equal(bus[3].reply.delay_us, 200u + 3u * kt_slot_us(23, 9600));
+    km_servo_set_slot_floor_us(&bus[3].s, 0xFFFFFFFFu);
+    kt_ping(&bus[3], KM_ID_SUPER);
+    assert_int_equal(bus[3].reply.delay_us, 200u + 3u * KM_SLOT_FLOOR_MAX_US);
+    km_servo_set_slot_floor_us(&bus[3].s, 0u); /* 0: the rule alone */
+    kt_ping(&bus[3], KM_ID_SUPER);
+    assert_int_equal(bus[3].reply.delay_us, 200u + 3u * kt_slot_us(6, 9600));
+}
+
 /* Every position in lists of 1..13 IDs (the scan takes four IDs a pass,
  * then the rest: every split of the list), and the same lists without it. */
 static void test_mread_every_position(void **state)
@@ -340,6 +368,7 @@ int main(void)
         cmocka_unit_test(test_mread_answer_is_the_read_answer),
         cmocka_unit_test(test_mread_slots_baud_and_delay),
         cmocka_unit_test(test_mread_longest_list),
+        cmocka_unit_test(test_mread_and_super_slot_floor),
         cmocka_unit_test(test_mread_every_position),
         cmocka_unit_test(test_mread_duplicates_and_unusable_ids),
         cmocka_unit_test(test_mread_not_listed_changes_nothing),

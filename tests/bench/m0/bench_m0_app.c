@@ -69,6 +69,11 @@ uint32_t km_hal_uart_gap_floor_us(void)
     return 1000000u;
 }
 
+uint32_t km_hal_uart_slot_floor_us(void)
+{
+    return 0u;
+}
+
 bool km_hal_uart_send(const uint8_t *data, uint16_t len)
 {
     (void)data;
