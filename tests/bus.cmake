@@ -4,7 +4,10 @@
 # missing image fails with the command that builds it; KM_BUILD_QEMU /
 # KM_BUILD_HOST_SIM in the environment point at other build trees).
 # RUN_SERIAL: the emulators' timing should not compete with the other tests
-# for two cores.
+# for two cores. The bus test checks super-ID and 0x82 answer order at
+# 115200 baud on a SCHED_FIFO bus when the host allows it (servo-bus
+# --realtime), else with a 20 ms emulated slot floor (bus_check.py's
+# docstring; docs/protocol-decisions.md "Answer slots on emulated buses").
 #
 # encoder: the encoder product (servo-bus --product encoder: model name,
 # 0x6F turns past 360 deg, stops on 0, restart reads 0) and the pot

@@ -247,7 +247,8 @@ class GapFloorOption(unittest.TestCase):
         # word is written too (0 = pot)
         self.assertEqual(loaders, ["loader,addr=0x20000000,data=0x4b4d4746,data-len=4",
                                    "loader,addr=0x20000004,data=0x000005dc,data-len=4",
-                                   "loader,addr=0x20000008,data=0x00000000,data-len=4"])
+                                   "loader,addr=0x20000008,data=0x00000000,data-len=4",
+                                   "loader,addr=0x2000000c,data=0x00000000,data-len=4"])
         self.assertNotIn("-device", sb.servo_argv("qemu", "/img.elf", 7001, "/f", None))
 
     def test_product_option(self):
@@ -260,11 +261,34 @@ class GapFloorOption(unittest.TestCase):
         # product alone: the gap floor word gets the servos' default (20000)
         self.assertEqual(loaders, ["loader,addr=0x20000000,data=0x4b4d4746,data-len=4",
                                    "loader,addr=0x20000004,data=0x00004e20,data-len=4",
-                                   "loader,addr=0x20000008,data=0x00000001,data-len=4"])
+                                   "loader,addr=0x20000008,data=0x00000001,data-len=4",
+                                   "loader,addr=0x2000000c,data=0x00000000,data-len=4"])
         r = subprocess.run([sys.executable, LAUNCHER, "--ids", "1", "--port", "0",
                             "--backend", "host-sim", "--image", FAKE, "--product", "stepper"],
                            capture_output=True, text=True, timeout=10)
         self.assertEqual(r.returncode, 2)
+
+    def test_slot_floor_and_qemu_args(self):
+        """--slot-floor-us: host-sim's argument, QEMU's word at 0x2000000C
+        (docs/protocol-decisions.md "Answer slots on emulated buses");
+        --qemu-arg: appended to QEMU's command line in order."""
+        sb = load_launcher_module()
+        host = sb.servo_argv("host-sim", "/img", 7001, "/f", None, None, None, None, (), 3000)
+        self.assertEqual(host[-2:], ["--slot-floor-us", "3000"])
+        self.assertNotIn("--slot-floor-us", sb.servo_argv("host-sim", "/img", 7001, "/f", None))
+        qemu = sb.servo_argv("qemu", "/img.elf", 7001, "/f", None, None, None, None,
+                             ("-icount", "shift=4"), 3000)
+        loaders = [qemu[i + 1] for i, a in enumerate(qemu) if a == "-device"]
+        self.assertEqual(loaders, ["loader,addr=0x20000000,data=0x4b4d4746,data-len=4",
+                                   "loader,addr=0x20000004,data=0x00004e20,data-len=4",
+                                   "loader,addr=0x20000008,data=0x00000000,data-len=4",
+                                   "loader,addr=0x2000000c,data=0x00000bb8,data-len=4"])
+        self.assertEqual(qemu[-2:], ["-icount", "shift=4"])
+        for extra in (["--slot-floor-us", "-5"], ["--qemu-arg=-icount"]):
+            r = subprocess.run([sys.executable, LAUNCHER, "--ids", "1", "--port", "0",
+                                "--backend", "host-sim", "--image", FAKE] + extra,
+                               capture_output=True, text=True, timeout=10)
+            self.assertEqual(r.returncode, 2, extra)
 
     def test_build_dir_option_and_environment(self):
         sb = load_launcher_module()
