@@ -43,7 +43,7 @@ typedef struct {
 
 static rig_window_t s_rig_win_region, s_rig_win_store;
 
-static bool rig_win_inside(const rig_window_t *w, uint32_t off, uint32_t n)
+static inline bool rig_win_inside(const rig_window_t *w, uint32_t off, uint32_t n)
 {
     const uint32_t size = w->pages * w->whole->page_size;
     return off <= size && n <= size - off;
@@ -73,7 +73,7 @@ static km_flash_result_t rig_win_read(void *ctx, uint32_t off, void *d, uint32_t
     return w->whole->read(w->whole->ctx, w->first * w->whole->page_size + off, d, n);
 }
 
-static void rig_bind(rig_t *r)
+static inline void rig_bind(rig_t *r)
 {
     km_nor_sim_bind(&r->sim, &r->whole);
     s_rig_win_region.whole = &r->whole;
@@ -94,7 +94,7 @@ static void rig_bind(rig_t *r)
     r->target.region_size = r->region_pages * r->whole.page_size;
 }
 
-static void rig_put32(uint8_t *p, uint32_t v)
+static inline void rig_put32(uint8_t *p, uint32_t v)
 {
     for (int i = 0; i < 4; i++) {
         p[i] = (uint8_t)(v >> (8 * i));
@@ -103,7 +103,7 @@ static void rig_put32(uint8_t *p, uint32_t v)
 
 /* A simulator of `pages` pages, the first region_pages of them the
  * application region, with a real controller's rules. */
-static void rig_init(rig_t *r, uint32_t page_size, uint32_t cell, uint32_t pages,
+static inline void rig_init(rig_t *r, uint32_t page_size, uint32_t cell, uint32_t pages,
                      uint32_t region_pages, uint8_t fill)
 {
     const km_nor_sim_config_t cfg = {page_size, cell, pages, fill};
@@ -116,7 +116,7 @@ static void rig_init(rig_t *r, uint32_t page_size, uint32_t cell, uint32_t pages
 }
 
 /* An image of `length` bytes whose body is a seeded xorshift stream. */
-static void rig_make_image(rig_image_t *im, uint32_t length, uint32_t version, uint32_t model,
+static inline void rig_make_image(rig_image_t *im, uint32_t length, uint32_t version, uint32_t model,
                            uint32_t seed)
 {
     memset(im->bytes, 0xFF, sizeof im->bytes);
@@ -139,13 +139,13 @@ static void rig_make_image(rig_image_t *im, uint32_t length, uint32_t version, u
     rig_put32(im->bytes + 28, km_crc32(0u, im->bytes, 28u));
 }
 
-static uint32_t rig_blocks(const rig_image_t *im)
+static inline uint32_t rig_blocks(const rig_image_t *im)
 {
     return (im->length + KM_UPDATE_BLOCK - 1u) / KM_UPDATE_BLOCK;
 }
 
 /* The WRITE frame body for block b: sub, u16 block, data, u32 CRC. */
-static uint8_t rig_write_body(const rig_image_t *im, uint32_t b, uint8_t *body)
+static inline uint8_t rig_write_body(const rig_image_t *im, uint32_t b, uint8_t *body)
 {
     body[0] = 0x03u;
     body[1] = (uint8_t)b;

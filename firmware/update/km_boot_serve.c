@@ -1,0 +1,95 @@
+/* The bootloader's dispatcher (km_boot_serve.h). */
+#include "km_boot_serve.h"
+
+#include <string.h>
+
+#include "km_encoder.h"
+#include "km_update_proto.h"
+
+#define PRV_CMD_PING 0x01u
+#define PRV_CMD_READ 0x02u
+#define PRV_CMD_WRITE 0x03u
+#define PRV_REG_STATUS 0x01u
+#define PRV_REG_RESTART 0x02u
+#define PRV_REG_VERSION 0x0Cu
+#define PRV_ST_EXCEPTION 0x20u
+
+static void prv_status_answer(km_boot_serve_t *s, km_boot_reply_t *r)
+{
+    r->len = km_encode_status(r->bytes, s->id, s->status);
+    s->status = 0u;
+}
+
+void km_boot_serve(km_boot_serve_t *s, const km_frame_view_t *f, km_boot_reply_t *r)
+{
+    r->len = 0u;
+    r->action = KM_BOOT_ACT_NONE;
+    const int own = f->id == s->id;
+    if (!own && f->id != KM_ID_BROADCAST) {
+        return;
+    }
+    switch (f->cmd) {
+    case PRV_CMD_PING:
+        if (f->body_len != 0u) {
+            s->status |= PRV_ST_EXCEPTION;
+        }
+        if (own) {
+            prv_status_answer(s, r);
+        }
+        return;
+    case PRV_CMD_READ: {
+        uint8_t body[5];
+        uint8_t n = 0u;
+        if (f->body_len == 1u && f->body[0] == PRV_REG_VERSION) {
+            body[0] = PRV_REG_VERSION;
+            for (uint32_t i = 0; i < 4u; i++) {
+                body[1u + i] = (uint8_t)(s->version >> (8u * i));
+            }
+            n = 5u;
+        } else if (f->body_len == 1u && f->body[0] == PRV_REG_STATUS) {
+            body[0] = PRV_REG_STATUS;
+            body[1] = s->status;
+            body[2] = 0u; /* the "random" byte: one bootloader per ID is all it can tell */
+            n = 3u;
+            s->status = 0u;
+        } else {
+            s->status |= PRV_ST_EXCEPTION;
+            if (own) {
+                prv_status_answer(s, r);
+            }
+            return;
+        }
+        if (own) {
+            r->len = km_encode_response(r->bytes, s->id, PRV_CMD_READ, body, n);
+        }
+        return;
+    }
+    case PRV_CMD_WRITE: {
+        static const uint8_t k_restart[5] = {PRV_REG_RESTART, 0xE1u, 0xE2u, 0xE3u, 0xE4u};
+        if (f->body_len == 5u && memcmp(f->body, k_restart, 5u) == 0) {
+            r->action = KM_BOOT_ACT_RESTART;
+        } else {
+            s->status |= PRV_ST_EXCEPTION; /* nothing else is writable here */
+        }
+        return;
+    }
+    case KM_CMD_UPDATE: {
+        km_update_answer_t a;
+        km_update_frame(&s->upd, f->body, f->body_len, &a);
+        if (a.action == KM_UPD_ACT_RESTART) {
+            r->action = KM_BOOT_ACT_RESTART;
+        } else if (a.action == KM_UPD_ACT_EXCEPTION) {
+            s->status |= PRV_ST_EXCEPTION;
+            if (own) {
+                prv_status_answer(s, r);
+            }
+        } else if (own && a.len > 0u) {
+            r->len = km_encode_response(r->bytes, s->id, KM_CMD_UPDATE, a.body, a.len);
+        }
+        return;
+    }
+    default:
+        s->status |= PRV_ST_EXCEPTION;
+        return;
+    }
+}
