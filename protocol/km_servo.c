@@ -961,6 +961,41 @@ static void prv_ext_read(km_servo_t *s, const km_frame_view_t *f, km_reply_t *re
     reply->delay_us = prv_delay_us(s, f->id, (uint16_t)(7u + prv_ext_size(f->body[0])));
 }
 
+/* ---- firmware update 0x78 (docs/update.md) ---------------------------- */
+
+/* The application's side of 0x78 is the firmware's (ops->update): ENTER
+ * restarts into the bootloader, STATUS answers state 0, anything else is
+ * bit 5 with the short response. A firmware without the op treats 0x78 as
+ * any command it does not have (bit 5, no answer). Answered to our own ID
+ * only, at the normal response delay. */
+static bool prv_update(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply, bool to_me)
+{
+    uint8_t body[KM_UPDATE_ANSWER_MAX];
+    uint8_t n = 0u;
+    if (s->ops->update == NULL) {
+        prv_exception(s); /* like any command this firmware does not have */
+        return false;
+    }
+    if (!s->ops->update(s->ops->ctx, f->body, f->body_len, body, &n)) {
+        prv_exception(s);
+        if (to_me) {
+            prv_answer_status(s, prv_own_status(s), f->id, reply);
+            return true;
+        }
+        return false;
+    }
+    if (f->body_len >= 1u && f->body[0] == KM_UPDATE_SUB_ENTER) {
+        s->restarting = true; /* an accepted ENTER is a restart: nothing after it runs */
+        return false;
+    }
+    if (!to_me || n == 0u) {
+        return false;
+    }
+    reply->len = km_encode_response(reply->bytes, km_servo_id(s), KM_CMD_UPDATE_FW, body, n);
+    reply->delay_us = prv_delay_us(s, f->id, (uint16_t)(6u + n));
+    return true;
+}
+
 /* ---- dispatch --------------------------------------------------------- */
 
 /* Runs one command addressed to this servo; fills *reply. */
@@ -1042,8 +1077,10 @@ static prv_report_t prv_dispatch(km_servo_t *s, const km_frame_view_t *f, km_rep
             (void)prv_write(s, s->sync.addr, s->sync.data, s->sync.len);
         }
         return PRV_UNANSWERED; /* an empty buffer is nothing to do, not an error (§3) */
+    case KM_CMD_UPDATE_FW:
+        return prv_update(s, f, reply, to_me) ? PRV_OWN : PRV_UNANSWERED;
     default:
-        /* 0x78, 0x7E and unknown commands: not supported. */
+        /* 0x7E and unknown commands: not supported. */
         prv_exception(s);
         return PRV_UNANSWERED;
     }

@@ -34,6 +34,11 @@ typedef struct {
      * a protection latched): the dispatcher then sets status bit 6 and
      * changes nothing. */
     bool (*request)(void *ctx, const km_request_t *req);
+    /* 0x78 firmware update, the application's side (docs/update.md §4):
+     * the frame's body in; `answer` (KM_UPDATE_ANSWER_MAX bytes) gets the
+     * answer's body, *answer_len its length (0: none). False: not served
+     * here (status bit 5). NULL: 0x78 is not supported at all. */
+    bool (*update)(void *ctx, const uint8_t *body, uint8_t n, uint8_t *answer, uint8_t *answer_len);
     void *ctx;
 } km_servo_ops_t;
 
@@ -111,6 +116,9 @@ uint32_t km_servo_params_gen(const km_servo_t *s);
  * `F9 FF id 03 7F addr cs` answers `F9 F5 id len 7F addr value cs`.
  * docs/protocol-decisions.md "Extension command 0x7F" has the frames. */
 #define KM_CMD_EXT 0x7Fu
+#define KM_CMD_UPDATE_FW 0x78u   /* docs/update.md */
+#define KM_UPDATE_ANSWER_MAX 80u
+#define KM_UPDATE_SUB_ENTER 0x01u  /* accepted by ops->update: the firmware restarts */
 #define KM_EXT_USERDATA_SOURCE 0x01u /* u8 KM_USERDATA_*: where the user data came from */
 #define KM_EXT_RESET_CAUSE 0x02u     /* u8 km_reset_cause_t (hal/km_hal_system.h) */
 #define KM_EXT_ACTIVE_BAUD 0x03u     /* u16 baud / 100 in force (0x10 may differ) */

@@ -8,14 +8,27 @@
 #include "km_app.h"
 #include "km_sim_product.h"
 
+#ifdef KM_APP_BOOTLOADER
+#include "boot_layout.h"
+#include "km_boot_board.h"
+#endif
+
+/* The software field of 0x0C (0x0100 = v0.1.00); the update tests build a
+ * second image with another (docs/update.md). */
+#ifndef KM_APP_SW_VERSION
+#define KM_APP_SW_VERSION 0x0100u
+#endif
+#define PRV_FW_VERSION (0x00100000u | (uint32_t)(KM_APP_SW_VERSION))
+
 /* Position-loop gains and profile limits: the defaults were tuned on the
  * simulated plant of this servo class (docs/tuning.md says how). */
 static const km_control_gains_t s_gains = KM_CONTROL_GAINS_DEFAULT;
 
 static const km_product_t s_product = {
     .model = "KM-SIM-P135",
-    /* 0x@@##&&&&: no bootloader, hardware v1.0, software v0.1.00 */
-    .firmware_version = 0x00100100u,
+    /* 0x@@##&&&&: bootloader (0 = none, else set at run time below),
+     * hardware v1.0, software v0.1.00 */
+    .firmware_version = PRV_FW_VERSION,
     .variant = KM_VARIANT_POTENTIOMETER,
     .max_current_ma = 2000,       /* below the plant's 2.5 A stall current */
     .max_speed_dps = 360,         /* about the plant's no-load speed */
@@ -40,7 +53,7 @@ static const km_product_t s_product = {
  * speed/current figures; what differs is the variant (§6) and the limits. */
 static const km_product_t s_product_encoder = {
     .model = "KM-SIM-ENCODER",
-    .firmware_version = 0x00100100u,
+    .firmware_version = PRV_FW_VERSION,
     .variant = KM_VARIANT_ENCODER,
     .max_current_ma = 2000,
     .max_speed_dps = 360,
@@ -70,5 +83,18 @@ void km_sim_product_select(km_sim_variant_t which)
 
 const km_product_t *km_board_product(void)
 {
-    return s_selected == KM_SIM_PRODUCT_ENCODER ? &s_product_encoder : &s_product;
+    const km_product_t *p = s_selected == KM_SIM_PRODUCT_ENCODER ? &s_product_encoder : &s_product;
+#ifdef KM_APP_BOOTLOADER
+    /* 0x0C's bootloader byte: the version the bootloader that started
+     * this image left in the shared RAM words (docs/update.md §10). */
+    static km_product_t s_with_boot;
+    const volatile km_boot_shared_t *sh = (const volatile km_boot_shared_t *)BOOT_SHARED_ADDR;
+    s_with_boot = *p;
+    if (sh->check == ~sh->boot_version && sh->boot_version <= 0xFFu) {
+        s_with_boot.firmware_version |= sh->boot_version << 24;
+    }
+    return &s_with_boot;
+#else
+    return p;
+#endif
 }

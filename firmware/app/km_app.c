@@ -28,6 +28,7 @@
 #include "km_parser.h"
 #include "km_rx_queue.h"
 #include "km_servo.h"
+#include "km_update_proto.h"
 
 #define KM_APP_TICK_US KM_CONTROL_TICK_US /* control tick: 1 kHz */
 #define KM_APP_RX_BUDGET 64u      /* bytes parsed per loop pass: bounds tick jitter */
@@ -298,10 +299,46 @@ static bool prv_ops_request(void *ctx, const km_request_t *req)
     return km_control_request(&s_control, req, prv_params());
 }
 
+/* 0x78 in the application (docs/update.md §4): ENTER leaves the request
+ * for the bootloader and restarts like 0x02 (nothing after it runs);
+ * without a bootloader (km_board_boot_request() false) it is refused. */
+static bool prv_ops_update(void *ctx, const uint8_t *body, uint8_t n, uint8_t *answer,
+                           uint8_t *answer_len)
+{
+    km_update_answer_t a;
+    km_update_app_frame(body, n, &a);
+    *answer_len = 0u;
+    if (a.action == KM_UPD_ACT_EXCEPTION) {
+        return false;
+    }
+    if (a.action == KM_UPD_ACT_ENTER) {
+        /* Weak default false; a board with a bootloader links its own. */
+        // cppcheck-suppress knownConditionTrueFalse
+        if (!km_board_boot_request()) {
+            return false;
+        }
+        prv_ops_restart(ctx);
+        return true;
+    }
+    if (a.len > KM_UPDATE_ANSWER_MAX) {
+        return false;
+    }
+    memcpy(answer, a.body, a.len);
+    *answer_len = a.len;
+    return true;
+}
+
+/* No bootloader unless the board says so (a board with one defines it). */
+__attribute__((weak)) bool km_board_boot_request(void)
+{
+    return false;
+}
+
 static const km_servo_ops_t s_ops = {
     .commit = prv_ops_commit,
     .restart = prv_ops_restart,
     .request = prv_ops_request,
+    .update = prv_ops_update,
     .ctx = NULL,
 };
 

@@ -20,6 +20,12 @@ void km_app_answer_started(uint32_t frame_end, uint32_t started, uint32_t delay_
  * test can drive the real loop one pass at a time over a fake hal. */
 _Noreturn void km_app_run(void);
 
+/* A board with a bootloader (docs/update.md) defines this: leave the
+ * "stay in update mode" request for it and return true; the app then
+ * restarts. The app's weak default returns false (no bootloader: 0x78
+ * ENTER is refused with bit 5). */
+bool km_board_boot_request(void);
+
 /* Boot: hal, store mount, dispatcher, control, bus. Resets every piece of
  * the app's state, so a test may call it again to model a reset. */
 void km_app_init(void);

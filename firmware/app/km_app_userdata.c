@@ -11,10 +11,6 @@ _Static_assert(KM_STORE_MOUNT_LOADED == KM_USERDATA_LOADED &&
                    KM_STORE_MOUNT_ERR_ARG == KM_USERDATA_UNAVAILABLE,
                "register 0x0D reports the store's mount result as is");
 
-/* Bump when a persisted register's meaning or encoding changes: stored
- * values are then replaced by the product defaults (the store reports it). */
-#define KM_USERDATA_SCHEMA_VERSION 1u
-
 static km_store_key_t s_keys[KM_USERDATA_MAX];
 static km_store_schema_t s_schema;
 static km_store_t s_store;

@@ -13,6 +13,10 @@
 #include "km_registers.h"
 
 #define KM_USERDATA_MAX KM_REG_PERSISTED_COUNT
+/* Bump when a persisted register's meaning or encoding changes: stored
+ * values are then replaced by the product defaults (the store reports it).
+ * The bootloader mounts with it too, to find the ID and baud. */
+#define KM_USERDATA_SCHEMA_VERSION 1u
 _Static_assert(KM_USERDATA_MAX <= KM_STORE_MAX_KEYS, "the store holds every persisted register");
 
 /* Mounts the store (zero flash operations) and fills `values` in the

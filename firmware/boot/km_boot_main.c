@@ -1,0 +1,108 @@
+/* The bootloader (docs/update.md §3): the first code after reset. Starts
+ * the application if the boot check passes and no update was asked for;
+ * otherwise stays in update mode and answers on the bus at the stored ID
+ * and baud (user data readable) or ID 0 at 115200, through the protocol
+ * parser and the update state machine. Portable: the board is behind
+ * km_boot_board.h. */
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "km_app_userdata.h"
+#include "km_boot_board.h"
+#include "km_boot_check.h"
+#include "km_boot_serve.h"
+#include "km_parser.h"
+#include "km_store.h"
+
+#define PRV_FALLBACK_BAUD 115200u
+#define PRV_ANSWER_DELAY_US 200u   /* the 0x12 default: the master turns its line around */
+
+static km_boot_serve_t s_serve;
+static km_parser_t s_parser;
+static km_frame_t s_frame;
+static km_boot_reply_t s_reply;
+static km_store_t s_store;
+
+/* ID and baud from the user data, or the fallback (docs/update.md §3). */
+static void prv_address(uint8_t *id, uint32_t *baud)
+{
+    static const km_store_key_t k_keys[2] = {{0x0Fu, 0u}, {0x10u, PRV_FALLBACK_BAUD / 100u}};
+    static const km_store_schema_t k_schema = {k_keys, 2u, KM_USERDATA_SCHEMA_VERSION};
+    uint32_t v[2] = {0u, PRV_FALLBACK_BAUD / 100u};
+    const km_store_mount_t m = km_store_mount(&s_store, km_bootb_store(), &k_schema, v);
+    *id = 0u;
+    *baud = PRV_FALLBACK_BAUD;
+    if (m == KM_STORE_MOUNT_LOADED || m == KM_STORE_MOUNT_MIGRATED) {
+        *id = v[0] <= KM_ID_MAX ? (uint8_t)v[0] : 0u;
+        *baud = v[1] * 100u;
+    }
+}
+
+static void prv_wait_us(uint32_t from, uint32_t us)
+{
+    while (km_bootb_now_us() - from < us) {
+    }
+}
+
+static void prv_handle(void)
+{
+    const km_frame_view_t v = {s_frame.id, s_frame.cmd, s_frame.body_len, s_frame.body,
+                               s_frame.end_tick};
+    km_boot_serve(&s_serve, &v, &s_reply);
+    if (s_reply.len > 0u) {
+        prv_wait_us(s_frame.end_tick, PRV_ANSWER_DELAY_US);
+        km_bootb_uart_tx(s_reply.bytes, s_reply.len);
+    }
+    if (s_reply.action == KM_BOOT_ACT_RESTART) {
+        km_bootb_reset();
+    }
+}
+
+int main(void)
+{
+    km_bootb_init();
+    volatile km_boot_shared_t *sh = km_bootb_shared();
+    const bool asked = sh->request == KM_BOOT_REQUEST_MAGIC;
+    sh->request = 0u;
+    sh->app_running = 0u;
+    sh->boot_version = KM_BOOT_VERSION;
+    sh->check = ~(uint32_t)KM_BOOT_VERSION;
+
+    km_bootb_factory();
+    const km_image_target_t *t = km_bootb_target();
+    km_image_header_t h;
+    const bool valid = km_boot_check(km_bootb_region(), t, &h);
+    if (valid && !asked) {
+        km_bootb_start(t->base + h.vectors);
+    }
+
+    /* Update mode. */
+    uint8_t id;
+    uint32_t baud;
+    prv_address(&id, &baud);
+    if (!km_bootb_uart_init(baud)) {
+        baud = PRV_FALLBACK_BAUD;
+        (void)km_bootb_uart_init(baud);
+    }
+    km_update_init(&s_serve.upd, km_bootb_region(), t);
+    s_serve.id = id;
+    s_serve.version = ((uint32_t)KM_BOOT_VERSION << 24) | (km_bootb_hw_version() << 16) |
+                      (valid ? (h.version & 0xFFFFu) : 0u);
+    uint32_t gap = km_parser_default_gap_us(baud);
+    if (gap < km_bootb_gap_floor_us()) {
+        gap = km_bootb_gap_floor_us();
+    }
+    km_parser_init(&s_parser, gap);
+    for (;;) {
+        uint8_t b;
+        unsigned ev;
+        if (km_bootb_uart_rx(&b)) {
+            ev = km_parser_feed(&s_parser, b, km_bootb_now_us(), &s_frame);
+        } else {
+            ev = km_parser_poll(&s_parser, km_bootb_now_us(), &s_frame);
+        }
+        if ((ev & KM_PARSE_FRAME) != 0u) {
+            prv_handle();
+        }
+    }
+}
