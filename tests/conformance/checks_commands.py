@@ -79,7 +79,7 @@ def cmd_write_level0(ctx):
        "at response level 1 a write to the own ID answers a short response; broadcast does not")
 def cmd_write_level1(ctx):
     i = ctx.ids[0]
-    saved = {a: ctx.snapshot(j, [0x11, 0x12]) for j in ctx.ids for a in [j]}
+    saved = {j: ctx.snapshot(j, [0x11, 0x12]) for j in ctx.ids}
     try:
         for j in ctx.ids:
             ctx.write_ok(j, 0x11, bytes([saved[j][0x11][0] | 0x08]))
