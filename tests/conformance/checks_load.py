@@ -28,21 +28,24 @@ def load_mixed(ctx):
     model_5b, model_64 = {}, {}
     lim = {}
     errors = []
+    kinds = {}  # error kind -> count
     lat = {}
     bad0 = ctx.wire.bad_frames
 
-    def err(msg):
+    def err(msg, kind):
         errors.append(msg)
-        if len(errors) >= 20:
+        kinds[kind] = kinds.get(kind, 0) + 1
+        if len(errors) >= max(20, target // 1000):
             raise Fail("%d errors, first: %s" % (len(errors), "; ".join(errors[:5])))
 
     def timed(kind, frame, n):
         t = time.perf_counter()
         r = ctx.wire.transact(frame, n, ctx.timeout)
-        lat.setdefault(kind, []).append(time.perf_counter() - t)
+        took = time.perf_counter() - t
+        lat.setdefault(kind, []).append(took)
         if len(r) != n:
-            err("%s %s: %d of %d answers" % (kind, hexs(frame), len(r), n))
-        return r
+            err("%s %s: %d of %d answers" % (kind, hexs(frame), len(r), n), "missing answer")
+        return r, took
 
     try:
         for i in ids:
@@ -56,13 +59,13 @@ def load_mixed(ctx):
             i = rng.choice(ids)
             k = rng.random()
             if k < 0.25:
-                r = timed("ping", fr.ping(i), 1)
+                r, _ = timed("ping", fr.ping(i), 1)
                 if r and not (r[0].id == i and r[0].is_status and not r[0].status & spec.BITS_56):
-                    err("ping %d answered %s" % (i, hexs(r[0].to_bytes())))
+                    err("ping %d answered %s" % (i, hexs(r[0].to_bytes())), "wrong answer")
                 sent += 1
             elif k < 0.55:
                 addr = rng.choice((0x0B, 0x5B, 0x64, 0x46, 0x01))
-                r = timed("read", fr.read(i, addr), 1)
+                r, _ = timed("read", fr.read(i, addr), 1)
                 if r:
                     f = r[0]
                     want = {0x0B: spec.PROTOCOL_VERSION, 0x5B: model_5b[i], 0x64: model_64[i]}.get(addr)
@@ -71,23 +74,26 @@ def load_mixed(ctx):
                     if ok and want is not None:
                         ok = spec.to_int(f.params) == want
                     if not ok:
-                        err("read 0x%02X of %d answered %s, model %s" % (addr, i, hexs(f.to_bytes()), want))
+                        err("read 0x%02X of %d answered %s, model %s" % (addr, i, hexs(f.to_bytes()), want),
+                            "wrong answer")
                 sent += 1
             elif k < 0.75:
                 v = rng.randint(0, lim[i])
-                r = timed("write", fr.write(i, 0x5B, spec.u16(v)), 1)
+                r, _ = timed("write", fr.write(i, 0x5B, spec.u16(v)), 1)
                 if r and not (r[0].id == i and r[0].is_status and not r[0].status & spec.BITS_56):
-                    err("write 0x5B=%d to %d answered %s" % (v, i, hexs(r[0].to_bytes())))
+                    err("write 0x5B=%d to %d answered %s" % (v, i, hexs(r[0].to_bytes())), "wrong answer")
                 model_5b[i] = v
                 sent += 1
             elif k < 0.80:
                 frame = fr.ping(spec.ID_SUPER) if rng.random() < 0.5 else fr.read(spec.ID_SUPER, 0x5B)
-                r = timed("super", frame, len(ids))
+                r, took = timed("super", frame, len(ids))
                 if [f.id for f in r] != sorted(ids)[:len(r)]:
-                    err("super ID: answer order %s" % [f.id for f in r])
+                    err("super ID: answer order %s in %.1f ms" % ([f.id for f in r], took * 1e3),
+                        "super-ID slot order")
                 for f in r:
                     if not f.is_status and f.id in model_5b and spec.to_int(f.params) != model_5b[f.id]:
-                        err("super read 0x5B of %d: %s, model %d" % (f.id, hexs(f.params), model_5b[f.id]))
+                        err("super read 0x5B of %d: %s, model %d" % (f.id, hexs(f.params), model_5b[f.id]),
+                            "wrong answer")
                 sent += 1
             elif k < 0.90:
                 for j in ids:
@@ -106,15 +112,18 @@ def load_mixed(ctx):
         # the unanswered frames at the end are checked too
         for i in ids:
             if ctx.read_int(i, 0x5B) != model_5b[i] or ctx.read_int(i, 0x64) != model_64[i]:
-                err("servo %d: final 0x5B/0x64 differ from the model" % i)
+                err("servo %d: final 0x5B/0x64 differ from the model" % i, "wrong answer")
             if ctx.status(i) & spec.BITS_56:
-                err("servo %d: status bits 5/6 set at the end" % i)
+                err("servo %d: status bits 5/6 set at the end" % i, "status bits")
         bad = ctx.wire.bad_frames - bad0
         if bad:
-            err("%d frames with a bad checksum or length" % bad)
+            err("%d frames with a bad checksum or length" % bad, "bad frame")
         answered = sorted(t for ts in lat.values() for t in ts)
-        print("# load: %d transactions (request frames) on servos %s in %.1f s: %.0f/s, %d errors"
-              % (sent, ",".join(map(str, ids)), wall, sent / wall, len(errors)))
+        print("# load: %d transactions (request frames) on servos %s in %.1f s: %.0f/s, %d errors%s"
+              % (sent, ",".join(map(str, ids)), wall, sent / wall, len(errors),
+                 "".join(", %s %d" % kv for kv in sorted(kinds.items()))))
+        for e in errors[:10]:
+            print("# load: error: %s" % e)
         for kind, ts in sorted(lat.items()) + [("all answered", answered)]:
             ts = sorted(ts)
             print("# load: %-12s n=%-6d latency ms p50 %.2f p95 %.2f p99 %.2f max %.2f"
