@@ -3,6 +3,11 @@
  * numbers (and board_config.c's sensor calibration) for their model. */
 #include "km_app.h"
 
+#ifdef KM_APP_BOOTLOADER
+#include "boot_layout.h"
+#include "km_boot_board.h"
+#endif
+
 /* Position-loop gains and profile limits: the defaults were tuned on the
  * simulated plant of this servo class (docs/tuning.md says how). */
 static const km_control_gains_t s_gains = KM_CONTROL_GAINS_DEFAULT;
@@ -33,5 +38,17 @@ static const km_product_t s_product = {
 
 const km_product_t *km_board_product(void)
 {
+#ifdef KM_APP_BOOTLOADER
+    /* 0x0C's bootloader byte: the version the bootloader that started this
+     * image left in the shared RAM words (docs/update.md §10). */
+    static km_product_t s_with_boot;
+    const volatile km_boot_shared_t *sh = (const volatile km_boot_shared_t *)BOOT_SHARED_ADDR;
+    s_with_boot = s_product;
+    if (sh->check == ~sh->boot_version && sh->boot_version <= 0xFFu) {
+        s_with_boot.firmware_version |= sh->boot_version << 24;
+    }
+    return &s_with_boot;
+#else
     return &s_product;
+#endif
 }
