@@ -52,10 +52,10 @@ switch the servos to 9600 baud, 8.3 ms, and still failed under load). Now
 tools/bench-superid):
   realtime  (auto when the host allows SCHED_FIFO, e.g. root or an rtprio
             limit) servo-bus --realtime: the hub and the emulators run under
-            SCHED_FIFO, and the slots are the real rule's: 2 answer-order
+            SCHED_FIFO, and the slots are the real rule's: 0 answer-order
             errors in 9,000 super-ID / 0x82 exchanges on QEMU with the other
-            core busy (1 in 3,000 on host-sim; jitter p99 - p50 247 us, a
-            slot is 695 us or more);
+            core busy (4 in 27,000 over three runs; 0 in 3,000 on host-sim;
+            jitter p99 - p50 about 280 us, a slot is 695 us or more);
   floor     (auto otherwise) servo-bus --slot-floor-us 20000: the emulated
             boards stretch every super-ID / 0x82 slot to 20 ms (0 on real
             boards), the rest of the protocol stays at 115200. Does not hold
