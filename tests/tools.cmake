@@ -2,7 +2,10 @@
 # package host/kmx (test_kmx.py: codec, registers, transports, Bus against a
 # real host-sim servo over TCP and a pty and on the 3-servo host-sim bus of
 # servo-bus, about 3 s; test_kmx_cli.py: the kmx command
-# against host-sim and the 3-servo bus, with tools/servo-session, about 14 s; both need the host-sim preset built).
+# against host-sim and the 3-servo bus, with tools/servo-session, about 14 s;
+# test_kmx_baud.py: the baud model (tools/kmwire.py, host-sim --baud,
+# servo-bus over RFC 2217) and kmx set-baud, scan --all-bauds, rescue on two
+# host-sim servos, about 23 s; all need the host-sim preset built).
 # unittest exits non-zero when any test fails or errors, which fails the CTest test;
 # FAIL_REGULAR_EXPRESSION also catches a run that collected no tests at all.
 find_program(KM_PYTHON3 python3)

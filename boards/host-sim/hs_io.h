@@ -16,6 +16,11 @@ bool hs_uart_open_pty(void);
  * take them over there (returns false on a first start). */
 void hs_uart_prepare_exec(void);
 bool hs_uart_adopt(void);
+
+/* --baud N: the master's line rate (0: the servo's own, the default);
+ * --report-baud: "baud N" on stdout at every UART start (hs_uart.c). */
+void hs_uart_set_wire_baud(uint32_t baud);
+void hs_uart_set_report_baud(bool on);
 /* The simulated plant's physics to the re-executed image (hs_plant_keep.c). */
 void hs_plant_prepare_exec(void);
 /* --scenario FILE (hs_scenario.c); false, with the reason on stderr, if the

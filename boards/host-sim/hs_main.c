@@ -1,6 +1,7 @@
 /* host-sim: the firmware as a native Linux program (software in the loop).
  *   km-servo-host-sim --listen 127.0.0.1:7001 --flash servo1.flash
  *   km-servo-host-sim --pty --flash servo1.flash [--gap-floor-us 0] [--slot-floor-us N]
+ *                     [--baud N] [--report-baud]
  * The bus is a TCP socket (one client at a time) or a pseudo-terminal, paced
  * at the servo's baud rate (hs_uart.c); the user-data flash is a file with
  * NOR rules; sensors read the simulated plant.
@@ -41,6 +42,10 @@
 void hs_system_set_argv(char **argv);
 void hs_board_set_flash(const km_flash_t *flash);
 
+/* The products' baud range (boards/sim-common/km_sim_product.c). */
+#define HS_BAUD_MIN 9600u
+#define HS_BAUD_MAX 1000000u
+
 static int prv_usage(const char *argv0)
 {
     fprintf(stderr,
@@ -58,8 +63,11 @@ static int prv_usage(const char *argv0)
             "                    T_MS KEY VALUE, keys supply_mv, ambient_dc (0.1 degC),\n"
             "                    load_mnm (mN*m), faults (1 pot, 2 motor, 4 NTC open),\n"
             "                    temp_dc (winding temperature now, 0.1 degC)\n"
-            "  --baud N          accepted, ignored: the line rate is the servo's register 0x10\n",
-            argv0, HS_GAP_FLOOR_DEFAULT_US);
+            "  --baud N          the master's line rate on the wire, %u..%u; the servo runs at\n"
+            "                    its stored 0x10 and hears garbage at another rate (default:\n"
+            "                    the master follows the servo)\n"
+            "  --report-baud     print \"baud N\" on stdout at every UART start (servo-bus)\n",
+            argv0, HS_GAP_FLOOR_DEFAULT_US, HS_BAUD_MIN, HS_BAUD_MAX);
     return 2;
 }
 
@@ -86,7 +94,15 @@ int main(int argc, char **argv)
         } else if (strcmp(argv[i], "--flash") == 0 && i + 1 < argc) {
             flash_path = argv[++i];
         } else if (strcmp(argv[i], "--baud") == 0 && i + 1 < argc) {
-            i++; /* the line rate comes from the stored 0x10, as on a real servo */
+            uint32_t baud;
+            if (!prv_parse_u32(argv[++i], &baud) || baud < HS_BAUD_MIN || baud > HS_BAUD_MAX) {
+                fprintf(stderr, "host-sim: --baud '%s': a baud rate is a whole number in %u..%u\n", argv[i],
+                        HS_BAUD_MIN, HS_BAUD_MAX);
+                return 2;
+            }
+            hs_uart_set_wire_baud(baud);
+        } else if (strcmp(argv[i], "--report-baud") == 0) {
+            hs_uart_set_report_baud(true);
         } else if (strcmp(argv[i], "--gap-floor-us") == 0 && i + 1 < argc) {
             uint32_t us;
             if (!prv_parse_u32(argv[++i], &us)) {

@@ -28,7 +28,16 @@
  * km_hal_uart_tx_busy() stays true until its last stop bit would have left
  * the wire (counted from when the answer was due), so the app paces answers
  * as a half-duplex servo must. Like a real half-duplex transceiver, the
- * servo does not hear its own TX. */
+ * servo does not hear its own TX.
+ *
+ * Baud: the UART runs at the servo's own baud (register 0x10, at init). With
+ * --baud N the wire's other end (the master) runs at N: bytes read from the
+ * socket are what this UART decodes from bytes sent at N, and answers reach
+ * the master as what a UART at N decodes from them (hs_wire.c), so a servo
+ * at another baud hears garbage and stays silent, as on a real wire. Without
+ * --baud the master follows the servo. --report-baud prints "baud N" on
+ * stdout at every UART start, for tools/servo-bus, which models the wire
+ * itself (docs/protocol-decisions.md "Baud on the emulated bus"). */
 #define _GNU_SOURCE /* posix_openpt, ptsname */
 #include <errno.h>
 #include <fcntl.h>
@@ -43,6 +52,7 @@
 #include <unistd.h>
 
 #include "hs_io.h"
+#include "hs_wire.h"
 #include "km_hal_time.h"
 #include "km_hal_uart.h"
 #include "km_rx_queue.h" /* KM_RX_QUEUE_SIZE: what the app can take between idles */
@@ -70,6 +80,24 @@ static bool s_tx_busy;                  /* what tx_busy() last told the app */
 static uint32_t s_gap_floor_us = HS_GAP_FLOOR_DEFAULT_US;
 
 static uint32_t s_slot_floor_us;
+static uint32_t s_wire_baud;   /* the master's rate; 0 = the servo's own */
+static uint32_t s_uart_baud = 115200u;
+static bool s_report_baud;
+
+void hs_uart_set_wire_baud(uint32_t baud)
+{
+    s_wire_baud = baud;
+}
+
+void hs_uart_set_report_baud(bool on)
+{
+    s_report_baud = on;
+}
+
+static uint32_t prv_wire_baud(void)
+{
+    return s_wire_baud != 0u ? s_wire_baud : s_uart_baud;
+}
 
 void hs_uart_set_gap_floor_us(uint32_t us)
 {
@@ -207,20 +235,28 @@ void hs_uart_on_readable(void)
     if (room == 0u) {
         return;
     }
-    uint8_t buf[HS_RX_BUF];
-    const ssize_t n = read(fd, buf, room);
-    if (n <= 0) {
+    uint8_t wire[HS_RX_BUF];
+    uint8_t buf[HS_RX_BUF * HS_WIRE_GROWTH];
+    const ssize_t got = read(fd, wire, room);
+    if (got <= 0) {
         if (s_conn_fd >= 0) { /* client left: wait for the next one */
             close(s_conn_fd);
             s_conn_fd = -1;
         }
         return;
     }
+    /* What this UART decodes from the master's bytes; more than `room` only
+     * when a slow master's bytes decode into several each: the rest is lost
+     * as an overrun would lose it. */
+    size_t n = hs_wire_garble(wire, (size_t)got, prv_wire_baud(), s_uart_baud, buf, sizeof buf);
+    if (n > room) {
+        n = room;
+    }
     /* The first byte reaches the end of the wire now, unless earlier bytes
      * still occupy it; each next one a byte time later. */
     const uint64_t now = hs_time_real_ns();
     uint64_t due = s_wire_free_ns > now ? s_wire_free_ns : now;
-    for (ssize_t i = 0; i < n; i++) {
+    for (size_t i = 0; i < n; i++) {
         const uint32_t slot = s_rx_head & (HS_RX_BUF - 1u);
         s_rx_byte[slot] = buf[i];
         s_rx_due_ns[slot] = due;
@@ -314,6 +350,11 @@ bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx)
     /* The line rate is the servo's own baud register (0x10), as on a real
      * servo; rounding a byte time to the nanosecond is 2 µs over 4 KiB. */
     s_byte_ns = (HS_BITS_PER_BYTE * 1000000000ull + baud / 2u) / baud;
+    s_uart_baud = baud;
+    if (s_report_baud) {
+        printf("baud %u\n", (unsigned)baud);
+        fflush(stdout);
+    }
     s_rx = handler;
     s_rx_ctx = ctx;
     return true;
@@ -349,7 +390,14 @@ bool km_hal_uart_send(const uint8_t *data, uint16_t len)
         return true; /* nobody listening: the bytes go nowhere, as on an open wire */
     }
     /* Written whole at once, so the client sees the answer start on time and
-     * complete; the line rate is modelled by tx_busy, not by trickling. */
+     * complete; the line rate is modelled by tx_busy, not by trickling. The
+     * master hears it at its own rate. */
+    uint8_t heard[512u * HS_WIRE_GROWTH];
+    if (len > 512u) {
+        len = 512u; /* longer than any answer of the protocol */
+    }
+    len = (uint16_t)hs_wire_garble(data, len, s_uart_baud, prv_wire_baud(), heard, sizeof heard);
+    data = heard;
     size_t off = 0;
     while (off < len) {
         const ssize_t n = write(fd, data + off, len - off);

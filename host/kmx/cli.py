@@ -1,7 +1,7 @@
 """The `kmx` command: find servos on a bus and read and set their registers
 by name, with units (names, units and ranges from docs/registers.json).
 
-  kmx [--bus SPEC] scan                 every servo: ID, baud, model, firmware, status
+  kmx [--bus SPEC] scan [--all-bauds]   every servo: ID, baud, model, firmware, status
   kmx [--bus SPEC] ping ID
   kmx [--bus SPEC] get ID NAME...       e.g. kmx get 1 position voltage
   kmx [--bus SPEC] set ID NAME VALUE... e.g. kmx set 1 move_time 45 500
@@ -10,11 +10,15 @@ by name, with units (names, units and ranges from docs/registers.json).
   kmx [--bus SPEC] move ID ANGLE [--time MS | --speed DPS] [--wait]
   kmx [--bus SPEC] monitor ID... [--interval MS] [--count N] [--csv]
   kmx [--bus SPEC] set-id ID NEW        write the ID, restart, find it at NEW
+  kmx [--bus SPEC] set-baud ID BAUD     write the baud, restart, find it at BAUD
+  kmx [--bus SPEC] rescue               find servos of unknown ID and baud, say how to reach them
   kmx [--bus SPEC] fault-log ID         the last protection and self-test events
   kmx [--bus SPEC] plot ID --out F.png [--seconds S] [--step ANGLE [--time MS | --speed DPS]]
 
 SPEC: tcp:HOST:PORT (tools/servo-bus, host-sim), serial:/dev/ttyUSB0@115200,
-pty:/dev/pts/N; default $KMX_BUS, else tcp:127.0.0.1:7000. Failures print
+pty:/dev/pts/N, rfc2217:HOST:PORT@BAUD (tools/servo-bus as a serial port whose
+baud kmx can change: set-baud, scan --all-bauds, rescue); default $KMX_BUS,
+else tcp:127.0.0.1:7000. Failures print
 one line `kmx: ...` and exit 1 (2 for a bad command line), never a traceback.
 """
 
@@ -23,6 +27,7 @@ import os
 import sys
 import time
 
+from . import baud as kbaud
 from . import faultlog
 from . import frame as fr
 from . import plot
@@ -59,6 +64,13 @@ positive_ms = _positive("milliseconds")
 positive_s = _positive("seconds")
 
 
+def baud_arg(text):
+    try:
+        return kbaud.parse_baud(text)
+    except KmxError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
 def count(text):
     try:
         v = int(text)
@@ -77,6 +89,17 @@ def _table(rows, header):
 
 def cmd_scan(bus, regs, args):
     t0 = time.monotonic()
+    if args.all_bauds:
+        kbaud._need_baud_control(bus, "scan --all-bauds")
+        rows = kbaud.scan_all_bauds(bus, regs, args.scan_ms)
+        if not rows:
+            raise NoAnswer("no servo answered a super-ID ping at any of %s baud on %s"
+                           % (", ".join(map(str, kbaud.STANDARD_BAUDS)), bus.transport.spec))
+        print(_table(rows, ["ID", "baud", "model", "firmware", "status"]))
+        print("%d servo%s on %s at %d baud rates (super-ID scans, %.1f s)" % (
+            len(rows), "" if len(rows) == 1 else "s", bus.transport.spec, len(kbaud.STANDARD_BAUDS),
+            time.monotonic() - t0))
+        return 0
     window = bus.scan_window() if args.scan_ms is None else args.scan_ms / 1000.0
     found = bus.scan(timeout=window)
     if not found:
@@ -336,6 +359,10 @@ def build_parser():
     p.add_argument("--scan-ms", type=positive_ms, metavar="MS",
                    help="listen this long for answers (default: until ID 250's slot has passed at the "
                         "bus baud, 270 ms at 115200)")
+    p.add_argument("--all-bauds", action="store_true",
+                   help="scan at every standard baud (%s) in turn; the ID and baud columns say "
+                        "where each servo answered (needs a serial or rfc2217: bus)"
+                        % ", ".join(map(str, kbaud.STANDARD_BAUDS)))
     p.set_defaults(run=cmd_scan)
 
     p = sub.add_parser("ping", help="ping one servo: its status in words",
@@ -409,6 +436,26 @@ def build_parser():
     p.add_argument("id", type=servo_id, help="the servo's ID now")
     p.add_argument("new", type=servo_id, help="its new ID, 0..250")
     p.set_defaults(run=cmd_set_id)
+
+    p = sub.add_parser("set-baud", help="change a servo's baud, restart it and find it at the new baud",
+                       description="Writes the baud register 0x10 (baud / 100), restarts the servo, "
+                                   "switches the master to BAUD and pings the servo there; on failure "
+                                   "it switches back and says whether the servo still answers at the "
+                                   "old baud. Needs a bus whose baud kmx can change: serial:DEV@BAUD or "
+                                   "rfc2217:HOST:PORT@BAUD (tools/servo-bus).")
+    p.add_argument("id", type=servo_id, help="the servo's ID")
+    p.add_argument("baud", type=baud_arg, help="its new baud, %d..%d, a multiple of 100"
+                   % (kbaud.BAUD_MIN, kbaud.BAUD_MAX))
+    p.set_defaults(run=kbaud.cmd_set_baud)
+
+    p = sub.add_parser("rescue", help="find servos whose ID or baud is unknown; print how to reach them",
+                       description="Pings the super ID at every standard baud (%s): every servo answers "
+                                   "whatever its ID. Prints each one found with its ID and baud and the "
+                                   "kmx command lines that reach it and bring it back to 115200. Needs a "
+                                   "serial or rfc2217: bus." % ", ".join(map(str, kbaud.STANDARD_BAUDS)))
+    p.add_argument("--scan-ms", type=positive_ms, metavar="MS",
+                   help="listen this long at each baud (default: until ID 250's slot has passed)")
+    p.set_defaults(run=kbaud.cmd_rescue)
 
     p = sub.add_parser("fault-log", help="the last protection and self-test events, newest first",
                        description="Reads the fault log of one servo (our extension command 0x7F, "

@@ -3,6 +3,9 @@
     tcp:HOST:PORT              the emulated bus (tools/servo-bus, host-sim --listen)
     serial:/dev/ttyUSB0@115200 a real serial port (baud optional, default 115200)
     pty:/dev/pts/N             a pseudo-terminal (host-sim --pty)
+    rfc2217:HOST:PORT@BAUD     the emulated bus as a serial port over RFC 2217
+                               (tools/servo-bus): the baud is the master's
+                               line rate on the wire, set_baud() changes it
 
 Serial ports and ptys go through pyserial (Debian: python3-serial); no
 termios code here. Every failure is a KmxError subclass with a message that
@@ -15,13 +18,16 @@ import select
 import socket
 import stat
 import termios
+import warnings
 
 from .deps import import_debian
 from .errors import (ConnectionRefused, NoSuchDevice, NotASerialPort,
                      PortBusy, SpecError, TransportError)
 
 DEFAULT_BAUD = 115200
-SPEC_FORMS = "tcp:HOST:PORT, serial:/dev/ttyUSB0@115200 or pty:/dev/pts/N"
+BUSY_PREFIX = b"servo-bus: busy"  # tools/servo-bus BUSY_LINE
+SPEC_FORMS = "tcp:HOST:PORT, serial:/dev/ttyUSB0@115200, pty:/dev/pts/N or rfc2217:HOST:PORT@115200"
+BAUD_MIN, BAUD_MAX = 9600, 1000000  # what the servos can run at (0x10 x 100)
 
 
 def parse_spec(spec):
@@ -30,6 +36,14 @@ def parse_spec(spec):
     if not isinstance(spec, str) or ":" not in spec:
         raise SpecError("bus '%s': expected %s" % (spec, SPEC_FORMS))
     kind, rest = spec.split(":", 1)
+    if kind == "rfc2217":
+        addr, sep, baud = rest.partition("@")
+        host, hsep, port = addr.rpartition(":")
+        if not hsep or not host or not port.isdigit() or not 1 <= int(port) <= 65535:
+            raise SpecError("bus '%s': rfc2217 wants HOST:PORT[@BAUD], e.g. rfc2217:127.0.0.1:7000@115200" % spec)
+        if sep and (not baud.isdigit() or int(baud) <= 0):
+            raise SpecError("bus '%s': the baud after @ must be a positive number" % spec)
+        return "rfc2217", {"host": host, "port": int(port), "baud": int(baud) if sep else DEFAULT_BAUD}
     if kind == "tcp":
         host, sep, port = rest.rpartition(":")
         if not sep or not host:
@@ -90,6 +104,14 @@ class TcpTransport(Transport):
             raise TransportError("%s: cannot connect: %s" % (self.spec, e.strerror or e)) from None
         self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.sock.setblocking(False)
+        self._first = True  # servo-bus tells a second client it is busy in the first bytes
+
+    def _check_busy(self, data):
+        if self._first and data:
+            self._first = False
+            if data.startswith(BUSY_PREFIX):
+                raise PortBusy("%s: the bus is busy: another client holds it (servo-bus takes one "
+                               "client at a time; close the other one)" % self.spec)
 
     def write(self, data):
         try:
@@ -110,6 +132,7 @@ class TcpTransport(Transport):
             return b""
         except OSError as e:
             raise TransportError("%s: read failed: %s" % (self.spec, e.strerror or e)) from None
+        self._check_busy(data)
         if not data:
             raise TransportError("%s: the bus closed the connection" % self.spec)
         return data
@@ -117,11 +140,13 @@ class TcpTransport(Transport):
     def flush_input(self):
         while True:
             try:
-                if not self.sock.recv(4096):
-                    return
+                data = self.sock.recv(4096)
             except (BlockingIOError, InterruptedError):
                 return
             except OSError:
+                return
+            self._check_busy(data)
+            if not data:
                 return
 
     def close(self):
@@ -167,6 +192,14 @@ class SerialTransport(Transport):
         # other side closed answers tcflush with termios.error EIO)
         self._errors = (serial.SerialException, OSError, termios.error, ValueError)
 
+    def set_baud(self, baud):
+        """The port's line rate from now on."""
+        try:
+            self.port.baudrate = baud
+        except self._errors as e:
+            raise TransportError("%s: cannot set %d baud: %s" % (self.spec, baud, e)) from None
+        self.baud = baud
+
     def write(self, data):
         try:
             self.port.write(bytes(data))
@@ -197,6 +230,83 @@ class SerialTransport(Transport):
             self.port = None
 
 
+class Rfc2217Transport(Transport):
+    """The emulated bus as a serial port (RFC 2217, pyserial's client): the
+    master's baud on the wire is this port's (tools/servo-bus "Baud")."""
+
+    def __init__(self, host, port, baud=DEFAULT_BAUD, spec=None):
+        self.spec = spec or "rfc2217:%s:%d@%d" % (host, port, baud)
+        self.baud = baud
+        serial = import_serial()
+        self._serial_exc = serial.SerialException
+        try:
+            with warnings.catch_warnings():  # pyserial 3.5's thread setDaemon()/setName() on Python >= 3.10
+                warnings.simplefilter("ignore", DeprecationWarning)
+                self.port = serial.serial_for_url("rfc2217://%s:%d?ign_set_control&timeout=2" % (host, port),
+                                                  baudrate=baud, timeout=0)
+        except (serial.SerialException, ValueError) as e:
+            text = str(e)
+            if "Connection refused" in text:
+                raise ConnectionRefused("%s: connection refused (is the bus running? start it with "
+                                        "tools/servo-bus)" % self.spec) from None
+            if "parameter change" in text or "rejected value" in text:
+                raise TransportError("%s: the bus refused %d baud (the servos run at %d..%d)"
+                                     % (self.spec, baud, BAUD_MIN, BAUD_MAX)) from None
+            if "RFC2217" in text or "BINARY" in text:
+                raise TransportError("%s: the other end does not speak RFC 2217 (host-sim --listen "
+                                     "does not: use tcp:HOST:PORT)" % self.spec) from None
+            raise TransportError("%s: cannot open: %s" % (self.spec, text)) from None
+        except OSError as e:
+            raise TransportError("%s: cannot open: %s" % (self.spec, e)) from None
+        self._errors = (serial.SerialException, OSError, ValueError)
+
+    def set_baud(self, baud):
+        """The master's line rate from now on (a serial adapter's baud)."""
+        try:
+            self.port.baudrate = baud
+        except self._errors as e:
+            if "parameter change" in str(e) or "rejected value" in str(e):
+                raise TransportError("%s: the bus refused %d baud (the servos run at %d..%d)"
+                                     % (self.spec, baud, BAUD_MIN, BAUD_MAX)) from None
+            raise TransportError("%s: cannot set %d baud: %s" % (self.spec, baud, e)) from None
+        self.baud = baud
+
+    def write(self, data):
+        try:
+            self.port.write(bytes(data))
+        except self._errors as e:
+            raise TransportError("%s: write failed (bus gone?): %s" % (self.spec, e)) from None
+
+    def read(self, timeout):
+        try:
+            self.port.timeout = max(0.0, timeout)
+            first = self.port.read(1)
+            if not first:
+                if not self.port.is_open or self.port._thread is None or not self.port._thread.is_alive():
+                    raise TransportError("%s: the bus closed the connection" % self.spec)
+                return b""
+            self.port.timeout = 0
+            return first + self.port.read(max(0, self.port.in_waiting))
+        except self._errors as e:
+            raise TransportError("%s: read failed (bus gone?): %s" % (self.spec, e)) from None
+
+    def flush_input(self):
+        try:
+            self.port.timeout = 0
+            while self.port.read(4096):
+                pass
+        except self._errors as e:
+            raise TransportError("%s: the bus is gone: %s" % (self.spec, e)) from None
+
+    def close(self):
+        if self.port is not None:
+            try:
+                self.port.close()
+            except self._errors:
+                pass
+            self.port = None
+
+
 def open_transport(spec):
     """Opens the transport a spec string names (see the module doc)."""
     kind, p = parse_spec(spec)
@@ -204,4 +314,6 @@ def open_transport(spec):
         return TcpTransport(p["host"], p["port"], spec)
     if kind == "serial":
         return SerialTransport(p["path"], p["baud"], spec)
+    if kind == "rfc2217":
+        return Rfc2217Transport(p["host"], p["port"], p["baud"], spec)
     return SerialTransport(p["path"], DEFAULT_BAUD, spec)

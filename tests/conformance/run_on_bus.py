@@ -5,7 +5,8 @@
                   [--slow-baud N --slow NAME...] [--] SUITE-ARGS...
 
 Starts tools/servo-bus on a free port (--port 0: it prints the port in its
-"ready" line), runs conformance.py --bus tcp:127.0.0.1:PORT with the same
+"ready" line), runs conformance.py --bus rfc2217:127.0.0.1:PORT@BAUD (the
+hub as a serial port whose baud the suite sets and changes) with the same
 --ids and SUITE-ARGS, and always stops the bus (SIGTERM, then SIGKILL),
 also when the suite fails, times out or this wrapper is interrupted.
 Exit status: the suite's, or 1 when the bus does not come up.
@@ -38,14 +39,18 @@ sys.path.insert(0, HERE)
 import wire as W  # noqa: E402
 
 
-def switch_baud(port, ids, baud):
-    t = W.Wire("tcp:127.0.0.1:%d" % port)
+def switch_baud(port, ids, baud, old):
+    """Servos and master from `old` to `baud` (the hub models the line
+    rate: tools/servo-bus "Baud"), over RFC 2217 as over a serial port."""
+    t = W.Wire("rfc2217:127.0.0.1:%d@%d" % (port, old))
     try:
         kmbus = W.fr
         t.send(kmbus.write(0xFE, 0x10, (baud // 100).to_bytes(2, "little")))
         time.sleep(0.3)
         t.send(kmbus.write(0xFE, 0x02, bytes([0xE1, 0xE2, 0xE3, 0xE4])))
-        time.sleep(0.3)
+        time.sleep(0.05)
+        t.set_baud(baud)
+        time.sleep(0.25)
         for i in ids:
             end = time.monotonic() + 20
             while not t.transact(kmbus.ping(i), 1, 0.3):
@@ -92,12 +97,14 @@ def main():
         if a.slow_baud and a.slow:
             passes.append((a.slow_baud, suite + sum((["--only", p] for p in a.slow), [])))
         totals = [0, 0, 0]
+        now = 115200
         for baud, args in passes:
-            if baud:
-                switch_baud(port, ids, baud)
+            if baud and baud != now:
+                switch_baud(port, ids, baud, now)
+                now = baud
                 print("# bus: servos switched to %d baud" % baud, flush=True)
             out = subprocess.run([sys.executable, os.path.join(HERE, "conformance.py"),
-                                  "--bus", "tcp:127.0.0.1:%d@%d" % (port, baud or 115200),
+                                  "--bus", "rfc2217:127.0.0.1:%d@%d" % (port, now),
                                   "--ids", a.ids] + args, stdout=subprocess.PIPE, text=True)
             sys.stdout.write(out.stdout)
             sys.stdout.flush()

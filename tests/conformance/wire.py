@@ -7,7 +7,9 @@ this file adds what a conformance master needs beyond kmx.Bus:
     earlier one (kept in Wire.stale, a failure), echoes of our own frames
     on a half-duplex wire are dropped, bad frames are counted;
   - tcp:HOST:PORT@BAUD keeps the master to that line rate on an emulated
-    bus (Paced below), which TCP alone does not.
+    bus (Paced below), which TCP alone does not; rfc2217:HOST:PORT@BAUD
+    (tools/servo-bus as a serial port) also sets the master's baud on the
+    emulated wire, and set_baud() changes it, as on a serial bus.
 """
 import os
 import sys
@@ -31,6 +33,10 @@ class Paced:
         self.byte_s = 10.0 / baud
         self.free_at = 0.0  # monotonic time the wire is free
 
+    def set_baud(self, baud):
+        self.inner.set_baud(baud)
+        self.byte_s = 10.0 / baud
+
     def _busy(self, n):
         self.free_at = max(self.free_at, time.monotonic()) + n * self.byte_s
 
@@ -53,14 +59,16 @@ class Paced:
 
 def open_bus(spec):
     """(transport, kind, can_set_baud) for tcp:HOST:PORT[@BAUD],
-    serial:DEV[@BAUD] or pty:/dev/pts/N."""
+    rfc2217:HOST:PORT[@BAUD], serial:DEV[@BAUD] or pty:/dev/pts/N."""
     if spec.startswith("tcp:") and "@" in spec:
         base, _, baud = spec.partition("@")
         kt.parse_spec(base)
         if not baud.isdigit() or int(baud) <= 0:
             raise SystemExit("--bus %s: the baud after @ must be a positive number" % spec)
         return Paced(kt.open_transport(base), int(baud)), "tcp", False
-    kind, _ = kt.parse_spec(spec)
+    kind, p = kt.parse_spec(spec)
+    if kind == "rfc2217":
+        return Paced(kt.open_transport(spec), p["baud"]), kind, True
     # A pty has no line rate: a baud set on it changes nothing on the wire.
     return kt.open_transport(spec), kind, kind == "serial"
 
@@ -121,7 +129,7 @@ class Wire:
         return self.collect(None, 10.0, quiet)
 
     def set_baud(self, baud):
-        self.t.port.baudrate = baud  # kmx's SerialTransport: a pyserial port
+        self.t.set_baud(baud)  # kmx's SerialTransport, or Paced over RFC 2217
 
     def close(self):
         self.t.close()

@@ -2,7 +2,7 @@
 """A stand-in for the host-sim servo program, for testing tools/servo-bus
 without QEMU or the firmware. It speaks the host-sim command-line contract:
 
-    fake_servo.py --listen 127.0.0.1:PORT --flash FILE [--baud N]
+    fake_servo.py --listen 127.0.0.1:PORT --flash FILE [--baud N] [--report-baud]
 
 listens on PORT for one bus connection at a time, keeps its ID in FILE
 (blank or missing file = fresh servo = ID 0), and answers per PROTOCOL.md
@@ -89,6 +89,7 @@ def main():
     ap.add_argument("--listen", required=True)
     ap.add_argument("--flash", required=True)
     ap.add_argument("--baud", type=int, default=115200)
+    ap.add_argument("--report-baud", action="store_true")  # servo-bus: "baud N" on stdout
     args = ap.parse_args()
     host, port = args.listen.rsplit(":", 1)
     servo = FakeServo(args.flash)
@@ -97,6 +98,8 @@ def main():
     srv.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
     srv.bind((host, int(port)))
     srv.listen(1)
+    if args.report_baud:
+        print("baud %d" % args.baud, flush=True)
     rx_log = None
     if servo.log_dir:
         rx_log = open(os.path.join(servo.log_dir, "rx-%d.bin" % os.getpid()), "ab", buffering=0)

@@ -268,7 +268,7 @@ class TransportSpecs(unittest.TestCase):
         self.assertEqual(tp.parse_spec("pty:/dev/pts/4"), ("pty", {"path": "/dev/pts/4"}))
 
     def test_bad_specs(self):
-        cases = [("localhost", "expected tcp:HOST:PORT, serial:/dev/ttyUSB0@115200 or pty:/dev/pts/N"),
+        cases = [("localhost", "expected tcp:HOST:PORT, serial:/dev/ttyUSB0@115200, pty:/dev/pts/N or rfc2217:HOST:PORT@115200"),
                  ("tcp:7000", "tcp wants HOST:PORT"),
                  ("tcp:127.0.0.1:", "port must be a number in 1..65535"),
                  ("tcp:127.0.0.1:99999", "port must be a number in 1..65535"),
@@ -329,9 +329,10 @@ class HostSim:
     """One real host-sim servo (the firmware as a native program) on a fresh
     flash file, over TCP (--listen) or a pseudo-terminal (--pty)."""
 
-    def __init__(self, pty=False):
+    def __init__(self, pty=False, extra=()):
         self.dir = tempfile.TemporaryDirectory()
-        argv = [host_sim_image(), "--flash", os.path.join(self.dir.name, "servo.flash"), "--gap-floor-us", "0"]
+        argv = [host_sim_image(), "--flash", os.path.join(self.dir.name, "servo.flash"), "--gap-floor-us", "0",
+                *extra]
         if pty:
             self.proc = subprocess.Popen(argv + ["--pty"], stdout=subprocess.PIPE, text=True)
             line = self.proc.stdout.readline().split()
@@ -506,17 +507,18 @@ class ServoBus:
     """Three real host-sim servos, IDs 1, 2, 3, on the emulated wire of
     tools/servo-bus (answers reach the master in wire order)."""
 
-    def __init__(self, ids=(1, 2, 3)):
+    def __init__(self, ids=(1, 2, 3), extra=()):
         host_sim_image()
         self.proc = subprocess.Popen(
             [sys.executable, os.path.join(REPO, "tools", "servo-bus"), "--ids", ",".join(map(str, ids)),
-             "--port", "0", "--backend", "host-sim", "--gap-floor-us", "0"],
+             "--port", "0", "--backend", "host-sim", "--gap-floor-us", "0", *extra],
             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
         line = self.proc.stdout.readline().split()
         if line[:1] != ["ready"]:
             self.close()
             raise AssertionError("servo-bus did not start: %r" % line)
         self.spec = "tcp:" + line[1]
+        self.rfc2217 = "rfc2217:%s@115200" % line[1]
 
     def close(self):
         self.proc.terminate()

@@ -22,7 +22,8 @@ from test_kmx import REPO, HostSim, ServoBus  # noqa: E402
 from kmx import cli, deps  # noqa: E402  (host/ is on sys.path through test_kmx)
 
 KMX = os.path.join(REPO, "tools", "kmx")
-SUBCOMMANDS = ("scan", "ping", "get", "set", "dump", "torque", "move", "monitor", "set-id", "fault-log", "plot")
+SUBCOMMANDS = ("scan", "ping", "get", "set", "dump", "torque", "move", "monitor", "set-id", "set-baud", "rescue",
+               "fault-log", "plot")
 
 
 class Result:
@@ -264,7 +265,7 @@ class KmxErrorsWithoutServo(unittest.TestCase):
         s.close()
         cases = [("tcp:127.0.0.1:%d" % port, "kmx: tcp:127.0.0.1:%d: connection refused" % port),
                  ("tcp:7000", "kmx: bus 'tcp:7000': tcp wants HOST:PORT"),
-                 ("com3", "kmx: bus 'com3': expected tcp:HOST:PORT, serial:/dev/ttyUSB0@115200 or pty:/dev/pts/N"),
+                 ("com3", "kmx: bus 'com3': expected tcp:HOST:PORT, serial:/dev/ttyUSB0@115200, pty:/dev/pts/N or rfc2217:HOST:PORT@115200"),
                  ("serial:/dev/ttyUSB97@115200", "kmx: serial:/dev/ttyUSB97@115200: no such device /dev/ttyUSB97"),
                  ("serial:/dev/null", "kmx: serial:/dev/null: /dev/null is not a serial port")]
         for bus, msg in cases:
