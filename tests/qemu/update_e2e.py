@@ -8,16 +8,19 @@ tools/servo-bus, then tools/servo-update:
      erased: they still run v1 (a BEGIN with the stm32g031 image);
   3. v2 to all three in one broadcast pass (figures printed);
   4. back to v1 with RESTARTS system resets (the standard restart frame,
-     broadcast) at random points of the pass; every servo answers a ping
-     after each, and the update completes.
+     broadcast) and RESETS real ones (system_reset on one servo's QEMU
+     monitor, inside a frame or the erase or program it causes) at random
+     points of the pass; every servo answers a ping after each, and the
+     update completes.
 Prints "all checks passed" at the end; exit 1 on any failure.
-    update_e2e.py [--restarts N] [--seed S] [--build-qemu DIR] [--build-stm32 DIR]
+    update_e2e.py [--restarts N] [--resets N] [--seed S] [--build-qemu DIR] [--build-stm32 DIR]
 """
 import argparse
 import os
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
@@ -28,7 +31,8 @@ from kmx import frame as fr  # noqa: E402
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--restarts", type=int, default=6)
+    ap.add_argument("--restarts", type=int, default=3)
+    ap.add_argument("--resets", type=int, default=4)
     ap.add_argument("--seed", type=int, default=3)
     ap.add_argument("--build-qemu", default=os.environ.get("KM_BUILD_QEMU", os.path.join(REPO, "build/qemu")))
     ap.add_argument("--build-stm32", default=os.path.join(REPO, "build/stm32g031"))
@@ -42,8 +46,10 @@ def main():
         if not os.path.isfile(f):
             print("missing %s: cmake --preset qemu && cmake --build --preset qemu" % f)
             return 1
+    mon = tempfile.TemporaryDirectory(prefix="update-e2e-")
     bus_proc = subprocess.Popen([os.path.join(REPO, "tools/servo-bus"), "--ids", "1,2,3", "--port", "0",
-                                 "--image", boot], stdout=subprocess.PIPE, text=True)
+                                 "--image", boot, "--monitor-dir", mon.name],
+                                stdout=subprocess.PIPE, text=True)
     failures = []
     try:
         line = bus_proc.stdout.readline().strip()
@@ -85,19 +91,22 @@ def main():
         if r.returncode != 0 or versions() != {1: 0x10100102, 2: 0x10100102, 3: 0x10100102}:
             failures.append("3: v2 not on all three")
 
-        r = subprocess.run(update + ["--restarts", str(a.restarts), "--seed", str(a.seed), v1],
+        r = subprocess.run(update + ["--restarts", str(a.restarts), "--seed", str(a.seed),
+                                     "--resets", str(a.resets), "--monitor-dir", mon.name, v1],
                            capture_output=True, text=True)
         print(r.stdout.strip())
         if r.returncode != 0 or versions() != {1: 0x10100100, 2: 0x10100100, 3: 0x10100100}:
-            failures.append("4: v1 with %d restarts did not complete" % a.restarts)
-        if "%d restarts injected, 0 times" % a.restarts not in r.stdout:
-            failures.append("4: not every restart injected, or a servo unreachable after one")
+            failures.append("4: v1 with %d restarts and %d resets did not complete"
+                            % (a.restarts, a.resets))
+        if "%d restarts injected, %d resets injected, 0 times" % (a.restarts, a.resets) not in r.stdout:
+            failures.append("4: not every restart or reset injected, or a servo unreachable after one")
     finally:
         bus_proc.send_signal(signal.SIGTERM)
         try:
             bus_proc.wait(10)
         except subprocess.TimeoutExpired:
             bus_proc.kill()
+        mon.cleanup()
     for f in failures:
         print("FAIL", f)
     if failures:
