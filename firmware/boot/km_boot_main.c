@@ -1,8 +1,9 @@
 /* The bootloader (docs/update.md §3): the first code after reset. Starts
  * the application if the boot check passes and no update was asked for;
  * otherwise stays in update mode and answers on the bus at the stored ID
- * and baud (user data readable) or ID 0 at 115200, through the protocol
- * parser and the update state machine. Portable: the board is behind
+ * and baud (user data readable) or ID 0 at 115200, through the frame
+ * decoder (km_boot_rx.c: the parser's frames in less code) and the update
+ * state machine. Portable: the board is behind
  * km_boot_board.h. */
 #include <stdbool.h>
 #include <stdint.h>
@@ -10,6 +11,7 @@
 #include "km_app_userdata.h"
 #include "km_boot_board.h"
 #include "km_boot_check.h"
+#include "km_boot_rx.h"
 #include "km_boot_serve.h"
 #include "km_parser.h"
 #include "km_store.h"
@@ -18,8 +20,7 @@
 #define PRV_ANSWER_DELAY_US 200u   /* the 0x12 default: the master turns its line around */
 
 static km_boot_serve_t s_serve;
-static km_parser_t s_parser;
-static km_frame_t s_frame;
+static km_boot_rx_t s_rx;
 static km_boot_reply_t s_reply;
 static km_store_t s_store;
 
@@ -44,13 +45,11 @@ static void prv_wait_us(uint32_t from, uint32_t us)
     }
 }
 
-static void prv_handle(void)
+static void prv_handle(const km_frame_view_t *v)
 {
-    const km_frame_view_t v = {s_frame.id, s_frame.cmd, s_frame.body_len, s_frame.body,
-                               s_frame.end_tick};
-    km_boot_serve(&s_serve, &v, &s_reply);
+    km_boot_serve(&s_serve, v, &s_reply);
     if (s_reply.len > 0u) {
-        prv_wait_us(s_frame.end_tick, PRV_ANSWER_DELAY_US);
+        prv_wait_us(v->end_tick, PRV_ANSWER_DELAY_US);
         km_bootb_uart_tx(s_reply.bytes, s_reply.len);
     }
     if (s_reply.action == KM_BOOT_ACT_RESTART) {
@@ -92,17 +91,14 @@ int main(void)
     if (gap < km_bootb_gap_floor_us()) {
         gap = km_bootb_gap_floor_us();
     }
-    km_parser_init(&s_parser, gap);
+    km_boot_rx_init(&s_rx, gap);
     for (;;) {
         uint8_t b;
-        unsigned ev;
-        if (km_bootb_uart_rx(&b)) {
-            ev = km_parser_feed(&s_parser, b, km_bootb_now_us(), &s_frame);
-        } else {
-            ev = km_parser_poll(&s_parser, km_bootb_now_us(), &s_frame);
-        }
-        if ((ev & KM_PARSE_FRAME) != 0u) {
-            prv_handle();
+        km_frame_view_t v;
+        const bool got = km_bootb_uart_rx(&b) ? km_boot_rx_feed(&s_rx, b, km_bootb_now_us(), &v)
+                                              : km_boot_rx_poll(&s_rx, km_bootb_now_us(), &v);
+        if (got) {
+            prv_handle(&v);
         }
     }
 }
