@@ -14,7 +14,7 @@
 #include "km_boot_rx.h"
 #include "km_boot_serve.h"
 #include "km_parser.h"
-#include "km_store.h"
+#include "km_store_peek.h"
 
 #define PRV_FALLBACK_BAUD 115200u
 #define PRV_ANSWER_DELAY_US 200u   /* the 0x12 default: the master turns its line around */
@@ -22,18 +22,16 @@
 static km_boot_serve_t s_serve;
 static km_boot_rx_t s_rx;
 static km_boot_reply_t s_reply;
-static km_store_t s_store;
 
-/* ID and baud from the user data, or the fallback (docs/update.md §3). */
+/* ID and baud from the user data (what a mount of a schema of 0x0F and
+ * 0x10 would load: km_store_peek), or the fallback (docs/update.md §3). */
 static void prv_address(uint8_t *id, uint32_t *baud)
 {
-    static const km_store_key_t k_keys[2] = {{0x0Fu, 0u}, {0x10u, PRV_FALLBACK_BAUD / 100u}};
-    static const km_store_schema_t k_schema = {k_keys, 2u, KM_USERDATA_SCHEMA_VERSION};
+    static const uint8_t k_keys[2] = {0x0Fu, 0x10u};
     uint32_t v[2] = {0u, PRV_FALLBACK_BAUD / 100u};
-    const km_store_mount_t m = km_store_mount(&s_store, km_bootb_store(), &k_schema, v);
     *id = 0u;
     *baud = PRV_FALLBACK_BAUD;
-    if (m == KM_STORE_MOUNT_LOADED || m == KM_STORE_MOUNT_MIGRATED) {
+    if (km_store_peek(km_bootb_store(), KM_USERDATA_SCHEMA_VERSION, k_keys, 2u, v)) {
         *id = v[0] <= KM_ID_MAX ? (uint8_t)v[0] : 0u;
         *baud = v[1] * 100u;
     }

@@ -1,0 +1,88 @@
+/* km_store_peek (km_store_peek.h): the mount's page choice and replay
+ * (km_store_mount.c prv_scan and the active-page rule), reads only, each
+ * record read once. A weak cell may read differently at each read, for
+ * the mount as here; what a valid record proves (docs/store.md) holds for
+ * any read of it, so both still land on an acknowledged state. */
+#include "km_store_peek.h"
+
+#include <string.h>
+
+#include "km_store.h"
+#include "km_store_record.h"
+
+#define PRV_MAX 4u
+
+/* Sets the value of `key` if it is one of keys[]. */
+static void prv_set(const uint8_t *keys, uint32_t n, uint32_t *v, uint8_t key, uint32_t value)
+{
+    for (uint32_t i = 0; i < n; i++) {
+        if (keys[i] == key) {
+            v[i] = value;
+        }
+    }
+}
+
+bool km_store_peek(const km_flash_t *f, uint16_t version, const uint8_t *keys, uint32_t n,
+                   uint32_t *values)
+{
+    uint8_t buf[KM_REC_MAX_BYTES];
+    uint8_t snap_keys[KM_STORE_MAX_KEYS];
+    uint32_t best[PRV_MAX];
+    uint32_t cand[PRV_MAX];
+    bool found = false;
+    bool same = false;
+    uint32_t best_gen = 0u;
+    if (n > PRV_MAX) {
+        return false;
+    }
+    memset(snap_keys, 0, sizeof snap_keys); /* filled below; said for -fanalyzer */
+    memset(best, 0, sizeof best);
+    for (uint32_t p = 0; p < f->page_count; p++) {
+        km_rec_t rec;
+        /* The mount keeps the first page of the highest generation. */
+        if (!km_rec_read(f, p, 0u, buf, &rec) || rec.type != KM_REC_SNAPSHOT ||
+            (found && rec.gen <= best_gen)) {
+            continue;
+        }
+        found = true;
+        best_gen = rec.gen;
+        same = rec.version == version; /* else the values mean something else */
+        if (!same) {
+            continue;
+        }
+        memcpy(cand, values, n * sizeof cand[0]);
+        const uint32_t snap_count = rec.count;
+        uint32_t at = 0u;
+        for (uint32_t i = 0; i < snap_count; i++) {
+            uint32_t v;
+            bool indexed;
+            km_rec_entry(&rec, &at, &snap_keys[i], &v, &indexed);
+            prv_set(keys, n, cand, snap_keys[i], v);
+        }
+        /* Deltas only after a K that reads programmed (docs/store.md). */
+        uint32_t off = rec.size;
+        if (!km_rec_cell_erased(f, p * f->page_size + off)) {
+            off += f->prog_size;
+            while (off < f->page_size && km_rec_read(f, p, off, buf, &rec) &&
+                   rec.type != KM_REC_SNAPSHOT) {
+                at = 0u;
+                for (uint32_t i = 0; i < rec.count; i++) {
+                    uint8_t id;
+                    uint32_t v;
+                    bool indexed;
+                    km_rec_entry(&rec, &at, &id, &v, &indexed);
+                    if (!indexed || id < snap_count) {
+                        prv_set(keys, n, cand, indexed ? snap_keys[id] : id, v);
+                    }
+                }
+                off += rec.size;
+            }
+        }
+        memcpy(best, cand, n * sizeof best[0]);
+    }
+    if (!found || !same) {
+        return false;
+    }
+    memcpy(values, best, n * sizeof best[0]);
+    return true;
+}
