@@ -5,7 +5,11 @@
 # against host-sim and the 3-servo bus, with tools/servo-session, about 14 s;
 # test_kmx_baud.py: the baud model (tools/kmwire.py, host-sim --baud,
 # servo-bus over RFC 2217) and kmx set-baud, scan --all-bauds, rescue on two
-# host-sim servos, about 23 s; all need the host-sim preset built).
+# host-sim servos, about 23 s; test_servo_bus_stop.py: Ctrl-C at random
+# moments of servo-bus's start-up, 20 runs on host-sim and 20 on QEMU (when
+# built) with no process left (tests/tools/ctrl_c_check.py, by PID), SIGKILL,
+# --flash-dir relaunch, one-line refusals, about 20 s; all need the host-sim
+# preset built). Whole py_tools run: about 70 s.
 # unittest exits non-zero when any test fails or errors, which fails the CTest test;
 # FAIL_REGULAR_EXPRESSION also catches a run that collected no tests at all.
 find_program(KM_PYTHON3 python3)

