@@ -118,3 +118,32 @@ class Lifecycle(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class OneLineMessages(unittest.TestCase):
+    """The launchers' own refusals and goodbyes: one line, no traceback."""
+
+    def test_servo_session_tcp_without_port(self):
+        r = subprocess.run([os.path.join(REPO, "tools", "servo-session"), "--tcp", "127.0.0.1"],
+                           capture_output=True, text=True, timeout=20)
+        self.assertEqual((r.returncode, r.stderr), (1, "servo-session: bus 'tcp:127.0.0.1': tcp wants HOST:PORT, "
+                                                       "e.g. tcp:127.0.0.1:7000\n"))
+
+    def test_servo_demo_bad_options(self):
+        demo = os.path.join(REPO, "tools", "servo-demo")
+        for argv, msg in ((["--backend", "qemuu"], "servo-demo: unknown backend 'qemuu': qemu or host-sim\n"),
+                          (["--port"], "servo-demo: --port needs a value (0: a free port)\n"),
+                          (["--port", "x7"], "servo-demo: --port 'x7' is not a port number (0: a free port)\n")):
+            r = subprocess.run([demo, *argv], capture_output=True, text=True, timeout=20)
+            self.assertEqual((r.returncode, r.stderr), (2, msg))
+
+    def test_servo_bus_ctrl_c_goodbye(self):
+        host_sim_image()
+        p = subprocess.Popen([sys.executable, SERVO_BUS, "--ids", "1", "--port", "0", "--backend", "host-sim"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        self.assertTrue(p.stdout.readline().startswith("ready "))
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=20)
+        self.assertEqual((p.returncode, out), (0, ""))
+        self.assertEqual(err.splitlines()[-1], "servo-bus: stopping")
+        self.assertNotIn("Traceback", err)
