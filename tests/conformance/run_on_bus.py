@@ -2,6 +2,7 @@
 """Run the conformance suite on an emulated bus (what CTest runs).
 
     run_on_bus.py --backend host-sim|qemu [--ids 1,2,3] [--bus-baud N]
+                  [--slot-timing auto|realtime|plain]
                   [--slow-baud N --slow NAME...] [--] SUITE-ARGS...
 
 Starts tools/servo-bus on a free port (--port 0: it prints the port in its
@@ -16,7 +17,14 @@ protocol (broadcast write 0x10, broadcast restart), as tests/bus/bus_check.py
 does for QEMU, whose emulated UART has no line rate but whose super-ID slots
 follow the servos' baud (docs/protocol-decisions.md "Super-ID answer slots").
 
---slow-baud N --slow NAME...: two passes on the same bus. The suite first
+--slot-timing: "realtime" runs the bus with servo-bus --realtime (hub and
+emulators under SCHED_FIFO) and the suite under SCHED_FIFO below them, so
+emulated super-ID and 0x82 answers keep the real slot rule at 115200
+(docs/protocol-decisions.md "Answer slots on emulated buses"); "auto" (the
+default) does so when the host allows SCHED_FIFO (root, or an rtprio
+limit), else "plain". --slow-baud applies only to a plain bus.
+
+--slow-baud N --slow NAME...: two passes on the same bus (plain bus only). The suite first
 runs without the checks NAME (exact, glob or prefix, as --only), then every
 servo is switched to N baud and the suite runs those checks alone. For the
 checks that need super-ID answers in slot order: an emulated servo starts
@@ -61,6 +69,16 @@ def switch_baud(port, ids, baud, old):
         t.close()
 
 
+def realtime_allowed():
+    """True when this host lets a process enter SCHED_FIFO."""
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(1))
+    except (PermissionError, OSError, AttributeError):
+        return False
+    os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+    return True
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--backend", required=True, choices=("host-sim", "qemu"))
@@ -69,10 +87,19 @@ def main():
     ap.add_argument("--gap-floor-us", type=int)
     ap.add_argument("--slow-baud", type=int)
     ap.add_argument("--slow", action="append", default=[])
+    ap.add_argument("--slot-timing", choices=("auto", "realtime", "plain"), default="auto")
     ap.add_argument("suite", nargs=argparse.REMAINDER)
     a = ap.parse_args()
     argv = [sys.executable, os.path.join(ROOT, "tools", "servo-bus"), "--ids", a.ids, "--port", "0",
             "--backend", a.backend, "--timeout", "30"]
+    realtime = a.slot_timing == "realtime" or (a.slot_timing == "auto" and realtime_allowed())
+    if realtime:
+        # Below the hub (20) and the servos (10); the suite inherits it.
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(5))
+        argv.append("--realtime")
+        a.slow_baud = None
+    print("# slot timing: %s" % ("SCHED_FIFO bus and suite, every check at the bus baud" if realtime
+                                 else "plain scheduling"), flush=True)
     if a.gap_floor_us is not None:
         argv += ["--gap-floor-us", str(a.gap_floor_us)]
     t0 = time.monotonic()
