@@ -2,6 +2,7 @@
  * write passes before anything changes (PROTOCOL.md §4: out of range or
  * wrong length = nothing changes, status bit 6). */
 #include "km_registers.h"
+#include "km_registers_range.h"
 
 const km_reg_t km_reg_table[KM_REG_COUNT] = {
 #define KM_REG(addr, ident, access, persisted, layout, def, lo, hi) \
@@ -52,24 +53,6 @@ uint32_t km_reg_default(km_reg_index_t reg, const km_product_t *p)
     const uint32_t v = prv_default_raw(reg, p);
     const uint8_t size = km_reg_fixed_size((km_layout_t)km_reg_table[reg].layout);
     return size > 0u && size < 4u ? v & ((1u << (8u * size)) - 1u) : v;
-}
-
-static void prv_range(km_reg_index_t reg, const km_product_t *p, int32_t *lo_out, int32_t *hi_out)
-{
-    (void)p;
-    switch (reg) {
-#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi) \
-    case KM_REG_##ident:                                            \
-        *lo_out = (int32_t)(lo);                                    \
-        *hi_out = (int32_t)(hi);                                    \
-        return;
-#include "km_registers.def"
-#undef KM_REG
-    default:
-        *lo_out = 0;
-        *hi_out = 0;
-        return;
-    }
 }
 
 uint8_t km_reg_fixed_size(km_layout_t layout)
@@ -126,7 +109,7 @@ bool km_reg_validate(km_reg_index_t reg, const km_product_t *p, const uint8_t *d
 {
     const km_layout_t layout = (km_layout_t)km_reg_table[reg].layout;
     int32_t lo, hi;
-    prv_range(reg, p, &lo, &hi);
+    km_reg_range(reg, p, &lo, &hi);
     int32_t first;
     switch (layout) {
     case KM_L_U8:

@@ -9,6 +9,7 @@
  * the servo. */
 #include <stdio.h>
 
+#include "km_registers_range.h"
 #include "regdoc.h"
 
 typedef struct {
@@ -38,24 +39,6 @@ static const layout_info_t s_layouts[] = {
 
 _Static_assert(sizeof s_layouts / sizeof s_layouts[0] == (unsigned)KM_L_ADV + 1u,
                "every layout of km_registers.h needs a row here");
-
-static void range_of(unsigned reg, const km_product_t *p, long *lo_out, long *hi_out)
-{
-    (void)p;
-    switch ((km_reg_index_t)reg) {
-#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi) \
-    case KM_REG_##ident:                                            \
-        *lo_out = (long)(lo);                                       \
-        *hi_out = (long)(hi);                                       \
-        return;
-#include "km_registers.def"
-#undef KM_REG
-    default:
-        *lo_out = 0;
-        *hi_out = 0;
-        return;
-    }
-}
 
 static void print_string(const char *s)
 {
@@ -137,11 +120,11 @@ static void print_field(unsigned i, unsigned f, const layout_info_t *li)
     print_string(unit);
     printf(", \"scale\": %.10g", scale);
     const int writable = (r->access & KM_W) != 0;
-    long lo_a, hi_a, lo_b, hi_b;
-    range_of(i, &regdoc_probe_a, &lo_a, &hi_a);
-    range_of(i, &regdoc_probe_b, &lo_b, &hi_b);
+    int32_t lo_a, hi_a, lo_b, hi_b;
+    km_reg_range((km_reg_index_t)i, &regdoc_probe_a, &lo_a, &hi_a);
+    km_reg_range((km_reg_index_t)i, &regdoc_probe_b, &lo_b, &hi_b);
     if (writable && r->layout == KM_L_BITS8) {
-        printf(", \"mask\": %ld", hi_a);
+        printf(", \"mask\": %ld", (long)hi_a);
     } else if (writable && value_layout(r->layout) && (f == 0u || r->layout == KM_L_U8U8)) {
         printf(", \"min\": ");
         print_bound(lo_a, lo_b);
