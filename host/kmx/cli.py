@@ -24,7 +24,9 @@ one line `kmx: ...` and exit 1 (2 for a bad command line), never a traceback.
 
 import argparse
 import os
+import signal
 import sys
+import threading
 import time
 
 from . import baud as kbaud
@@ -344,7 +346,8 @@ def build_parser():
                                  epilog=__doc__.split("\n\n", 1)[1],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--bus", default=os.environ.get("KMX_BUS", DEFAULT_BUS),
-                    help="the bus: tcp:HOST:PORT, serial:DEVICE@BAUD or pty:PATH (default $KMX_BUS or %s)"
+                    help="the bus: tcp:HOST:PORT, serial:DEVICE@BAUD, pty:PATH, rfc2217:HOST:PORT@BAUD, "
+                         "rfc2217://HOST:PORT or socket://HOST:PORT (default $KMX_BUS or %s)"
                     % DEFAULT_BUS)
     ap.add_argument("--timeout", type=positive_ms, default=100, metavar="MS",
                     help="wait for one answer, ms (default 100)")
@@ -484,7 +487,51 @@ def build_parser():
     return ap
 
 
-def main(argv=None):
+class _CtrlC:
+    """SIGINT while kmx runs: the first Ctrl-C raises KeyboardInterrupt
+    where the command is (it then closes the bus and says `kmx:
+    interrupted`). While the bus closes, and for any later Ctrl-C, it says
+    that if not yet said and exits at once: an RFC 2217 close waits for
+    pyserial's reader thread and sleeps, and swallows an exception raised
+    inside it (a bare except), so raising there would lose the Ctrl-C."""
+
+    def __init__(self):
+        self.first = True
+        self.closing = False
+        self.said = False
+        self.previous = None
+
+    def say(self):
+        """`kmx: interrupted` on stderr, once."""
+        if not self.said:
+            self.said = True
+            print("kmx: interrupted", file=sys.stderr, flush=True)
+
+    def handle(self, signum, frame):
+        """The SIGINT handler (see the class)."""
+        if self.first and not self.closing:
+            self.first = False
+            raise KeyboardInterrupt
+        self.say()
+        try:
+            sys.stdout.flush()
+        finally:
+            os._exit(130)
+
+    def install(self):
+        """Puts handle() in place (signal handlers live in the main thread only)."""
+        if threading.current_thread() is threading.main_thread():
+            self.previous = signal.signal(signal.SIGINT, self.handle)
+
+    def uninstall(self):
+        """The handler from before main(); after an interrupt, none: the
+        process is on its way out with status 130 and has said so."""
+        if self.previous is not None:
+            signal.signal(signal.SIGINT, signal.SIG_IGN if self.said else self.previous)
+
+
+def run(argv, ctrl_c):
+    """Parses the command line, opens the bus, runs the command, closes the bus."""
     args = build_parser().parse_args(argv)
     bus = None
     try:
@@ -496,13 +543,29 @@ def main(argv=None):
         print("kmx: %s" % e, file=sys.stderr)
         return 1
     except KeyboardInterrupt:
-        print("kmx: interrupted", file=sys.stderr)
+        ctrl_c.say()
         return 130
     except BrokenPipeError:  # `kmx dump 1 | head`
         return 0
     finally:
         if bus is not None:
+            ctrl_c.closing = True
             bus.close()
+            ctrl_c.closing = False
+
+
+def main(argv=None):
+    """The kmx command: its exit status (0, 1 failure, 2 bad command line,
+    130 Ctrl-C, which anywhere prints one line and never a traceback)."""
+    ctrl_c = _CtrlC()
+    ctrl_c.install()
+    try:
+        return run(argv, ctrl_c)
+    except KeyboardInterrupt:  # in the close after the command, or before it
+        ctrl_c.say()
+        return 130
+    finally:
+        ctrl_c.uninstall()
 
 
 if __name__ == "__main__":

@@ -6,6 +6,8 @@
     rfc2217:HOST:PORT@BAUD     the emulated bus as a serial port over RFC 2217
                                (tools/servo-bus): the baud is the master's
                                line rate on the wire, set_baud() changes it
+    rfc2217://HOST:PORT[@BAUD] the same, written as pyserial's URL
+    socket://HOST:PORT         pyserial's URL of a raw TCP socket: tcp:HOST:PORT
 
 Serial ports and ptys go through pyserial (Debian: python3-serial); no
 termios code here. Every failure is a KmxError subclass with a message that
@@ -27,15 +29,35 @@ from .errors import (ConnectionRefused, NoSuchDevice, NotASerialPort,
 DEFAULT_BAUD = 115200
 BUSY_PREFIX = b"servo-bus: busy"  # tools/servo-bus BUSY_LINE
 SPEC_FORMS = "tcp:HOST:PORT, serial:/dev/ttyUSB0@115200, pty:/dev/pts/N or rfc2217:HOST:PORT@115200"
+URL_FORMS = "rfc2217://HOST:PORT[@BAUD] or socket://HOST:PORT"  # pyserial's URLs of the two network ports
+URL_KINDS = {"rfc2217": "rfc2217", "socket": "tcp", "tcp": "tcp"}  # scheme -> the kind it opens
 BAUD_MIN, BAUD_MAX = 9600, 1000000  # what the servos can run at (0x10 x 100)
+
+
+def _url_rest(spec, kind, rest):
+    """The spec of a pyserial URL (rfc2217://, socket://; tcp:// too) without
+    its "//", so it parses as the colon form; SpecError for the URL forms
+    kmx does not open (query options, other schemes)."""
+    if kind not in URL_KINDS:
+        raise SpecError("bus '%s': kmx opens no '%s://' URL; expected %s, or %s"
+                        % (spec, kind, SPEC_FORMS, URL_FORMS))
+    rest = rest[2:]
+    if "?" in rest or "/" in rest:
+        raise SpecError("bus '%s': no path or ?options after HOST:PORT (kmx sets the port's options "
+                        "itself); expected %s" % (spec, URL_FORMS))
+    return URL_KINDS[kind], rest
 
 
 def parse_spec(spec):
     """Splits a spec string into (kind, params): ("tcp", {"host", "port"}),
-    ("serial", {"path", "baud"}) or ("pty", {"path"}). Raises SpecError."""
+    ("serial", {"path", "baud"}), ("pty", {"path"}) or ("rfc2217", {"host",
+    "port", "baud"}); pyserial's URLs rfc2217:// and socket:// as their
+    colon forms. Raises SpecError."""
     if not isinstance(spec, str) or ":" not in spec:
         raise SpecError("bus '%s': expected %s" % (spec, SPEC_FORMS))
     kind, rest = spec.split(":", 1)
+    if rest.startswith("//"):
+        kind, rest = _url_rest(spec, kind, rest)
     if kind == "rfc2217":
         addr, sep, baud = rest.partition("@")
         host, hsep, port = addr.rpartition(":")
@@ -62,7 +84,7 @@ def parse_spec(spec):
         if not rest:
             raise SpecError("bus '%s': pty wants a path, e.g. pty:/dev/pts/3" % spec)
         return "pty", {"path": rest}
-    raise SpecError("bus '%s': unknown transport '%s'; expected %s" % (spec, kind, SPEC_FORMS))
+    raise SpecError("bus '%s': unknown transport '%s'; expected %s, or %s" % (spec, kind, SPEC_FORMS, URL_FORMS))
 
 
 def import_serial():
