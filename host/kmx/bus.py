@@ -3,16 +3,22 @@ answers it expects within a timeout, each stamped with its arrival time.
 Echoes of its own command frames (a half-duplex wire hears the master's
 bytes back) are parsed and dropped, never taken for noise or answers.
 Reads and pings retry; writes are sent once (a retried write may act twice).
+A write that changes an ID (0x0F, or 0x03 = 2, which sets it to 0) is
+refused with IdTaken when another servo answers on the new ID, or when two
+servos already share the old one (it would move both): two servos on one
+ID cannot be told apart by any frame afterwards (PROTOCOL.md §5.1 0x01).
+transact() and send_bytes() send raw frames and check nothing.
 
     bus = Bus(open_transport("tcp:127.0.0.1:7000"))
     bus.ping(1) -> status byte        bus.read(1, 0x46) -> value bytes
     bus.scan() -> [(id, status)]      bus.multi_read(0x46, [1, 2, 3]) -> {id: bytes}
+    bus.shared_ids([1, 2]) -> {id: how two servos on it showed}
 """
 
 import time
 
 from . import frame as fr
-from .errors import BadAnswer, NoAnswer
+from .errors import BadAnswer, IdTaken, NoAnswer
 from .transport import open_transport
 
 DEFAULT_TIMEOUT = 0.1      # one answer at any standard baud, with host slack
@@ -21,6 +27,7 @@ BOOT_TIMEOUT = 3.0         # a restarted servo answers pings again within this
 DEFAULT_DELAY_US = 200     # 0x12 response delay, a fresh servo's (§5.1)
 PING_ANSWER = 6            # bytes of a short response (§2)
 READ_ANSWER_MAX = 7 + 16   # the longest read answer (0x0A, 16 B of text)
+STATUS_READ_ANSWER = 7 + 2  # a read answer of 0x01: [status][random]
 
 
 def slot_us(answer_bytes, baud):
@@ -191,6 +198,7 @@ class Bus:
         otherwise returns None at once. A short response names no command:
         one that arrives late can be taken for the answer to the next
         question, so with response level 1 pass answer=True."""
+        self.check_id_change(dev_id, addr, value)
         data = fr.write(dev_id, addr, value)
         if not answer:
             self.transact(data)
@@ -242,7 +250,9 @@ class Bus:
                 if f.is_status]
 
     def sync_write(self, dev_id, addr, value):
-        """Sync write (0x04): buffered by the servo until execute()."""
+        """Sync write (0x04): buffered by the servo until execute(). An ID
+        change is checked as write() checks it."""
+        self.check_id_change(dev_id, addr, value)
         self.transact(fr.sync_write(dev_id, addr, value))
 
     def execute(self, dev_id=fr.ID_BROADCAST):
@@ -272,3 +282,100 @@ class Bus:
         if timeout is None:  # the last slot's answer, cut for the longest read, plus host slack
             timeout = slots_window_s(len(ids), READ_ANSWER_MAX, self.baud) + self.timeout
         return self.transact(fr.multi_read(addr, ids), len(ids), timeout)
+
+    # -- one servo per ID (§1, §5.1 0x01) ----------------------------------
+    def check_id_change(self, dev_id, addr, value):
+        """Raises IdTaken if writing value at addr to dev_id would leave two
+        servos on one ID: 0x0F = N (or 0x03 = 2, the ID to 0) while another
+        servo answers on N, or while two servos share dev_id; to broadcast,
+        while more than one servo answers a scan. Other writes pass."""
+        value = bytes(value)
+        if addr == fr.REG_ID and len(value) == 1:
+            new_id = value[0]
+        elif addr == fr.REG_USERDATA_RESET and value == b"\x02":
+            new_id = 0
+        else:
+            return
+        if new_id > fr.ID_MAX or dev_id == new_id or (dev_id > fr.ID_MAX and dev_id != fr.ID_BROADCAST):
+            return  # refused by the servo (bit 6), no change, or nobody acts on it (super ID, 251, 252, 255)
+        if dev_id == fr.ID_BROADCAST:
+            self._check_broadcast_id(new_id)
+            return
+        if self.answers_on(new_id):
+            raise IdTaken("ID %d is taken: another servo answers there" % new_id)
+        shared = self.shared_id(dev_id)
+        if shared:
+            raise IdTaken("two servos answer on ID %d, which gave %s: the write would move both to ID %d; "
+                          "disconnect all but one of them first" % (dev_id, shared, new_id))
+
+    def _check_broadcast_id(self, new_id):
+        """A broadcast write of an ID reaches every servo: one at most may hear it."""
+        found = self.scan()
+        if len(found) > 1:
+            raise IdTaken("a broadcast write would give all %d servos on the bus (IDs %s) ID %d; "
+                          "write to one servo's own ID" % (len(found), ", ".join(str(i) for i, _ in found), new_id))
+
+    def answers_on(self, dev_id):
+        """True if a servo answers a ping on dev_id (with the bus's retries).
+        A late answer from another ID (a second servo on an ID just asked)
+        does not count."""
+        for _ in range(1 + self.retries):
+            if any(f.id == dev_id for f in self.transact(fr.ping(dev_id), 0, self.timeout)):
+                return True
+        return False
+
+    def shared_id(self, dev_id, tries=3):
+        """How two or more servos answering on dev_id showed (words: "2
+        answers to one read of 0x01 (random bytes 0x23, 0x59)"), or None (one
+        servo, or none). PROTOCOL.md §5.1: 0x01 reads [status][random], the
+        random byte new in every answer, so two servos' answers to one read
+        differ: on the emulated bus both arrive, on a wire they collide and
+        fail the checksum. Reads 0x01 and listens the whole timeout; a read
+        that came back garbled with no clean answer is tried again, and
+        garbled every time counts as two servos."""
+        garbled = 0
+        for _ in range(tries):
+            bad_before = self.parser.bad_frames
+            answers = self._status_reads(self.transact(fr.read(dev_id, fr.REG_STATUS), 0, self.timeout), dev_id)
+            if len(answers) > 1:
+                return _twice(answers)
+            if self.parser.bad_frames == bad_before:
+                return None  # one clean answer, or nobody at all
+            garbled += 1
+        return "garbled answers to %d reads of 0x01 (answers colliding)" % garbled
+
+    @staticmethod
+    def _status_reads(frames, dev_id):
+        """The random bytes of the 0x01 read answers from dev_id among frames."""
+        return [f.params[1] for f in frames if f.id == dev_id and not f.is_status and f.cmd == fr.READ
+                and f.addr == fr.REG_STATUS and len(f.params) == 2]
+
+    def shared_ids(self, found):
+        """{id: how it showed} for every ID that more than one servo answers
+        on, among found (a scan's [(id, status)]): an ID in the scan twice,
+        or a super-ID read of 0x01 (§1: every servo answers in its slot)
+        answered twice on one ID; an ID whose 0x01 answer is missing or
+        came back garbled is asked on its own (shared_id)."""
+        ids = [i for i, _ in found]
+        out = {i: "%d answers to the super-ID ping" % ids.count(i) for i in set(ids) if ids.count(i) > 1}
+        if not ids:
+            return out
+        window = slots_window_s(max(ids) + 1, STATUS_READ_ANSWER, self.baud) + self.timeout
+        bad_before = self.parser.bad_frames
+        frames = self.transact(fr.read(fr.ID_SUPER, fr.REG_STATUS), 0, window)
+        garbled = self.parser.bad_frames > bad_before
+        for i in sorted(set(ids)):
+            answers = self._status_reads(frames, i)
+            if len(answers) > 1:
+                out[i] = _twice(answers)
+            elif i not in out and (garbled or not answers):
+                shared = self.shared_id(i)
+                if shared:
+                    out[i] = shared
+        return out
+
+
+def _twice(randoms):
+    """Words for the answers of servos sharing an ID, by their random bytes."""
+    return "%d answers to one read of 0x01 (random bytes %s)" % (
+        len(randoms), ", ".join("0x%02X" % r for r in randoms))

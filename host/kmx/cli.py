@@ -17,9 +17,17 @@ by name, with units (names, units and ranges from docs/registers.json).
 
 SPEC: tcp:HOST:PORT (tools/servo-bus, host-sim), serial:/dev/ttyUSB0@115200,
 pty:/dev/pts/N, rfc2217:HOST:PORT@BAUD (tools/servo-bus as a serial port whose
-baud kmx can change: set-baud, scan --all-bauds, rescue); default $KMX_BUS,
-else tcp:127.0.0.1:7000. Failures print
-one line `kmx: ...` and exit 1 (2 for a bad command line), never a traceback.
+baud kmx can change: set-baud, scan --all-bauds, rescue); pyserial's URLs
+rfc2217://HOST:PORT[@BAUD] and socket://HOST:PORT name the same two; default
+$KMX_BUS, else tcp:127.0.0.1:7000. Failures print one line `kmx: ...` and
+exit 1 (2 for a bad command line), Ctrl-C one line `kmx: interrupted` and
+exit 130, never a traceback.
+
+One servo per ID: a write that changes an ID (set ID id N, set-id, set ID
+userdata_reset 2) is refused when another servo answers on the new ID or
+two servos share the old one; scan warns about an ID two servos answer on
+(PROTOCOL.md §5.1 0x01's random byte) and prints the command that separates
+them once one of them is alone on the bus.
 """
 
 import argparse
@@ -118,11 +126,26 @@ def cmd_scan(bus, regs, args):
         row.append(", ".join(fr.status_words(status)))
         rows.append(row)
     print(_table(rows, ["ID", "baud", "model", "firmware", "status"]))
+    shared = bus.shared_ids(found)
     order = [i for i, _ in found]
     note = "" if order == sorted(order) else " (answers out of ID order: %s)" % order
     print("%d servo%s on %s (super-ID scan, %.0f ms)%s" % (
         len(found), "" if len(found) == 1 else "s", bus.transport.spec, 1000 * (time.monotonic() - t0), note))
+    for dev_id, how in sorted(shared.items()):
+        print(_shared_warning(bus, dev_id, how, order))
     return 0
+
+
+def _shared_warning(bus, dev_id, how, taken):
+    """What to do about two servos on one ID. No frame addresses one of
+    them alone (every frame to the ID reaches both, PROTOCOL.md §1), so the
+    way apart is physical: one of them alone on the bus gets another ID."""
+    free = next(i for i in range(1, fr.ID_MAX + 1) if i not in taken)
+    return ("warning: ID %d gave %s: two servos share ID %d. No command reaches one of them alone "
+            "(every frame to ID %d reaches both), so: disconnect all but one of the servos on ID %d, run\n"
+            "  kmx --bus %s set-id %d %d\n"
+            "then reconnect the others (repeat while ID %d answers twice)."
+            % (dev_id, how, dev_id, dev_id, dev_id, bus.transport.spec, dev_id, free, dev_id))
 
 
 def cmd_ping(bus, regs, args):
@@ -152,14 +175,20 @@ def cmd_set(bus, regs, args):
     reg = regs.map.find(args.name)
     data = reg.encode(args.value if len(args.value) > 1 else args.value[0])
     bus.write(args.id, reg.address, data)
-    # §3: the new ID applies right after the write; §4: bit 6 = the write
-    # was refused, bit 5 = not supported
-    now_id = data[0] if reg.address == fr.REG_ID else args.id
+    # §3: the new ID applies right after the write (a 0x03 level-2 reset's ID
+    # 0 too, docs/protocol-decisions.md); §4: bit 6 = the write was refused,
+    # bit 5 = not supported
+    now_id = args.id
+    if reg.address == fr.REG_ID:
+        now_id = data[0]
+    elif reg.address == fr.REG_USERDATA_RESET and data == b"\x02":
+        now_id = 0
     try:
         status = bus.ping(now_id)
     except NoAnswer:
-        if reg.address == fr.REG_ID:
-            raise NoAnswer("wrote id = %d to ID %d, but nothing answers at ID %d" % (now_id, args.id, now_id)) from None
+        if now_id != args.id:
+            raise NoAnswer("wrote %s = %s to ID %d, but nothing answers at ID %d"
+                           % (reg.name, " ".join(args.value), args.id, now_id)) from None
         raise
     if status & 0x60:
         raise KmxError("ID %d refused %s (0x%02X) = %s: status 0x%02X (%s)" % (
@@ -171,7 +200,8 @@ def cmd_set(bus, regs, args):
               ("  (the servo answers at ID %d now)" % now_id if reg.address == fr.REG_ID else ""))
     else:
         print("%s (0x%02X) <- %s  [%s]" % (reg.name, reg.address, reg.decode(data) if reg.layout != "magic"
-                                           else data.hex(" ").upper(), data.hex(" ").upper()))
+                                           else data.hex(" ").upper(), data.hex(" ").upper()) +
+              ("  (the servo answers at ID %d now)" % now_id if now_id != args.id else ""))
     return 0
 
 
@@ -285,14 +315,7 @@ def cmd_set_id(bus, regs, args):
     if args.new == args.id:
         raise KmxError("ID %d already is %d" % (args.id, args.new))
     bus.ping(args.id)  # it must be there
-    try:
-        bus.ping(args.new)
-        taken = True
-    except NoAnswer:
-        taken = False
-    if taken:
-        raise KmxError("ID %d is taken: another servo answers there" % args.new)
-    bus.write(args.id, fr.REG_ID, bytes([args.new]))
+    bus.write(args.id, fr.REG_ID, bytes([args.new]))  # refused (IdTaken) if NEW is taken or ID shared
     bus.ping(args.new)  # §3: the new ID applies right after the write
     boot = bus.restart(args.new)  # and is stored: it survives the restart
     print("ID %d -> %d: answers at ID %d after a restart (%.0f ms)" % (args.id, args.new, args.new, 1000 * boot))
@@ -358,7 +381,10 @@ def build_parser():
 
     p = sub.add_parser("scan", help="find every servo (super-ID ping) with its baud, model, firmware, status",
                        description="Pings the super ID (0xFD): every servo answers in its own slot, in ID "
-                                   "order; then reads each one's baud, model and firmware.")
+                                   "order; then reads each one's baud, model and firmware, and reads 0x01 "
+                                   "with the super ID: an ID that answers twice (two random bytes), or "
+                                   "whose answers collide, is shared by two servos, and a warning says how "
+                                   "to separate them.")
     p.add_argument("--scan-ms", type=positive_ms, metavar="MS",
                    help="listen this long for answers (default: until ID 250's slot has passed at the "
                         "bus baud, 270 ms at 115200)")
@@ -434,8 +460,9 @@ def build_parser():
     p.set_defaults(run=cmd_monitor)
 
     p = sub.add_parser("set-id", help="change a servo's ID, restart it and find it at the new ID",
-                       description="Checks that NEW is free, writes the ID register 0x0F, restarts the "
-                                   "servo and pings it at NEW: the ID is stored user data.")
+                       description="Checks that NEW is free and that one servo only answers on ID, "
+                                   "writes the ID register 0x0F, restarts the servo and pings it at NEW: "
+                                   "the ID is stored user data.")
     p.add_argument("id", type=servo_id, help="the servo's ID now")
     p.add_argument("new", type=servo_id, help="its new ID, 0..250")
     p.set_defaults(run=cmd_set_id)

@@ -49,3 +49,8 @@ class RegisterError(KmxError):
 
 class RangeError(KmxError):
     """A value does not fit the register (type, range, field count): refused before sending."""
+
+
+class IdTaken(KmxError):
+    """A write that changes a servo's ID (0x0F, or a 0x03 level-2 reset)
+    would leave two servos on one ID: refused before anything is sent."""

@@ -31,6 +31,7 @@ MULTI_WRITE_ADDRESSES = (0x64, 0x65, 0x66, 0x68, 0x6E, 0x6F)  # §3: 0x83 only t
 # §5 registers the bus layer itself needs
 REG_STATUS = 0x01
 REG_RESTART = 0x02
+REG_USERDATA_RESET = 0x03  # value 2 resets everything, the ID to 0 at once (docs/protocol-decisions.md)
 REG_ID = 0x0F
 REG_BAUD = 0x10
 RESTART_MAGIC = b"\xE1\xE2\xE3\xE4"
