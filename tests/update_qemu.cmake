@@ -11,3 +11,14 @@ if(KM_PYTHON3_UPD)
   set_tests_properties(update_qemu_e2e PROPERTIES LABELS bus TIMEOUT 300 RUN_SERIAL TRUE
     PASS_REGULAR_EXPRESSION "all checks passed")
 endif()
+
+# servo-update stopped half way (issue 18 item 6): an absent ID refused with
+# both QEMU bootloader servos untouched, then Ctrl-C in the middle of the
+# blocks: the command it prints finishes the update (tests/tools/
+# servo_update_qemu.py: unittest, not in py_tools' discovery). About 15 s.
+if(KM_PYTHON3_UPD)
+  add_test(NAME update_qemu_interrupt
+    COMMAND ${KM_PYTHON3_UPD} ${CMAKE_SOURCE_DIR}/tests/tools/servo_update_qemu.py -v)
+  set_tests_properties(update_qemu_interrupt PROPERTIES LABELS bus TIMEOUT 300 RUN_SERIAL TRUE
+    FAIL_REGULAR_EXPRESSION "Ran 0 tests;FAILED")
+endif()

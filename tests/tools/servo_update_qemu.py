@@ -1,0 +1,119 @@
+#!/usr/bin/python3
+"""tools/servo-update on two QEMU servos that boot through the bootloader
+(km-servo-boot-qemu-microbit.elf: the bootloader with v1 in its factory
+slot; docs/update.md §6), issue 18 item 6:
+  - an ID that does not answer is refused before any servo is touched:
+    both servos still run v1 (they answer a super-ID ping, which a
+    bootloader never does, docs/update.md §3, and 0x0C is unchanged);
+  - Ctrl-C (SIGINT, as from a terminal) in the middle of the blocks: one
+    short message naming the servos left in their bootloaders and the
+    command that finishes the update, status 130, no traceback; the
+    servos are in their bootloaders indeed (no super-ID answer); that
+    command, run as printed, completes the update: both answer 0x0C =
+    v2 and a super-ID ping again.
+Not in tests/tools' discovery (no test_ prefix): it needs the qemu preset's
+images, and CTest runs it as update_qemu_interrupt (a missing image fails
+it with the command that builds it). About 30 s.
+    servo_update_qemu.py [-v]
+"""
+import os
+import re
+import select
+import shlex
+import signal
+import struct
+import subprocess
+import sys
+import time
+import unittest
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
+sys.path.insert(0, os.path.join(REPO, "host"))
+from kmx.bus import Bus  # noqa: E402
+
+BUILD = os.path.join(os.environ.get("KM_BUILD_QEMU") or os.path.join(REPO, "build", "qemu"),
+                     "boards", "qemu-microbit")
+BOOT = os.path.join(BUILD, "km-servo-boot-qemu-microbit.elf")
+V2 = os.path.join(BUILD, "km-servo-app-v2-qemu-microbit.kmfw")
+UPDATE = os.path.join(REPO, "tools", "servo-update")
+V1_0X0C, V2_0X0C = 0x10100100, 0x10100102  # bootloader v1.0, hardware 1.0, software 0x0100 / 0x0102
+
+
+def read_line(proc, seconds):
+    """One line of proc's stdout within seconds, or None."""
+    ready, _, _ = select.select([proc.stdout], [], [], seconds)
+    return proc.stdout.readline() if ready else None
+
+
+class InterruptedUpdate(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        for f in (BOOT, V2):
+            if not os.path.isfile(f):
+                raise AssertionError("missing %s: cmake --preset qemu && cmake --build --preset qemu" % f)
+        cls.bus_proc = subprocess.Popen([os.path.join(REPO, "tools", "servo-bus"), "--ids", "1,2", "--port", "0",
+                                         "--image", BOOT], stdout=subprocess.PIPE, text=True)
+        line = read_line(cls.bus_proc, 60) or ""
+        if not line.startswith("ready "):
+            cls.tearDownClass()
+            raise AssertionError("servo-bus did not start: %r" % line)
+        cls.spec = "tcp:" + line.split()[1]
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.bus_proc.send_signal(signal.SIGINT)
+        try:
+            cls.bus_proc.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            cls.bus_proc.kill()
+            cls.bus_proc.wait()
+        cls.bus_proc.stdout.close()
+
+    def servos(self):
+        """(IDs answering a super-ID ping, {ID: 0x0C}) of IDs 1 and 2."""
+        with Bus(self.spec, timeout=0.3) as bus:
+            scanned = sorted(i for i, _ in bus.scan())
+            return scanned, {i: struct.unpack("<I", bus.read(i, 0x0C))[0] for i in (1, 2)}
+
+    def test_1_absent_id_touches_nothing(self):
+        before = self.servos()
+        self.assertEqual(before, ([1, 2], {1: V1_0X0C, 2: V1_0X0C}))
+        r = subprocess.run([UPDATE, "--bus", self.spec, "--ids", "1,2,5", V2], capture_output=True, text=True,
+                           timeout=120)
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        self.assertEqual(r.stderr, "servo-update: refused, nothing sent to any servo: ID 5 does not answer on "
+                                   "%s (kmx --bus %s scan lists the IDs there)\n" % (self.spec, self.spec))
+        self.assertEqual(self.servos(), before)  # still the application, never the bootloader
+
+    def test_2_ctrl_c_then_the_printed_command_finishes(self):
+        p = subprocess.Popen([UPDATE, "--bus", self.spec, "--ids", "1,2", V2], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True, env=dict(os.environ, PYTHONUNBUFFERED="1"))
+        out = ""
+        while "BEGIN:" not in out:  # both erased: the blocks go out now
+            line = read_line(p, 60)
+            if not line:
+                p.kill()
+                self.fail("servo-update printed no BEGIN line:\n%s%s" % (out, p.communicate()[1]))
+            out += line
+        time.sleep(0.5)  # well inside the 238 blocks (4 s at 115200)
+        p.send_signal(signal.SIGINT)
+        rest, err = p.communicate(timeout=60)
+        self.assertNotIn("Traceback", err)
+        self.assertEqual(p.returncode, 130, out + rest + err)
+        lines = err.splitlines()
+        self.assertEqual(lines[0], "servo-update: interrupted: ID 1, 2 may be left in their bootloaders (no "
+                                   "application runs until the update completes); finish the update with:")
+        self.assertEqual(len(lines), 2, err)
+        command = shlex.split(lines[1])
+        self.assertEqual(command, [UPDATE, "--bus", self.spec, "--ids", "1,2", V2])
+        scanned, versions = self.servos()
+        self.assertEqual(scanned, [])  # bootloaders do not answer the super ID
+        r = subprocess.run(command, capture_output=True, text=True, timeout=180)
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertRegex(r.stdout, re.compile(r"^ID 1: 0x0C = 0x10100102 \(new image\)$", re.M))
+        self.assertRegex(r.stdout, re.compile(r"^ID 2: 0x0C = 0x10100102 \(new image\)$", re.M))
+        self.assertEqual(self.servos(), ([1, 2], {1: V2_0X0C, 2: V2_0X0C}))
+
+
+if __name__ == "__main__":
+    unittest.main()
