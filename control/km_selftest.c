@@ -1,5 +1,5 @@
-/* Power-on self-test and the run-time motor check (contract in
- * km_selftest.h). */
+/* Power-on self-test, the run-time sensor supervision and the motor check
+ * (contract in km_selftest.h). */
 #include "km_selftest.h"
 
 #include <string.h>
@@ -7,6 +7,8 @@
 enum { PRV_POS, PRV_TEMP, PRV_VOLT, PRV_CURR, PRV_N };
 
 static const uint8_t s_bit[PRV_N] = {KM_HW_POSITION, KM_HW_TEMPERATURE, KM_HW_VOLTAGE, KM_HW_CURRENT};
+/* The run-time checks' times, by index (position, temperature). */
+static const uint32_t s_run_us[2] = {KM_SELFTEST_POS_RUN_US, KM_SELFTEST_TEMP_RUN_US};
 
 static int32_t prv_abs(int32_t v)
 {
@@ -18,14 +20,26 @@ void km_selftest_init(km_selftest_t *t)
     memset(t, 0, sizeof *t);
 }
 
+/* A position reading the mechanics cannot give: an open or shorted wiper
+ * (potentiometer products; an encoder has no rail). */
+static bool prv_position_bad(const km_sensors_t *in, const km_control_params_t *p)
+{
+    return p->variant == KM_VARIANT_POTENTIOMETER &&
+           (in->position < p->pos_read_min || in->position > p->pos_read_max);
+}
+
+/* A temperature reading no servo has: an open or shorted NTC. */
+static bool prv_temperature_bad(const km_sensors_t *in)
+{
+    return in->temperature_c10 < KM_SELFTEST_NTC_OPEN_C10 || in->temperature_c10 > KM_SELFTEST_NTC_SHORT_C10;
+}
+
 static void prv_power_on_sample(km_selftest_t *t, const km_sensors_t *in, const km_control_params_t *p,
                                 bool bridge_free)
 {
     bool bad[PRV_N];
-    bad[PRV_POS] = p->variant == KM_VARIANT_POTENTIOMETER &&
-                   (in->position <= p->travel_min || in->position >= p->travel_max);
-    bad[PRV_TEMP] = in->temperature_c10 < KM_SELFTEST_NTC_OPEN_C10 ||
-                    in->temperature_c10 > KM_SELFTEST_NTC_SHORT_C10;
+    bad[PRV_POS] = prv_position_bad(in, p);
+    bad[PRV_TEMP] = prv_temperature_bad(in);
     bad[PRV_VOLT] = in->voltage_mv < KM_SELFTEST_SUPPLY_MIN_MV || in->voltage_mv > KM_SELFTEST_SUPPLY_MAX_MV;
     bad[PRV_CURR] = bridge_free && prv_abs(in->current_ma) > KM_SELFTEST_CURRENT_OFFSET_MA;
     if (bridge_free) {
@@ -47,12 +61,32 @@ static void prv_power_on_sample(km_selftest_t *t, const km_sensors_t *in, const 
     }
 }
 
+/* One run-time check's up/down timer: the fault once it reaches the
+ * check's time (km_selftest.h). */
+static void prv_run_check(km_selftest_t *t, unsigned i, bool bad, uint32_t dt_us)
+{
+    uint32_t timer = t->run_bad_us[i];
+    if (bad) {
+        timer += dt_us;
+        if (timer >= s_run_us[i]) {
+            timer = s_run_us[i];
+            t->faults |= s_bit[i];
+        }
+    } else {
+        timer = timer > dt_us ? timer - dt_us : 0u;
+    }
+    t->run_bad_us[i] = timer;
+}
+
 uint8_t km_selftest_step(km_selftest_t *t, const km_sensors_t *in, const km_control_params_t *p,
                          int32_t drive_pwm, bool bridge_free, uint32_t dt_us)
 {
     t->faults |= in->faults; /* what the hal's drivers flag, at any time */
     if (!km_selftest_done(t)) {
         prv_power_on_sample(t, in, p, bridge_free);
+    } else {
+        prv_run_check(t, PRV_POS, prv_position_bad(in, p), dt_us);
+        prv_run_check(t, PRV_TEMP, prv_temperature_bad(in), dt_us);
     }
     if (prv_abs(drive_pwm) >= KM_SELFTEST_MOTOR_PWM && prv_abs(in->current_ma) < KM_SELFTEST_MOTOR_MA) {
         t->motor_open_us += dt_us;

@@ -1,15 +1,20 @@
 /* Power-on self-test (PROTOCOL.md §5.2 0x35, status bit 4): sensor
  * plausibility over the first KM_SELFTEST_SAMPLES control ticks after
- * boot, with the bridge off; and one check that needs the motor driven,
- * made whenever it is (an open motor lead). Pure, fixed-point.
+ * boot, with the bridge off; the same plausibility of the position and
+ * temperature sensors supervised at run time; and one check that needs the
+ * motor driven, made whenever it is (an open motor lead). Pure,
+ * fixed-point.
  *
- * A check fails only when more than half of its samples fail, so one noisy
- * sample never raises a fault. Power-on checks (bits of 0x35):
- *   5 position sensor  potentiometer product: the reading sits at either
- *                      end of the product's travel (an open wiper reads a
- *                      rail; a shaft turned past the electrical travel
- *                      cannot be told from it and is out of range too);
- *                      and whatever the hal's sensor driver flags;
+ * A power-on check fails only when more than half of its samples fail, so
+ * one noisy sample never raises a fault. Power-on checks (bits of 0x35):
+ *   5 position sensor  potentiometer product: the reading is outside what
+ *                      the mechanics can give (pos_read_min/max of the
+ *                      product: its end stops and a tolerance, inside the
+ *                      pot's electrical range), i.e. an open or shorted
+ *                      wiper reading a rail. A shaft resting on or past the
+ *                      end of its travel, up to its stop, is no fault:
+ *                      motion commands bring it back. And whatever the
+ *                      hal's sensor driver flags;
  *   2 temperature      below -30.0 degC (an open NTC) or above 150.0 degC
  *                      (a shorted one);
  *   3 voltage sensor   supply reads below 2.0 V (the MCU runs, so the
@@ -18,7 +23,18 @@
  *                      the samples taken with the bridge free count, and
  *                      at least 4 of them are needed (a servo commanded
  *                      in its first milliseconds skips this check);
- * At run time:
+ * At run time (after the power-on samples):
+ *   5, 2               the position and temperature checks above, each on
+ *                      an up/down timer as the protections' (km_protect.h):
+ *                      +1 tick while the reading is implausible, -1 while
+ *                      it is plausible (not below 0); a fault when it
+ *                      reaches its time T: 20 ms for the position (the
+ *                      loop drives on a lost wiper's reading: it must stop
+ *                      soon), 500 ms for the temperature (heat is slow).
+ *                      So a sensor that fails for good is found T after it
+ *                      failed, one noisy sample never is, and one that
+ *                      chatters is only when it is bad more than half the
+ *                      time;
  *   6 motor            |PWM| >= 300 with |current| < 10 mA for 500 ms: a
  *                      driven motor that draws nothing is an open lead.
  * Bits 1 (memory: the store found damage) and 0 (crystal) come from the
@@ -52,6 +68,8 @@
 #define KM_SELFTEST_MOTOR_PWM 300
 #define KM_SELFTEST_MOTOR_MA 10
 #define KM_SELFTEST_MOTOR_US 500000u
+#define KM_SELFTEST_POS_RUN_US 20000u    /* run-time position check: a wiper lost while holding */
+#define KM_SELFTEST_TEMP_RUN_US 500000u  /* run-time temperature check (heat is slow) */
 
 typedef struct {
     uint8_t samples;          /* power-on samples taken */
@@ -59,6 +77,7 @@ typedef struct {
     uint8_t free_samples;     /* samples taken with the bridge free (the current check's) */
     uint8_t faults;           /* 0x35 bits found so far (latched) */
     uint32_t motor_open_us;   /* driven without current, continuous */
+    uint32_t run_bad_us[2];   /* run-time up/down timers: position, temperature */
 } km_selftest_t;
 
 void km_selftest_init(km_selftest_t *t);

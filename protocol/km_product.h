@@ -57,6 +57,14 @@ typedef struct {
     uint16_t speed_max_dps;       /* upper bound of 0x15, 0x5D */
     int16_t travel_min;           /* lowest angle limit / target, 0.1 deg */
     int16_t travel_max;           /* highest angle limit / target, 0.1 deg */
+    /* Potentiometer products: the position readings the mechanics can give
+     * (0.1 deg, the sensor's frame, before zero offsets): the end stops and
+     * a tolerance. The pot's electrical range must reach beyond them, so a
+     * sound pot never reads a rail and a shaft resting on a stop reads
+     * inside; a reading outside is an open or shorted wiper (0x35 bit 5,
+     * control/km_selftest.h). Unused on encoder products. */
+    int16_t pos_read_min;
+    int16_t pos_read_max;
     int16_t zero_offset2_max;     /* |0x17| bound, 0.1 deg */
     uint8_t voltage_max_v;        /* upper bound of 0x3C fields */
     const km_control_gains_t *gains; /* NULL = KM_CONTROL_GAINS_DEFAULT */

@@ -308,6 +308,8 @@ void km_servo_control_params(const km_servo_t *s, km_control_params_t *out)
     out->angle_max = (int16_t)prv_reg(s, KM_REG_ANGLE_MAX);
     out->travel_min = s->product->travel_min;
     out->travel_max = s->product->travel_max;
+    out->pos_read_min = s->product->pos_read_min;
+    out->pos_read_max = s->product->pos_read_max;
     out->prot_enable = (uint8_t)prv_reg(s, KM_REG_PROT_ENABLE);
     out->prot_release = (uint8_t)prv_reg(s, KM_REG_PROT_RELEASE);
     out->prot_state = (uint8_t)prv_reg(s, KM_REG_PROT_STATE);

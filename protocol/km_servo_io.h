@@ -65,6 +65,8 @@ typedef struct {
     int16_t angle_max;           /* 0x1A, 0.1 deg, 0 = no limit */
     int16_t travel_min;          /* product travel: targets never go outside it */
     int16_t travel_max;
+    int16_t pos_read_min;        /* the readings a sound position sensor gives (km_product.h) */
+    int16_t pos_read_max;
     uint8_t prot_enable;         /* 0x32 bits: 3 stall, 2 temperature, 1 current, 0 voltage */
     uint8_t prot_release;        /* 0x33 same bits: 1 = released only by command */
     uint8_t prot_state;          /* 0x34: 2 bits per protection */

@@ -20,6 +20,13 @@
 # refused moves and clears, and the fault log read over 0x7F; about 50 s per
 # backend (the scenario's own time: 3 s detection times and releases).
 #
+# selftest: the self-test (PROTOCOL.md §5.2 0x35) over the bus with the
+# bench scenario tests/bus/scenarios/selftest.txt (issue 18): a horn pushed
+# onto its end stop with the servo free, two restarts, no position fault,
+# 0x64 = 2, 0x6E and a move back taken; an NTC that opens while the servo
+# holds, found (0x35 bit 2), motion refused, the fault log;
+# about 25 s per backend.
+#
 # host-sim runs with --gap-floor-us 0, the parser's real inter-byte gap rule
 # (its UART paces bytes at line rate and holds its clock for a late byte, so
 # no floor is needed for frames that reach it whole); QEMU keeps the boards'
@@ -31,7 +38,7 @@ if(KM_PYTHON3_BUS)
     if(backend STREQUAL "host-sim")
       set(gap_args --gap-floor-us 0)
     endif()
-    foreach(which smoke bus encoder protect)
+    foreach(which smoke bus encoder protect selftest)
       string(REPLACE "-" "_" tname "${backend}_${which}")
       add_test(NAME bus_${tname}
         COMMAND ${KM_PYTHON3_BUS} ${CMAKE_SOURCE_DIR}/tests/bus/bus_check.py ${which} --backend ${backend} ${gap_args})

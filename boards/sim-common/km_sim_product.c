@@ -44,6 +44,10 @@ static const km_product_t s_product = {
     .speed_max_dps = 720,
     .travel_min = -1350,
     .travel_max = 1350,
+    /* the plant's stops at +-150.0 deg and 7.5 deg of tolerance; its pot
+     * reads +-165.0 deg at the rails (sim/plant/km_plant_default.c) */
+    .pos_read_min = -1575,
+    .pos_read_max = 1575,
     .zero_offset2_max = 100,      /* +-10 deg: more skews a pot's two sides */
     .voltage_max_v = 20,
     .gains = &s_gains,

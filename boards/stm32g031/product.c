@@ -31,6 +31,13 @@ static const km_product_t s_product = {
     .speed_max_dps = 720,
     .travel_min = -1350,
     .travel_max = 1350,
+    /* What a sound pot can read on this mechanics: the end stops must sit
+     * inside. board_config.c's calibration puts the ADC rails at about
+     * +-150.0 deg and sensors.c flags a reading within 16 counts of a
+     * rail (beyond +-148.8 deg) as an open wiper; a servo maker sets these
+     * from their stops. */
+    .pos_read_min = -1480,
+    .pos_read_max = 1480,
     .zero_offset2_max = 100,
     .voltage_max_v = 20,
     .gains = &s_gains,

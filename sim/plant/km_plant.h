@@ -52,7 +52,7 @@ typedef enum {
 
 /* Injectable faults (bit mask), for protection and hardware-fault tests. */
 enum {
-    KM_PLANT_FAULT_POT_OPEN = 1u << 0,   /* wiper open: ADC rails high, position reads +travel */
+    KM_PLANT_FAULT_POT_OPEN = 1u << 0,   /* wiper open: ADC rails high, position reads +pot travel */
     KM_PLANT_FAULT_MOTOR_OPEN = 1u << 1, /* motor lead open: no current, no torque */
     KM_PLANT_FAULT_TEMP_OPEN = 1u << 2,  /* thermistor open: reads KM_PLANT_TEMP_OPEN_DC */
 };
@@ -70,7 +70,9 @@ typedef struct {
     uint32_t load_j_gmm2;        /* horn + load inertia at the output, g·mm² */
     uint32_t viscous_unm_per_dps;/* viscous friction at the output, µN·m per °/s */
     uint32_t coulomb_unm;        /* Coulomb (and static) friction at the output, µN·m */
-    int16_t pot_travel_ddeg;     /* potentiometer reads ±this, 0.1°; 0 = no pot limit (encoder product) */
+    int16_t pot_travel_ddeg;     /* potentiometer's electrical range ±this, 0.1°: its ADC spans it and it
+                                  * reads no further; wider than endstop_ddeg on a sound design, so a
+                                  * shaft on a stop never reads a rail; 0 = no pot (encoder product) */
     int16_t endstop_ddeg;        /* hard mechanical stops at ±this, 0.1°; 0 = free multi-turn */
     uint32_t thermal_r_mc_per_w; /* winding-to-ambient thermal resistance, m°C per W */
     uint32_t thermal_c_mj_per_c; /* winding + case heat capacity, mJ per °C */

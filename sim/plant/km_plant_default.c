@@ -12,7 +12,13 @@
  *   - inertia: rotor 1e-7 kg·m² reflected through 300² = 9e-3 kg·m², plus a
  *     1e-5 kg·m² horn; mechanical time constant J R / (Ke Kt ratio² eff)
  *     ~ 28 ms, as measured on such servos.
- *   - pot: electrical travel ±135°, hard stops at ±150°.
+ *   - pot: its ADC spans ±165° (0 and full scale at the ends of its
+ *     electrical range), hard stops at ±150°, the product's travel ±135°
+ *     (boards/sim-common/km_sim_product.c). A sound pot reads at most ±150°,
+ *     ADC 186..3909, clear of the rails; an open wiper reads the rail,
+ *     +165°, beyond anything the mechanics can give. A pot whose electrical
+ *     range ended inside the stops would read a shaft resting on a stop as
+ *     a rail, an open wiper and a stop alike.
  *   - heat: R_th 15 °C/W, C_th 5 J/°C (tau 75 s); a stalled motor (17.5 W)
  *     heads for +260 °C, which is why servos have stall and heat protection.
  */
@@ -29,7 +35,7 @@ const km_plant_config_t km_plant_default_config = {
     .load_j_gmm2 = 10000,
     .viscous_unm_per_dps = 50,
     .coulomb_unm = 30000,
-    .pot_travel_ddeg = 1350,
+    .pot_travel_ddeg = 1650,
     .endstop_ddeg = 1500,
     .thermal_r_mc_per_w = 15000,
     .thermal_c_mj_per_c = 5000,

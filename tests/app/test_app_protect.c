@@ -213,6 +213,99 @@ static void test_s5_2_self_test_fault_blocks_motion(void **state)
     assert_int_equal(ping(), 0x00); /* a sound NTC at the next boot */
 }
 
+static int16_t read_i16(uint8_t addr)
+{
+    uint8_t v[8];
+    assert_int_equal(exchange(0x02, &addr, 1, v), 2);
+    return (int16_t)(v[0] | (v[1] << 8));
+}
+
+static void write_i16(uint8_t addr, int16_t value)
+{
+    const uint8_t b[3] = {addr, (uint8_t)value, (uint8_t)((uint16_t)value >> 8)};
+    uint8_t v[8];
+    assert_int_equal(exchange(0x03, b, 3, v), -2);
+}
+
+static const uint8_t k_restart[5] = {0x02, 0xE1, 0xE2, 0xE3, 0xE4};
+
+/* §5.2 0x35 bit 5, §5.4 0x64/0x65/0x6E (issue 18 item 2): the potentiometer
+ * product booting with its horn resting on the -150.0 deg end stop (pushed
+ * there by hand, past the +-135.0 deg travel) has no position fault, again
+ * after a restart; it takes 0x64 = 2, 0x6E = -500 (into the stop) and
+ * 0x6E = 0, and a 0x65 back inside its travel, and gets there. */
+static void test_s5_2_boot_on_end_stop_no_fault_moves_back(void **state)
+{
+    (void)state;
+    kf_power_on();
+    kf_world.pot_product = true;
+    kf_use_plant(-1500);
+    kf_boot(KM_RESET_POWER_ON);
+    run_ms(50);
+    for (int boot = 0; boot < 2; boot++) {
+        assert_int_equal(ping(), 0x00);
+        assert_int_equal(read_u8(0x35), 0x00);
+        assert_int_equal(read_i16(0x46), -1500);
+        send(0x03, k_restart, 5);
+        run_ms(100);
+    }
+    write_u8(0x64, 2);
+    assert_int_equal(ping(), 0x00);
+    assert_int_equal(read_u8(0x64), 2);
+    write_i16(0x6E, -500);
+    assert_int_equal(ping(), 0x80); /* running (bit 7), not refused */
+    run_ms(200);
+    write_i16(0x6E, 0);
+    assert_int_equal(ping(), 0x00);
+    const uint8_t move[5] = {0x65, 0x00, 0x00, 0xE8, 0x03}; /* 0.0 deg in 1000 ms */
+    uint8_t v[8];
+    assert_int_equal(exchange(0x03, move, 5, v), -2);
+    assert_int_equal(ping() & 0x50, 0x00);
+    run_ms(2000);
+    const int16_t pos = read_i16(0x46);
+    assert_true(pos >= -10 && pos <= 10);
+    assert_int_equal(ping(), 0x00);
+}
+
+/* §5.2 0x35 bit 2, §4 bit 4 (issue 18 item 3): an NTC that opens while the
+ * servo holds reads -40.0 degC; 500 ms later it is a temperature-sensor
+ * fault, as at boot: status bit 4, the output let go, 0x64 = 0, moves
+ * refused (bit 6), a fault-log entry (kind 4, 0x35 bits, the -40 degC it
+ * read); the next boot with a sound NTC is clean. */
+static void test_s5_2_ntc_opening_while_running_is_a_hardware_fault(void **state)
+{
+    (void)state;
+    kf_power_on();
+    run_ms(50);
+    write_u8(0x64, 2);
+    run_ms(100);
+    assert_int_equal(kf_world.motor_mode, 2);
+    kf_world.temperature_c10 = -400;
+    run_ms(400);
+    assert_int_equal(ping(), 0x00);
+    assert_int_equal(read_u8(0x35), 0x00);
+    run_ms(200);
+    assert_int_equal(ping(), 0x10);
+    assert_int_equal(read_u8(0x35), 0x04);
+    assert_int_equal(read_u8(0x64), 0);
+    assert_int_equal(kf_world.motor_mode, 0);
+    const uint8_t move[5] = {0x65, 0x84, 0x03, 0xF4, 0x01};
+    uint8_t v[32];
+    assert_int_equal(exchange(0x03, move, 5, v), -2);
+    assert_int_equal(ping(), 0x50);
+    write_u8(0x64, 2);
+    assert_int_equal(ping(), 0x50);
+    assert_int_equal(kf_world.motor_mode, 0);
+    assert_int_equal(ext(0x11, v), 18);
+    assert_int_equal(v[4], 4); /* hardware fault */
+    assert_int_equal(v[5], 0x04);
+    assert_int_equal((int16_t)(v[12] | (v[13] << 8)), -400);
+    kf_world.temperature_c10 = 250;
+    send(0x03, k_restart, 5);
+    run_ms(100);
+    assert_int_equal(ping(), 0x00);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -220,6 +313,8 @@ int main(void)
         cmocka_unit_test(test_s5_2_release_by_command_clear_refused_while_active),
         cmocka_unit_test(test_fault_log_kept_across_restart_not_power_on),
         cmocka_unit_test(test_s5_2_self_test_fault_blocks_motion),
+        cmocka_unit_test(test_s5_2_boot_on_end_stop_no_fault_moves_back),
+        cmocka_unit_test(test_s5_2_ntc_opening_while_running_is_a_hardware_fault),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

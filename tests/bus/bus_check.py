@@ -22,6 +22,13 @@
                                          only by 0x36 (refused while it holds),
                                          and the fault log read over 0x7F;
                                          about 50 s per backend
+  bus_check.py selftest --backend host-sim  the self-test (§5.2 0x35) with
+                                         tests/bus/scenarios/selftest.txt: a
+                                         horn pushed onto its end stop, two
+                                         restarts, no fault, torque on and a
+                                         move back accepted; an NTC that opens
+                                         while running found (bit 2), motion
+                                         refused, a stop accepted; about 25 s
   [--gap-floor-us N]  passed to tools/servo-bus (tests/bus.cmake: 0 for host-sim)
   [--slot-timing auto|realtime|floor]  the bus test's answer-slot
                       timing (below); default auto
@@ -697,7 +704,7 @@ def protect(backend, opts):
         write0(bus, d, 0x3E, (3000).to_bytes(2, "little") + bytes([20]))
         check(read_show(bus, d, 0x3E, signed=False) == 3000 | (20 << 16), "§5.2 0x3E = 3000 mA, 2.0 s")
         # The 3 N*m load comes while the output is free (armed): it pushes
-        # the shaft to the end stop past the pot's travel (0x46 -135.0 deg).
+        # the shaft onto its end stop, past the travel (0x46 -150.0 deg).
         t_stop, pos = poll(bus, lambda: (lambda v: v if v is not None and v <= -1300 else None)(
             read_int(bus, d, 0x46)), 10.0)
         check(t_stop is not None, "plant: a 3 N*m load pushes the free shaft to its end stop "
@@ -847,9 +854,109 @@ def protect(backend, opts):
         bus.close()
 
 
+# ---- selftest: the power-on self-test and the run-time sensor check ----
+
+SELFTEST_SCENARIO = os.path.join(HERE, "scenarios", "selftest.txt")
+ST_HW = 0x10
+
+
+def selftest(backend, opts):
+    """§5.2 0x35 over bytes only (issue 18 items 2 and 3), one servo driven
+    by tests/bus/scenarios/selftest.txt. 1: a 3 N*m load pushes the free
+    horn onto its -150.0 deg end stop, then goes; two restarts; each time
+    0x35 reads 0 and status bit 4 is clear, and then 0x64 = 2, 0x6E = -500
+    (into the stop), 0x6E = 0 and 0x65 back to 0.0 deg are all accepted and
+    the shaft gets there. 2: the NTC opens while the servo holds: 0x35 bit 2
+    and status bit 4 within a few seconds, the output let go (0x64 reads 0,
+    0x49 0), a move refused (bit 6), and the fault log's newest entry says
+    it (kind 4, 0x35 bit 2, -40.0 degC). About 25 s, the scenario's own
+    time."""
+    opts.scenario = SELFTEST_SCENARIO
+    load = scenario_times(SELFTEST_SCENARIO, "load_mnm")  # pushed, let go
+    ntc = scenario_times(SELFTEST_SCENARIO, "faults")     # the NTC opens
+    check(len(load) == 2 and len(ntc) == 1,
+          "bench: scenario %s" % os.path.relpath(SELFTEST_SCENARIO, ROOT))
+    d = 1
+    bus = Bus(backend, [d], opts)
+    try:
+        st = ping_status(bus, d)
+        check(st == 0 and read_show(bus, d, 0x35) == 0, "bench: a sound servo at power-on (status %s)"
+              % (None if st is None else "0x%02x" % st))
+        # -- 1. pushed onto the end stop by hand, the servo free --
+        t_stop, pos = poll(bus, lambda: (lambda v: v if v is not None and v <= -1340 else None)(
+            read_int(bus, d, 0x46)), 10.0)
+        check(t_stop is not None, "plant: a 3 N*m load pushes the free shaft to its end stop (0x46 %s)"
+              % pos)
+        t_off, mv = poll(bus, lambda: (lambda v: v if v is not None and v < 7350 else None)(
+            read_int(bus, d, 0x4B)), 10.0)
+        check(t_off is not None, "plant: the hand lets go (the supply marker: 0x4B %s mV)" % mv)
+        rest = read_show(bus, d, 0x46)
+        check(rest is not None and rest <= -1340, "plant: the shaft rests on its stop, 0x46 %s" % rest)
+        for n in (1, 2):
+            check(bus.exchange(kmbus.write(d, 0x02, bytes.fromhex("E1E2E3E4")), 0, timeout=0.3) == [],
+                  "§3 restart %d: no answer" % n)
+            check(wait_ping(bus, d), "answers again after restart %d" % n)
+            st = ping_status(bus, d)
+            hw = read_show(bus, d, 0x35)
+            pos = read_show(bus, d, 0x46)
+            check(st == 0 and hw == 0 and pos == rest,
+                  "§5.2 0x35 after restart %d with the shaft resting on its stop (0x46 %s): 0x35 reads "
+                  "%s, status %s (no position fault: a rail reading is an open wiper, the stop is not)"
+                  % (n, pos, hw, None if st is None else "0x%02x" % st))
+        write0(bus, d, 0x64, b"\x02")
+        st = ping_status(bus, d)
+        check(st == 0 and read_show(bus, d, 0x64) == 2,
+              "§5.4 0x64 = 2 at the stop: accepted (status %s), 0x64 reads 2"
+              % (None if st is None else "0x%02x" % st))
+        write0(bus, d, 0x6E, (-500).to_bytes(2, "little", signed=True))
+        st = ping_status(bus, d)
+        check(st is not None and st & (ST_REFUSED | ST_HW) == 0,
+              "§5.4 0x6E = -500 (into the stop): accepted (status 0x%02x)" % (st or 0))
+        time.sleep(0.2)
+        write0(bus, d, 0x6E, (0).to_bytes(2, "little", signed=True))
+        st = ping_status(bus, d)
+        check(st is not None and st & (ST_REFUSED | ST_HW) == 0, "§5.4 0x6E = 0: accepted (status 0x%02x)"
+              % (st or 0))
+        write0(bus, d, 0x65, (0).to_bytes(2, "little", signed=True) + (1000).to_bytes(2, "little"))
+        st = ping_status(bus, d)
+        check(st is not None and st & (ST_REFUSED | ST_HW) == 0,
+              "§5.4 0x65 to 0.0 deg in 1000 ms: accepted (status 0x%02x)" % (st or 0))
+        seen = []
+        back = wait_pos(bus, d, -10, 10, 5.0, seen)
+        check(back is not None, "§5.4 ... and the shaft gets there: 0x46 from %s to %s in %s ms (wall clock)"
+              % (seen[0] if seen else None, seen[-1] if seen else None,
+                 None if back is None else round(back * 1000)))
+        check(read_show(bus, d, 0x35) == 0 and read_show(bus, d, 0x64) == 2,
+              "bench: holding at 0 with 0x35 = 0 before the NTC opens (at %.1f s on the plant's clock)"
+              % (ntc[0] / 1000))
+
+        # -- 2. the NTC opens while the servo holds --
+        t_hw, seen = wait_status(bus, d, ST_HW, True, 30.0)
+        check(t_hw is not None, "§4 status bit 4 once the NTC opens; status seen %s"
+              % ["0x%02x" % s for s in seen])
+        hw, c = read_show(bus, d, 0x35), read_show(bus, d, 0x4A)
+        check(hw == 0x04 and c == -40, "§5.2 0x35 reads 0x%02x (bit 2, temperature sensor), 0x4A %s degC"
+              % (hw or 0, c))
+        time.sleep(0.1)
+        ts, pwm = read_show(bus, d, 0x64), read_show(bus, d, 0x49)
+        check(ts == 0 and pwm == 0, "§5.2 as for a hardware fault: the output let go, 0x64 reads %s, "
+              "0x49 %s" % (ts, pwm))
+        write0(bus, d, 0x65, (300).to_bytes(2, "little", signed=True) + (500).to_bytes(2, "little"))
+        st = ping_status(bus, d)
+        check(st == ST_HW | ST_REFUSED, "§5.2 0x65 with the fault latched: refused (status %s)"
+              % (None if st is None else "0x%02x" % st))
+        raw = ext_read(bus, d, EXT_FAULT_ENTRY)
+        e = fault_entry(raw) if raw is not None and len(raw) == 18 else None
+        check(e is not None and e["kind"] == 4 and e["bits"] == 0x04 and e["c10"] == -400
+              and e["boots_ago"] == 0,
+              "fault log 0x7F 0x11: the newest entry is the sensor fault (%s)" % (show_entry(e) if e else raw))
+    finally:
+        bus.close()
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("which", choices=["smoke", "bus", "encoder", "protect"])
+    ap.add_argument("which", choices=["smoke", "bus", "encoder", "protect", "selftest"])
     ap.add_argument("--backend", choices=["qemu", "host-sim"], required=True)
     ap.add_argument("--gap-floor-us", type=int, help="passed to tools/servo-bus")
     ap.add_argument("--build-dir", help="passed to tools/servo-bus")
@@ -857,7 +964,8 @@ def main():
                     help="the bus test's answer slots: SCHED_FIFO bus or a 20 ms slot floor "
                     "(auto: SCHED_FIFO when the host allows it)")
     a = ap.parse_args()
-    {"smoke": smoke, "bus": bus_test, "encoder": encoder, "protect": protect}[a.which](a.backend, a)
+    {"smoke": smoke, "bus": bus_test, "encoder": encoder, "protect": protect,
+     "selftest": selftest}[a.which](a.backend, a)
     print("%s %s: all checks passed" % (a.backend, a.which))
 
 

@@ -49,9 +49,36 @@ static const km_product_t s_product = {
     .voltage_max_v = 30,
 };
 
+/* The potentiometer product of the simulated boards
+ * (boards/sim-common/km_sim_product.c), for tests that need the travel
+ * end and its position check (kf_world.pot_product). */
+static const km_product_t s_product_pot = {
+    .model = "KM-FAKE-POT",
+    .firmware_version = 0x00111002u,
+    .variant = KM_VARIANT_POTENTIOMETER,
+    .max_current_ma = 2000,
+    .max_speed_dps = 360,
+    .zero_offset1 = 0,
+    .angle_min = -1350,
+    .angle_max = 1350,
+    .voltage_high_v = 9,
+    .voltage_low_v = 6,
+    .current_threshold_ma = 1500,
+    .baud_min_100 = 96,
+    .baud_max_100 = 10000,
+    .current_max_ma = 3000,
+    .speed_max_dps = 720,
+    .travel_min = -1350,
+    .travel_max = 1350,
+    .pos_read_min = -1575,
+    .pos_read_max = 1575,
+    .zero_offset2_max = 100,
+    .voltage_max_v = 20,
+};
+
 const km_product_t *km_board_product(void)
 {
-    return &s_product;
+    return kf_world.pot_product ? &s_product_pot : &s_product;
 }
 
 const km_flash_t *km_board_flash(void)

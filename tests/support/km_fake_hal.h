@@ -51,6 +51,7 @@ typedef struct {
     uint32_t unmakeable_baud;
     int32_t position, current_ma, voltage_mv, temperature_c10; /* sensors */
     uint8_t sensor_faults;
+    bool pot_product;            /* the board is the potentiometer product from the next kf_boot() */
 
     /* the world */
     uint32_t now;

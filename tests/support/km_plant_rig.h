@@ -5,6 +5,7 @@
  *
  * Params start as the simulated product (boards/sim-common/km_sim_product.c)
  * decodes them at power-on: 0x11 = 0x02, travel and angle limits +-135.0 deg,
+ * position readings +-157.5 deg at most,
  * 0x13 = 0x5B = 1000, 0x15 = 0x5D = 360 deg/s, 0x64 = 3 (armed), default
  * gains. Header-only (tests/support/ is on the include path); include after
  * cmocka's headers. */
@@ -42,6 +43,8 @@ static inline void kr_default_params(km_control_params_t *p)
     p->angle_max = 1350;
     p->travel_min = -1350;
     p->travel_max = 1350;
+    p->pos_read_min = -1575; /* the plant's stops +-150.0 deg, and a tolerance */
+    p->pos_read_max = 1575;
     p->torque_limit = 1000;
     p->current_limit_ma = 2000;
     p->speed_limit_dps = 360;

@@ -48,6 +48,8 @@ static inline const km_product_t *kt_product_pot(void)
         .speed_max_dps = 1000,
         .travel_min = -1350,
         .travel_max = 1350,
+        .pos_read_min = -1575,
+        .pos_read_max = 1575,
         .zero_offset2_max = 300,
         .voltage_max_v = 30,
     };

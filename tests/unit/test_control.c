@@ -35,6 +35,8 @@ static km_control_params_t cfg_of(int16_t zo1, int16_t zo2, uint8_t config, uint
     cfg.max_speed_dps = 360;
     cfg.travel_min = -32000;
     cfg.travel_max = 32000;
+    cfg.pos_read_min = -32000;
+    cfg.pos_read_max = 32000;
     cfg.gains = g;
     return cfg;
 }

@@ -165,7 +165,11 @@ static void test_endstop_stalls_at_v_over_r(void **state)
         run_ms(&p, &in, 2000);
         assert_true(km_plant_at_endstop(&p));
         assert_int_equal(km_plant_turns_ddeg(&p), sign * c->endstop_ddeg);
-        assert_int_equal(km_plant_position_ddeg(&p), sign * c->pot_travel_ddeg); /* pot saturates */
+        /* the stops lie inside the pot's electrical range: it reads them,
+         * clear of its rails (a rail is an open wiper) */
+        assert_true(c->pot_travel_ddeg > c->endstop_ddeg);
+        assert_int_equal(km_plant_position_ddeg(&p), sign * c->endstop_ddeg);
+        assert_int_equal(km_plant_pot_adc(&p), sign < 0 ? 186 : 3909); /* docs/protocol-decisions.md */
         assert_int_equal(km_plant_speed_mdps(&p), 0);
         double v = km_plant_voltage_mv(&p);
         double i = sign * km_plant_current_ma(&p);

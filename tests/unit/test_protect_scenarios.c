@@ -45,8 +45,9 @@
  *     rotation command is taken and moves the shaft.
  *
  * Self-test rows (§5.2 0x35, §4 bit 4): the fault is found after the
- * power-on samples (KM_SELFTEST_SAMPLES ticks) or after 500 ms driven
- * without current; every motion request is refused, 0x64 = 0 is still
+ * power-on samples (KM_SELFTEST_SAMPLES ticks), after 500 ms driven
+ * without current, or by the run-time sensor checks (a wiper lost: 20 ms;
+ * an NTC lost: 500 ms); every motion request is refused, 0x64 = 0 is still
  * taken, the output is free; a restart (control started afresh on the
  * plant, the fault mended) moves again.
  */
@@ -474,22 +475,22 @@ static const row_t k_rows[] = {
      .trip_lo = 889, .trip_hi = 890, .bits = KM_PROT_STALL, .act = ACT_HOLD,
      .rel = REL_CMD, .rel_lo = 501, .rel_hi = 501, .ts_after = 2},
     {.name = "stall_motor_mode_end_stop_trips_brake",
-     /* 0x6E PWM 800 into the stop; the pot reading clamps at +135.0 deg
-      * before the shaft reaches +150, so the stall is timed from there:
-      * d = 492 ms, the run at PWM 800 until the reading stops moving */
+     /* 0x6E PWM 800 into the stop; the pot reads the shaft up to the
+      * +150.0 deg stop (its rails are beyond), so the stall is timed from
+      * there: d = 540 ms, the run at PWM 800 until the shaft stops */
      .cmd = CMD_MOTOR, .motor_pwm = 800, .pre_ms = 0, SET(0x0D, 0x00, 0x54, 1500, 20, 600, 5),
      .stim = {NONE, NONE}, .run_ms = 3000, .clear = NOCLEAR,
-     .trip_lo = 992, .trip_hi = 993, .bits = KM_PROT_STALL, .act = ACT_BRAKE,
+     .trip_lo = 1040, .trip_hi = 1041, .bits = KM_PROT_STALL, .act = ACT_BRAKE,
      .rel = REL_AUTO, .rel_from_trip = true, .rel_lo = 500, .rel_hi = 501, .ts_after = 3},
     {.name = "stall_motor_mode_hold_acts_as_brake",
      .cmd = CMD_MOTOR, .motor_pwm = 800, .pre_ms = 0, SET(0x0D, 0x00, A34(2, 1, 1, 0), 1500, 20, 600, 5),
      .stim = {NONE, NONE}, .run_ms = 3000, .clear = NOCLEAR,
-     .trip_lo = 992, .trip_hi = 993, .bits = KM_PROT_STALL, .act = ACT_BRAKE,
+     .trip_lo = 1040, .trip_hi = 1041, .bits = KM_PROT_STALL, .act = ACT_BRAKE,
      .rel = REL_AUTO, .rel_from_trip = true, .rel_lo = 500, .rel_hi = 501, .ts_after = 3},
     {.name = "stall_motor_mode_free",
      .cmd = CMD_MOTOR, .motor_pwm = 800, .pre_ms = 0, SET(0x0D, 0x00, A34(0, 1, 1, 0), 1500, 20, 600, 5),
      .stim = {NONE, NONE}, .run_ms = 3000, .clear = NOCLEAR,
-     .trip_lo = 992, .trip_hi = 993, .bits = KM_PROT_STALL, .act = ACT_FREE,
+     .trip_lo = 1040, .trip_hi = 1041, .bits = KM_PROT_STALL, .act = ACT_FREE,
      .rel = REL_AUTO, .rel_from_trip = true, .rel_lo = 500, .rel_hi = 501, .ts_after = 3},
     {.name = "stall_move_into_obstacle_hold_stops_it_where_it_tripped",
      /* a 0x66 move to +60 deg at 60 deg/s meets an obstacle at +30 deg (a
@@ -574,6 +575,20 @@ static const row_t k_rows[] = {
      .stim = {{ST_FAULT, 0, KM_PLANT_FAULT_MOTOR_OPEN, 0, 100000, false, 0, 0, 0, 0, 0}, NONE},
      .run_ms = 1500, .clear = NOCLEAR,
      .trip_lo = 501, .trip_hi = 502, .act = ACT_FREE, .hw = KM_HW_MOTOR},
+    {.name = "selftest_ntc_open_while_running_blocks_motion",
+     /* issue 18 item 3: the NTC opens at 0 on a holding servo (a move at
+      * 0): it reads -40.0 degC; found 500 ms later, as at boot after */
+     .cmd = CMD_HOLD, .pre_ms = 300, DEFAULTS,
+     .stim = {{ST_FAULT, 0, KM_PLANT_FAULT_TEMP_OPEN, 0, 100000, false, 0, 0, 0, 0, 0}, NONE},
+     .run_ms = 1500, .clear = NOCLEAR,
+     .trip_lo = 500, .trip_hi = 500, .act = ACT_FREE, .hw = KM_HW_TEMPERATURE},
+    {.name = "selftest_pot_open_while_running_blocks_motion",
+     /* the wiper opens at 0 on a moving servo: it reads the +165.0 deg
+      * rail; found 20 ms later, the output let go */
+     .cmd = CMD_HOLD, .pre_ms = 300, DEFAULTS,
+     .stim = {{ST_FAULT, 0, KM_PLANT_FAULT_POT_OPEN, 0, 100000, false, 0, 0, 0, 0, 0}, NONE},
+     .run_ms = 1500, .clear = NOCLEAR,
+     .trip_lo = 20, .trip_hi = 20, .act = ACT_FREE, .hw = KM_HW_POSITION},
 };
 
 #define N_ROWS (sizeof k_rows / sizeof k_rows[0])
@@ -1047,9 +1062,12 @@ static void prv_run_row(const row_t *w)
         r.in.ext_torque_unm = 0;
         const int32_t from = kr_pos(&r);
         const int16_t to = (int16_t)(from > 0 ? from - 100 : from + 100);
+        /* a shaft left on its end stop (past the travel) goes to the
+         * travel's end: targets are clamped to it (km_servo_mode.h) */
+        const int32_t at = km_servo_mode_clamp(&r.params, to);
         assert_true(kr_move(&r, KM_REQ_MOVE_SPEED, to, 0));
         kr_run(&r, 1000);
-        assert_true(kr_pos(&r) >= to - 10 && kr_pos(&r) <= to + 10);
+        assert_true(kr_pos(&r) >= at - 10 && kr_pos(&r) <= at + 10);
     }
 }
 
