@@ -22,12 +22,24 @@ void km_control_init(km_control_t *c, const km_control_params_t *p)
     c->bridge = km_output_bridge(p->power_on_brake ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE, 0, 0, false);
 }
 
-/* While protecting (km_control.h): 0x64 = 0/1 taken and remembered for the
- * release, every other torque or motion request refused. */
+/* While protecting (km_control.h): a request for less motion is taken,
+ * every other torque or motion request refused. 0x64 = 0/1 is remembered
+ * for the release; a motor stop stays in force after it. The protection's
+ * action keeps the last word on the bridge meanwhile (step 4b). */
 static bool prv_request_protecting(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
 {
-    if (req->kind != KM_REQ_TORQUE_SWITCH || req->u.u8 > 1u) {
+    if (!km_request_less_motion(req)) {
         return false;
+    }
+    if (req->kind != KM_REQ_TORQUE_SWITCH) {
+        /* 0x6E/0x6F = 0, 0x70 stop: motor mode takes the bridge, stopped
+         * (a servo hold under a hold action ends: less motion) */
+        if (!km_motor_mode_request(&c->motor, req, p, c->position)) {
+            return false;
+        }
+        c->servo.running = false;
+        c->servo.streaming = false;
+        return true;
     }
     c->ts_after = req->u.u8;
     if (c->motor.active) {
@@ -46,8 +58,8 @@ bool km_control_request(km_control_t *c, const km_request_t *req, const km_contr
     if (req->kind == KM_REQ_ZERO_POSITION) {
         return true; /* the dispatcher moves the offsets; nothing moves here */
     }
-    if (c->hw != 0u && (req->kind != KM_REQ_TORQUE_SWITCH || req->u.u8 == 2u || req->u.u8 == 3u)) {
-        return false; /* §5.2 0x35: a hardware fault blocks all motion until restart */
+    if (c->hw != 0u && !km_request_less_motion(req)) {
+        return false; /* §5.2 0x35: a hardware fault blocks motion until restart; a stop is taken */
     }
     if (c->action != KM_PROT_ACT_NONE) {
         return prv_request_protecting(c, req, p);

@@ -21,8 +21,11 @@
  * the bridge (hand-over rules in km_motor_mode.h).
  *
  * While protecting, 0x64 reads 5; motion requests and 0x64 = 2/3 are
- * refused (status bit 6); 0x64 = 0/1 are taken (the output is off anyway)
- * and are what 0x64 returns to. On release 0x64 returns to 0/1 if it was
+ * refused (status bit 6); a request for less motion (km_servo_io.h) is
+ * always taken, here and with a hardware fault latched: 0x64 = 0/1 (the
+ * output is off anyway) are what 0x64 returns to, a motor stop (0x6E/0x6F
+ * = 0, 0x70 stop) leaves motor mode stopped, and ends a hold action's
+ * hold. On release 0x64 returns to 0/1 if it was
  * off, to 2 if the output held position throughout (a hold action), else
  * to 3 (armed: on at the next rotation command, so a released servo never
  * moves by itself). Only this header

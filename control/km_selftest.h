@@ -39,7 +39,8 @@
  *                      driven motor that draws nothing is an open lead.
  * Bits 1 (memory: the store found damage) and 0 (crystal) come from the
  * app and the board; bit 7 from the hal. The dispatcher latches every bit
- * until restart and refuses motion while any is set (§5.2). */
+ * until restart and refuses more motion while any is set (§5.2); a
+ * request for less motion is always taken (km_servo_io.h). */
 #ifndef KM_SELFTEST_H
 #define KM_SELFTEST_H
 

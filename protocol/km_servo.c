@@ -539,9 +539,11 @@ static bool prv_servo_motion_allowed(km_servo_t *s)
     return !s->hw_latched && prv_reg(s, KM_REG_CONTROL_MODE) != 2u && (ts == 2u || ts == 3u);
 }
 
-static bool prv_motor_motion_allowed(km_servo_t *s)
+/* Motor mode (0x6E..0x70): "Motion preconditions"; a request for less
+ * motion is taken with a fault latched ("Protections"). */
+static bool prv_motor_motion_allowed(km_servo_t *s, const km_request_t *req)
 {
-    return !s->hw_latched && prv_reg(s, KM_REG_CONTROL_MODE) != 1u;
+    return (!s->hw_latched || km_request_less_motion(req)) && prv_reg(s, KM_REG_CONTROL_MODE) != 1u;
 }
 
 static bool prv_is_encoder(const km_servo_t *s)
@@ -633,7 +635,7 @@ static void prv_motor_motion(km_servo_t *s, km_reg_index_t r, const uint8_t *d, 
         req.kind = r == KM_REG_MOTOR_TORQUE ? KM_REQ_MOTOR_TORQUE : KM_REQ_MOTOR_SPEED;
         req.u.i16 = (int16_t)packed;
     }
-    if (!prv_motor_motion_allowed(s) || !prv_request(s, &req)) {
+    if (!prv_motor_motion_allowed(s, &req) || !prv_request(s, &req)) {
         prv_fail(s);
         return;
     }

@@ -49,6 +49,27 @@ typedef struct {
     } u;
 } km_request_t;
 
+/* A request for less motion: one that only stops the shaft or lets it go
+ * (0x64 = 0/1; 0x6E = 0; 0x6F = 0; 0x70 with its stop bit 7, or with
+ * nothing to run: a PWM or speed of 0, or a counted run of 0). Never
+ * refused for a protection acting or a hardware fault latched
+ * (docs/protocol-decisions.md "Protections"). */
+static inline bool km_request_less_motion(const km_request_t *r)
+{
+    switch (r->kind) {
+    case KM_REQ_TORQUE_SWITCH:
+        return r->u.u8 <= 1u;
+    case KM_REQ_MOTOR_TORQUE:
+    case KM_REQ_MOTOR_SPEED:
+        return r->u.i16 == 0;
+    case KM_REQ_MOTOR_ADVANCED:
+        return (r->u.adv.control & 0x80u) != 0u || r->u.adv.p2 == 0u ||
+               ((r->u.adv.control & 0x30u) != 0u && r->u.adv.p1 == 0u);
+    default:
+        return false;
+    }
+}
+
 /* Control registers in engineering units. Angles are 0.1 deg in the frame
  * the master sees (zero offsets and direction applied), like 0x46. */
 typedef struct {

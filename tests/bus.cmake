@@ -24,7 +24,7 @@
 # bench scenario tests/bus/scenarios/selftest.txt (issue 18): a horn pushed
 # onto its end stop with the servo free, two restarts, no position fault,
 # 0x64 = 2, 0x6E and a move back taken; an NTC that opens while the servo
-# holds, found (0x35 bit 2), motion refused, the fault log;
+# holds, found (0x35 bit 2), motion refused, a stop taken, the fault log;
 # about 25 s per backend.
 #
 # host-sim runs with --gap-floor-us 0, the parser's real inter-byte gap rule

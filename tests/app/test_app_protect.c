@@ -306,6 +306,56 @@ static void test_s5_2_ntc_opening_while_running_is_a_hardware_fault(void **state
     assert_int_equal(ping(), 0x00);
 }
 
+/* §5.2 0x34, §5.4 0x64 = 5 (issue 18 item 4): while the voltage protection
+ * acts, 0x6E = 0 and 0x70 with its stop bit are accepted (no bit 6: the
+ * output is stopped already), 0x6E = 500 is refused; with a hardware fault
+ * latched the same, and 0x70's stop with brake (bit 1) brakes. */
+static void test_s5_2_less_motion_accepted_while_protecting_or_faulted(void **state)
+{
+    (void)state;
+    const uint8_t stop_free[6] = {0x70, 0x80, 0x00, 0x00, 0x00, 0x00};
+    const uint8_t stop_brake[6] = {0x70, 0x82, 0x00, 0x00, 0x00, 0x00};
+    uint8_t v[8];
+    kf_power_on();
+    run_ms(50);
+    write_i16(0x6E, 200); /* under the motor-lead check's 300: the fake draws no current */
+    run_ms(100);
+    assert_int_equal(kf_world.motor_mode, 2);
+    kf_world.voltage_mv = 5000;
+    run_ms(3100);
+    assert_int_equal(ping(), 0x01);
+    assert_int_equal(kf_world.motor_mode, 0);
+    write_i16(0x6E, 0);
+    assert_int_equal(ping(), 0x01);
+    assert_int_equal(exchange(0x03, stop_free, 6, v), -2);
+    assert_int_equal(ping(), 0x01);
+    assert_int_equal(exchange(0x03, stop_brake, 6, v), -2);
+    assert_int_equal(ping(), 0x01);
+    write_i16(0x6E, 500);
+    assert_int_equal(ping(), 0x41);
+    assert_int_equal(kf_world.motor_mode, 0); /* the protection frees (0x34 voltage 00) */
+    kf_world.voltage_mv = 7400;
+    run_ms(3200);
+    assert_int_equal(ping(), 0x00);
+    assert_true(kf_world.motor_mode != 2); /* released: nothing starts again */
+
+    kf_world.temperature_c10 = -400;
+    send(0x03, k_restart, 5);
+    run_ms(100);
+    assert_int_equal(ping(), 0x10);
+    write_i16(0x6E, 0);
+    assert_int_equal(ping(), 0x10);
+    assert_int_equal(exchange(0x03, stop_brake, 6, v), -2);
+    assert_int_equal(ping(), 0x10);
+    assert_int_equal(kf_world.motor_mode, 1);
+    assert_int_equal(exchange(0x03, stop_free, 6, v), -2);
+    assert_int_equal(ping(), 0x10);
+    assert_int_equal(kf_world.motor_mode, 0);
+    write_i16(0x6E, 500);
+    assert_int_equal(ping(), 0x50);
+    assert_int_equal(kf_world.motor_mode, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -315,6 +365,7 @@ int main(void)
         cmocka_unit_test(test_s5_2_self_test_fault_blocks_motion),
         cmocka_unit_test(test_s5_2_boot_on_end_stop_no_fault_moves_back),
         cmocka_unit_test(test_s5_2_ntc_opening_while_running_is_a_hardware_fault),
+        cmocka_unit_test(test_s5_2_less_motion_accepted_while_protecting_or_faulted),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -861,16 +861,16 @@ ST_HW = 0x10
 
 
 def selftest(backend, opts):
-    """§5.2 0x35 over bytes only (issue 18 items 2 and 3), one servo driven
+    """§5.2 0x35 over bytes only (issue 18 items 2, 3, 4), one servo driven
     by tests/bus/scenarios/selftest.txt. 1: a 3 N*m load pushes the free
     horn onto its -150.0 deg end stop, then goes; two restarts; each time
     0x35 reads 0 and status bit 4 is clear, and then 0x64 = 2, 0x6E = -500
     (into the stop), 0x6E = 0 and 0x65 back to 0.0 deg are all accepted and
     the shaft gets there. 2: the NTC opens while the servo holds: 0x35 bit 2
     and status bit 4 within a few seconds, the output let go (0x64 reads 0,
-    0x49 0), a move refused (bit 6), and the fault log's newest entry says
-    it (kind 4, 0x35 bit 2, -40.0 degC). About 25 s, the scenario's own
-    time."""
+    0x49 0), a move refused (bit 6), 0x6E = 0 accepted (a request for less
+    motion), and the fault log's newest entry says it (kind 4, 0x35 bit 2,
+    -40.0 degC). About 25 s, the scenario's own time."""
     opts.scenario = SELFTEST_SCENARIO
     load = scenario_times(SELFTEST_SCENARIO, "load_mnm")  # pushed, let go
     ntc = scenario_times(SELFTEST_SCENARIO, "faults")     # the NTC opens
@@ -945,6 +945,10 @@ def selftest(backend, opts):
         st = ping_status(bus, d)
         check(st == ST_HW | ST_REFUSED, "§5.2 0x65 with the fault latched: refused (status %s)"
               % (None if st is None else "0x%02x" % st))
+        write0(bus, d, 0x6E, (0).to_bytes(2, "little", signed=True))
+        st = ping_status(bus, d)
+        check(st == ST_HW, "§5.2 0x6E = 0 with the fault latched: a request for less motion, accepted "
+              "(status %s)" % (None if st is None else "0x%02x" % st))
         raw = ext_read(bus, d, EXT_FAULT_ENTRY)
         e = fault_entry(raw) if raw is not None and len(raw) == 18 else None
         check(e is not None and e["kind"] == 4 and e["bits"] == 0x04 and e["c10"] == -400

@@ -1041,6 +1041,59 @@ static void test_zeroing_pot_0x18_zero_is_an_increment_with_fault(void **state)
     assert_int_equal(reg_by_addr(0x17), 0);
 }
 
+/* ---- "Motion preconditions": less motion with a fault latched ------------- */
+
+/* §5.2 0x35, §4 bit 4 (issue 18 item 4): with a hardware fault latched, a
+ * request for less motion reaches control and is not refused (0x6E = 0,
+ * 0x6F = 0 on an encoder, 0x70 with its stop bit or with nothing to run,
+ * 0x64 = 0/1); a request for more motion (0x6E != 0, 0x70 running, 0x65,
+ * 0x64 = 2) is refused with bit 6 and sends nothing. */
+static void test_s5_2_less_motion_passes_with_fault_latched(void **state)
+{
+    (void)state;
+    static const struct {
+        uint8_t addr, n, v[5];
+        bool less;
+    } cmds[] = {
+        {0x6E, 2, {0x00, 0x00}, true},
+        {0x6F, 2, {0x00, 0x00}, true},
+        {0x70, 5, {0x80, 0x00, 0x00, 0x00, 0x00}, true},             /* stop, free after */
+        {0x70, 5, {0x82, 0x00, 0x00, 0x00, 0x00}, true},             /* stop, brake after */
+        {0x70, 5, {0x91, 0x32, 0x00, 0x20, 0x03}, true},             /* stop bit wins over its fields */
+        {0x70, 5, {0x00, 0x00, 0x00, 0x00, 0x00}, true},             /* run on at PWM 0 */
+        {0x70, 5, {0x10, 0x00, 0x00, 0xF4, 0x01}, true},             /* a run of 0 s */
+        {0x64, 1, {0x00}, true},
+        {0x64, 1, {0x01}, true},
+        {0x6E, 2, {0x01, 0x00}, false},
+        {0x6E, 2, {0x0C, 0xFE}, false},                              /* -500 */
+        {0x6F, 2, {0x1E, 0x00}, false},
+        {0x70, 5, {0x10, 0x05, 0x00, 0xF4, 0x01}, false},            /* 0.5 s at PWM 500 */
+        {0x65, 4, {0x00, 0x00, 0xE8, 0x03}, false},
+        {0x64, 1, {0x02}, false},
+    };
+    for (unsigned i = 0; i < sizeof cmds / sizeof cmds[0]; i++) {
+        kt_init(&fx, kt_product_enc(), ID);
+        km_live_t live = {0};
+        live.hw_faults = 0x04; /* temperature sensor */
+        km_servo_set_live(&fx.s, &live);
+        kt_write(&fx, ID, cmds[i].addr, cmds[i].v, cmds[i].n);
+        if (cmds[i].less) {
+            assert_int_equal(fx.fake.n_requests, 1);
+            kt_ping_is(&fx, ID, KM_ST_HW_FAULT);
+        } else {
+            assert_int_equal(fx.fake.n_requests, 0);
+            kt_ping_is(&fx, ID, KM_ST_HW_FAULT | KM_ST_FAILED);
+        }
+    }
+    /* 0x5A = 1 (servo only) still refuses every motor command, a stop too:
+     * no motor runs there, so there is nothing for it to stop */
+    kt_init(&fx, kt_product_enc(), ID);
+    kt_write_u8(&fx, ID, 0x5A, 1);
+    motor_torque(ID, 0);
+    assert_int_equal(fx.fake.n_requests, 0);
+    kt_ping_is(&fx, ID, KM_ST_FAILED);
+}
+
 /* ---- "Restart" -------------------------------------------------------------- */
 
 /* After a valid restart nothing more runs until re-init: every later frame
@@ -1150,6 +1203,7 @@ int main(void)
         cmocka_unit_test(test_limits_angle_stored_contradicting_at_init),
         cmocka_unit_test(test_zeroing_refused_while_fault_latched),
         cmocka_unit_test(test_zeroing_pot_0x18_zero_is_an_increment_with_fault),
+        cmocka_unit_test(test_s5_2_less_motion_passes_with_fault_latched),
         cmocka_unit_test(test_restart_nothing_runs_after_it),
     };
     return cmocka_run_group_tests_name("dispatch_commands", tests, NULL, NULL);
