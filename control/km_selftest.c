@@ -85,8 +85,13 @@ uint8_t km_selftest_step(km_selftest_t *t, const km_sensors_t *in, const km_cont
     if (!km_selftest_done(t)) {
         prv_power_on_sample(t, in, p, bridge_free);
     } else {
-        prv_run_check(t, PRV_POS, prv_position_bad(in, p), dt_us);
-        prv_run_check(t, PRV_TEMP, prv_temperature_bad(in), dt_us);
+        const bool pos_bad = prv_position_bad(in, p);
+        const bool temp_bad = prv_temperature_bad(in);
+        if (pos_bad || temp_bad || (t->run_bad_us[PRV_POS] | t->run_bad_us[PRV_TEMP]) != 0u) {
+            /* the usual tick (both sound, nothing being timed) skips this */
+            prv_run_check(t, PRV_POS, pos_bad, dt_us);
+            prv_run_check(t, PRV_TEMP, temp_bad, dt_us);
+        }
     }
     if (prv_abs(drive_pwm) >= KM_SELFTEST_MOTOR_PWM && prv_abs(in->current_ma) < KM_SELFTEST_MOTOR_MA) {
         t->motor_open_us += dt_us;
