@@ -238,16 +238,34 @@ class KmxOnThreeServos(unittest.TestCase):
         self.assertEqual((r.returncode, r.stderr), (1, "kmx: ID 2 is taken: another servo answers there\n"))
 
 
-    def test_servo_session_decodes_with_units(self):
-        """tools/servo-session (the demo's session) on kmx: frames and decoded answers."""
-        r = subprocess.run([os.path.join(REPO, "tools", "servo-session"), "--tcp", self.wire.spec[len("tcp:"):]],
-                           capture_output=True, text=True, timeout=60)
+    def session(self, *args):
+        """Runs tools/servo-session on this bus; returns its stdout."""
+        r = subprocess.run([os.path.join(REPO, "tools", "servo-session"), "--tcp", self.wire.spec[len("tcp:"):]]
+                           + list(args), capture_output=True, text=True, timeout=60)
         self.assertEqual(r.returncode, 0, r.stderr)
         self.assertNotIn("Traceback", r.stderr)
-        out = r.stdout
+        return r.stdout
+
+    def test_servo_session_read_only_by_default(self):
+        """Without --move servo-session sends no write frame (instruction 0x03)
+        and no motion: safe on a real robot (issue 18 item 12)."""
+        out = self.session()
+        sent = [line.split(" > ")[1].split() for line in out.splitlines() if " > " in line]
+        self.assertTrue(sent)
+        self.assertEqual([f for f in sent if len(f) > 4 and f[1] == "FF" and f[4] == "03"], [])
+        self.assertNotIn("-- move", out)
+        self.assertIn("-- read only: nothing written, nothing moved", out)
+        self.assertIn("id 1 position (0x46) =", out)
+
+    def test_servo_session_decodes_with_units(self):
+        """tools/servo-session --move (the demo's session) on kmx: frames and
+        decoded answers; the setting it writes is put back."""
+        before = kmx(self.wire.spec, "get", "1", "response_delay").stdout
+        out = self.session("--move")
         self.assertIn("< F9 F5 01 02 00 FC   id 1 status 0x00 ok", out)
         self.assertRegex(out, r"< F9 F5 02 07 02 0B 00 00 02 05 E2   id 2 protocol_version \(0x0B\) = 0x05020000")
         self.assertIn("id 1 response_delay (0x12) = 250 µs", out)
+        self.assertEqual(kmx(self.wire.spec, "get", "1", "response_delay").stdout, before)
         self.assertRegex(out, r"-- id 1 arrived: 4[45]\.\d ° \(asked 45\.0 ° in 500 ms\)")  # within 1.0°
         self.assertRegex(out, r"-- id 1 arrived: -?0\.\d ° \(asked 0\.0 ° at 180 °/s\)")
         for i in (1, 2, 3):
