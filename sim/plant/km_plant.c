@@ -6,6 +6,8 @@
 
 #include <stddef.h>
 
+#include "km_plant_real.h"
+
 #define NDEG_PER_DDEG 100000000   /* nano-degrees per 0.1° */
 #define MDEG_PER_RAD_X1000 57295780LL /* (180/pi) * 1e6: m°/rad, times 1000 */
 #define EMF_MAX_MV 100000         /* init refuses configs whose EMF at overspeed exceeds this */
@@ -103,9 +105,11 @@ bool km_plant_init(km_plant_t *p, const km_plant_config_t *cfg)
     p->bus_mv = p->supply_mv;
     p->temp_uc = p->ambient_uc;
     p->carry_us = 0;
+    p->step_peak_ma = 0;
     p->time_ms = 0;
     p->time_us_part = 0;
-    return true;
+    /* the realistic model (km_plant_real.c) builds on the state above */
+    return cfg->real == NULL || km_plant_init_real(p);
 }
 
 /* Electrical: motor current and bus voltage for the bridge state at speed w. */
@@ -217,15 +221,21 @@ static void prv_thermal(km_plant_t *p)
 
 void km_plant_step(km_plant_t *p, const km_plant_input_t *in, uint32_t dt_us)
 {
-    uint32_t t = p->carry_us + dt_us;
-    while (t >= p->sub_us) {
-        int32_t w = p->speed_mdps;
-        prv_electrical(p, in, w);
-        prv_move(p, prv_mechanics(p, in, w));
-        prv_thermal(p);
-        t -= p->sub_us;
+    p->step_peak_ma = 0;
+    if (p->cfg->real != NULL) {
+        km_plant_step_real(p, in, dt_us);
+    } else {
+        uint32_t t = p->carry_us + dt_us;
+        while (t >= p->sub_us) {
+            int32_t w = p->speed_mdps;
+            prv_electrical(p, in, w);
+            km_plant_note_peak(p);
+            prv_move(p, prv_mechanics(p, in, w));
+            prv_thermal(p);
+            t -= p->sub_us;
+        }
+        p->carry_us = t;
     }
-    p->carry_us = t;
     uint32_t us = p->time_us_part + dt_us;
     p->time_ms += us / 1000u;
     p->time_us_part = us % 1000u;
@@ -252,6 +262,9 @@ void km_plant_set_position_ddeg(km_plant_t *p, int32_t ddeg)
     p->pos_ddeg = ddeg;
     p->pos_rem_ndeg = 0;
     p->speed_mdps = 0;
+    if (p->cfg->real != NULL) {
+        km_plant_real_place(p);
+    }
 }
 
 void km_plant_set_faults(km_plant_t *p, uint32_t faults)
@@ -280,6 +293,9 @@ int16_t km_plant_position_ddeg(const km_plant_t *p)
     if ((p->faults & KM_PLANT_FAULT_POT_OPEN) != 0) {
         return (int16_t)travel;
     }
+    if (p->cfg->real != NULL && p->cfg->pot_travel_ddeg != 0) {
+        return p->r.pos_ddeg; /* through the ADC, as the board samples it */
+    }
     return (int16_t)prv_clamp32(prv_pos_rounded(p), -travel, travel);
 }
 
@@ -292,6 +308,9 @@ uint16_t km_plant_pot_adc(const km_plant_t *p)
     if (travel == 0) {
         return 0;
     }
+    if (p->cfg->real != NULL) {
+        return p->r.adc;
+    }
     int32_t x = km_plant_position_ddeg(p) + travel; /* 0 .. 2 travel */
     return (uint16_t)((x * (int32_t)KM_PLANT_POT_ADC_MAX + travel) / (2 * travel));
 }
@@ -301,8 +320,16 @@ int32_t km_plant_turns_ddeg(const km_plant_t *p)
     return prv_pos_rounded(p);
 }
 
+int64_t km_plant_shaft_udeg(const km_plant_t *p)
+{
+    return (int64_t)p->pos_ddeg * 100000 + p->pos_rem_ndeg / 1000;
+}
+
 uint16_t km_plant_encoder_counts(const km_plant_t *p)
 {
+    if (p->cfg->real != NULL) {
+        return p->r.enc;
+    }
     /* The angle within one turn, [0, 3600) x 0.1 deg, to the nearest count. */
     int32_t within = p->pos_ddeg % 3600;
     if (within < 0) {
@@ -337,6 +364,9 @@ void km_plant_set_physics(km_plant_t *p, const km_plant_physics_t *in)
     p->time_us_part = 0;
     p->current_ma = 0;
     p->supply_ma = 0;
+    if (p->cfg->real != NULL) {
+        km_plant_real_place(p);
+    }
 }
 
 int32_t km_plant_speed_mdps(const km_plant_t *p)
@@ -353,6 +383,17 @@ int32_t km_plant_speed_dps(const km_plant_t *p)
 int32_t km_plant_current_ma(const km_plant_t *p)
 {
     return p->current_ma;
+}
+
+void km_plant_note_peak(km_plant_t *p)
+{
+    const int32_t i = p->current_ma < 0 ? -p->current_ma : p->current_ma;
+    p->step_peak_ma = i > p->step_peak_ma ? i : p->step_peak_ma;
+}
+
+int32_t km_plant_step_peak_ma(const km_plant_t *p)
+{
+    return p->step_peak_ma;
 }
 
 int32_t km_plant_supply_ma(const km_plant_t *p)
