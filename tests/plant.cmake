@@ -1,8 +1,10 @@
 # The plant tests compute expected physics with libm on the host (the plant
 # itself is integer-only).
-if(TARGET test_plant)
-  target_link_libraries(test_plant PRIVATE m)
-endif()
+foreach(t test_plant test_plant_real)
+  if(TARGET ${t})
+    target_link_libraries(${t} PRIVATE m)
+  endif()
+endforeach()
 
 # The plant also runs in the Cortex-M0 QEMU image: check that bar from the
 # host build (skipped when no ARM cross compiler is installed).

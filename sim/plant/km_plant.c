@@ -320,6 +320,7 @@ int32_t km_plant_turns_ddeg(const km_plant_t *p)
     return prv_pos_rounded(p);
 }
 
+/* The true multi-turn angle in µ° (measuring, not a sensor). */
 int64_t km_plant_shaft_udeg(const km_plant_t *p)
 {
     return (int64_t)p->pos_ddeg * 100000 + p->pos_rem_ndeg / 1000;
@@ -385,12 +386,14 @@ int32_t km_plant_current_ma(const km_plant_t *p)
     return p->current_ma;
 }
 
+/* Keeps the largest |current| of the step's sub-steps. */
 void km_plant_note_peak(km_plant_t *p)
 {
     const int32_t i = p->current_ma < 0 ? -p->current_ma : p->current_ma;
     p->step_peak_ma = i > p->step_peak_ma ? i : p->step_peak_ma;
 }
 
+/* The largest |current| of the last step, mA. */
 int32_t km_plant_step_peak_ma(const km_plant_t *p)
 {
     return p->step_peak_ma;

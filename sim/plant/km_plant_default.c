@@ -93,6 +93,7 @@ const km_plant_config_t km_plant_realistic_config = {
     .real = &km_plant_realistic_params,
 };
 
+/* A configuration by name; NULL for an unknown one. */
 const km_plant_config_t *km_plant_config_named(const char *name)
 {
     if (name == NULL) {
