@@ -289,6 +289,44 @@ static void test_lifting_torque_follows_forward_efficiency(void **state)
     assert_true(fails < 5);   /* 4 % above it does not (it only takes up the play) */
 }
 
+/* Stribeck: while turning, the friction the motor overcomes is
+ * Tc + Ts exp(-(w/ws)^2) + viscous + what the output side's own friction
+ * costs through the mesh; steady at a speed near ws it is well above the
+ * Coulomb level, far above ws it is back to it. A strong excess (100 mN·m,
+ * ws 5 °/s) makes the shape stand out of the current's resolution. */
+static void test_stribeck_friction_while_turning(void **state)
+{
+    (void)state;
+    km_plant_config_t *c = real_config(true);
+    s_real.stribeck_unm = 100000;
+    s_real.stribeck_ddps = 50;
+    const double ws = 5.0, kt = ke_out(); /* °/s, N·m per A */
+    const double mu_f = (100.0 - c->gear_eff_pct) / c->gear_eff_pct;
+    unsigned near = 0, far = 0;
+    km_plant_t p;
+    assert_true(km_plant_init(&p, c));
+    /* from fast down to a stop, slowly: the shaft follows the turning branch */
+    for (int16_t pwm = 300; pwm >= 20; pwm = (int16_t)(pwm > 100 ? pwm - 100 : pwm - 1)) {
+        const km_plant_input_t in = {KM_PLANT_DRIVE, pwm, 0};
+        run_ms(&p, &in, 800);
+        const double w = km_plant_speed_mdps(&p) / 1000.0; /* °/s */
+        const double friction = kt * km_plant_current_ma(&p) * 1e3 - c->viscous_unm_per_dps * w -
+                                (1.0 + mu_f) * s_real.out_coulomb_unm; /* µN·m */
+        const double want = c->coulomb_unm + s_real.stribeck_unm * exp(-(w / ws) * (w / ws));
+        if (w > 1.4 * ws && w < 1.8 * ws) {
+            print_message("PWM %d: %.2f deg/s, friction %.1f mN.m (%.1f expected)\n", pwm, w, friction / 1000,
+                          want / 1000);
+            assert_true(fabs(friction - want) < 2000.0);
+            assert_true(friction > c->coulomb_unm + 0.04 * s_real.stribeck_unm);
+            near++;
+        } else if (w > 10 * ws) {
+            assert_true(fabs(friction - c->coulomb_unm) < 2000.0);
+            far++;
+        }
+    }
+    assert_true(near > 0u && far > 0u);
+}
+
 /* Back-driving: with the bridge open, a slowly rising torque on the output
  * turns the shaft once it exceeds Tout + (Tc + Ts) / eff_back. */
 static void test_back_driving_needs_the_backward_efficiency(void **state)
@@ -417,6 +455,7 @@ int main(void)
         cmocka_unit_test(test_bridge_minimum_pulse_and_dead_time),
         cmocka_unit_test(test_winding_resistance_rises_with_temperature),
         cmocka_unit_test(test_lifting_torque_follows_forward_efficiency),
+        cmocka_unit_test(test_stribeck_friction_while_turning),
         cmocka_unit_test(test_back_driving_needs_the_backward_efficiency),
         cmocka_unit_test(test_backlash_and_stiffness),
         cmocka_unit_test(test_gravity_pulls_the_arm_down),
