@@ -1,0 +1,604 @@
+#!/usr/bin/env python3
+"""vg031: a virtual STM32G031 on unicorn (Debian's python3-unicorn) that
+runs the shipped, unmodified images and answers on an emulated bus.
+
+    vg031.py --boot km-boot-stm32g031.elf --app km-servo-app-stm32g031.kmfw
+             [--until-main] [--tcp PORT] [--ms N]
+    vg031.py --elf km-servo-stm32g031.elf ...
+
+Unicorn gives the Cortex-M0 instruction set and memory; this file adds
+what the core around it does: the NVIC, SCB and SysTick (ARMv6-M B3.2-B3.4),
+exception entry with the stacked frame (B1.5.6; the return is done by
+unicorn's core once IPSR is set), HardFault on an unmapped access,
+system reset (AIRCR, IWDG) with flash kept. Virtual time advances one
+instruction per core clock (CPI 1, an approximation: the M0+ takes 2-3
+cycles for loads, branches and flash wait states); the CPU runs in
+slices of 1 us and interrupts are taken between slices."""
+import argparse
+import ctypes
+import os
+import socket
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from unicorn import (Uc, UcError, UC_ARCH_ARM, UC_MODE_THUMB, UC_MODE_MCLASS, UC_PROT_ALL,  # noqa: E402
+                     UC_HOOK_MEM_WRITE, UC_HOOK_CODE, UC_HOOK_MEM_UNMAPPED, UC_HOOK_INTR)
+from unicorn import arm_const as A  # noqa: E402
+
+import g031_periph as P  # noqa: E402
+
+RAM_BASE, RAM_SIZE = 0x20000000, 0x2000
+UID = (0x00390041, 0x4E501120, 0x20383634)   # an arbitrary 96-bit unique ID (RM0444 §40.1)
+# Fixed sensor inputs (ADC codes, 12 bits) until the plant is attached:
+# pot mid-travel, zero current, 12 V supply through 100k/10k, NTC at 25 C.
+DEFAULT_SENSORS = {0: 2048, 1: 2048, 2: 1365, 3: 2048}
+RESET_PIN, RESET_PWR, RESET_SFT, RESET_IWDG = 1 << 26, 1 << 27, 1 << 28, 1 << 29
+
+
+class Scs:
+    """NVIC, SCB and SysTick (ARMv6-M B3.2-B3.4; PM0223 §4): 2 priority bits
+    per field (bits 7:6), word-access IPR, VTOR bits 31:7, AIRCR VECTKEY /
+    SYSRESETREQ, ICSR PENDSV/PENDST, SysTick 24-bit down-counter on the core
+    clock with COUNTFLAG cleared by a read."""
+
+    def __init__(self, machine):
+        self.m = machine
+        self.reset()
+
+    def reset(self):
+        """Power-on / system reset values."""
+        self.enabled = 0
+        self.pending = 0          # bit n: IRQ n
+        self.ipr = [0] * 8
+        self.vtor = 0
+        self.shpr2 = 0
+        self.shpr3 = 0
+        self.pend_sys = set()     # 11 SVC, 14 PendSV, 15 SysTick
+        self.syst_csr = 0
+        self.syst_rvr = 0
+        self.syst_next = None
+        self.countflag = False
+
+    def prio(self, exc):
+        """Priority of exception number exc (NMI -2, HardFault -1)."""
+        if exc == 2:
+            return -2
+        if exc == 3:
+            return -1
+        if exc == 11:
+            return self.shpr2 >> 24 & 0xC0
+        if exc in (14, 15):
+            return (self.shpr3 >> (16 if exc == 14 else 24)) & 0xC0
+        irq = exc - 16
+        return (self.ipr[irq >> 2] >> (8 * (irq & 3))) & 0xC0
+
+    def _syst_period(self):
+        return (self.syst_rvr + 1) * P.NS / self.m.hz
+
+    def read(self, off, now):
+        if off == 0x010:
+            v = self.syst_csr | (1 << 16 if self.countflag else 0)
+            self.countflag = False
+            return v
+        if off == 0x014:
+            return self.syst_rvr
+        if off == 0x018:
+            if self.syst_next is None:
+                return 0
+            return int((self.syst_next - now) * self.m.hz / P.NS) % (self.syst_rvr + 1)
+        if off in (0x100, 0x180):
+            return self.enabled
+        if off in (0x200, 0x280):
+            return self.pending
+        if 0x400 <= off < 0x420:
+            return self.ipr[(off - 0x400) >> 2]
+        if off == 0xD00:
+            return 0x410CC601      # CPUID: Cortex-M0+ r0p1
+        if off == 0xD04:
+            active = self.m.active[-1] if self.m.active else 0
+            return active | (1 << 28 if 14 in self.pend_sys else 0) | (1 << 26 if 15 in self.pend_sys else 0)
+        if off == 0xD08:
+            return self.vtor
+        if off == 0xD0C:
+            return 0xFA050000
+        if off == 0xD14:
+            return 0x208           # CCR: STKALIGN, UNALIGN_TRP (RES1 on ARMv6-M)
+        if off == 0xD1C:
+            return self.shpr2
+        if off == 0xD20:
+            return self.shpr3
+        return 0
+
+    def write(self, off, val, now):
+        if off == 0x010:
+            was = self.syst_csr & 1
+            self.syst_csr = val & 7
+            if val & 1 and not was:
+                self.syst_next = now + self._syst_period()
+            elif not val & 1:
+                self.syst_next = None
+        elif off == 0x014:
+            self.syst_rvr = val & 0xFFFFFF
+        elif off == 0x018:
+            self.countflag = False
+            if self.syst_csr & 1:
+                self.syst_next = now + self._syst_period()
+        elif off == 0x100:
+            self.enabled |= val
+        elif off == 0x180:
+            self.enabled &= ~val
+        elif off == 0x200:
+            self.pending |= val
+        elif off == 0x280:
+            self.pending &= ~val
+        elif 0x400 <= off < 0x420:
+            self.ipr[(off - 0x400) >> 2] = val & 0xC0C0C0C0
+        elif off == 0xD04:
+            for bit, exc, on in ((28, 14, True), (27, 14, False), (26, 15, True), (25, 15, False)):
+                if val & (1 << bit):
+                    (self.pend_sys.add if on else self.pend_sys.discard)(exc)
+        elif off == 0xD08:
+            self.vtor = val & 0xFFFFFF80
+        elif off == 0xD0C:
+            if val >> 16 == 0x05FA and val & 4:
+                self.m.request_reset("sysresetreq")
+        elif off == 0xD1C:
+            self.shpr2 = val & 0xC0000000
+        elif off == 0xD20:
+            self.shpr3 = val & 0xC0C00000
+
+    def tick(self, now):
+        """SysTick wraps: COUNTFLAG, and the exception with TICKINT."""
+        while self.syst_next is not None and now >= self.syst_next:
+            self.countflag = True
+            if self.syst_csr & 2:
+                self.pend_sys.add(15)
+            self.syst_next += self._syst_period()
+
+    def next_event(self, now):
+        return self.syst_next
+
+
+class Machine:
+    """One STM32G031: core, memory and peripherals, in virtual time."""
+
+    def __init__(self, flash_image, elves=(), watch=(), sensors=None):
+        self.flash_buf = (ctypes.c_ubyte * P.FLASH_SIZE).from_buffer_copy(flash_image.ljust(P.FLASH_SIZE, b"\xff"))
+        self.flash = memoryview(self.flash_buf).cast("B")
+        self.sensors = dict(DEFAULT_SENSORS if sensors is None else sensors)
+        self.now = 0
+        self.instructions = 0
+        self.resets = []            # [(time, reason)]
+        self.faults = []            # [(time, kind, pc)]
+        self.reset_request = None
+        self.wfi_sites = set()
+        self.watches = {addr: [] for addr in watch}   # address: [(time, instructions before the slice)]
+        for path in elves:
+            self.find_wfi(path)
+        self.uc = None
+        self.ram = bytearray(RAM_SIZE)
+        self.rcc = P.Rcc(self)
+        self.scs = Scs(self)
+        self.blocks = []
+        self._build_peripherals()
+        self.rcc.set_reset_flags(RESET_PWR | RESET_PIN)
+        self._power_on()
+
+    def _build_peripherals(self):
+        self.flashc = P.Flash(self)
+        self.gpioa, self.gpiob = P.GpioA(self), P.GpioB(self)
+        self.usart1 = P.Usart(self)
+        self.tim2, self.tim3 = P.Tim2(self), P.Tim3(self)
+        self.adc, self.dma, self.dmamux = P.Adc(self), P.Dma(self), P.Dmamux(self)
+        self.iwdg = P.Iwdg(self)
+        self.blocks = [self.rcc, self.flashc, self.gpioa, self.gpiob, self.usart1, self.tim2,
+                       self.tim3, self.adc, self.dma, self.dmamux, self.iwdg]
+        self.by_page = {}
+        for b in self.blocks:
+            self.by_page.setdefault(b.base & ~0xFFF, []).append(b)
+        self.unmodelled = set()
+
+    @property
+    def hz(self):
+        return self.rcc.sysclk()
+
+    def pclk(self):
+        return self.rcc.sysclk()
+
+    # ---- memory -------------------------------------------------------------
+
+    def _map(self):
+        uc = Uc(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS)
+        uc.ctl_set_cpu_model(A.UC_CPU_ARM_CORTEX_M0)
+        addr = ctypes.addressof(self.flash_buf)
+        uc.mem_map_ptr(P.FLASH_BASE, P.FLASH_SIZE, UC_PROT_ALL, addr)
+        uc.mem_map_ptr(0x00000000, P.FLASH_SIZE, UC_PROT_ALL, addr)   # boot alias (RM0444 §2.5)
+        uc.mem_map(RAM_BASE, RAM_SIZE)
+        uc.mem_write(RAM_BASE, bytes(self.ram))
+        uc.mem_map(0x1FFF7000, 0x1000)                                # engineering bytes: UID
+        uc.mem_write(0x1FFF7590, b"".join(w.to_bytes(4, "little") for w in UID))
+        for page in self.by_page:
+            uc.mmio_map(page, 0x1000, self._mmio_read, page, self._mmio_write, page)
+        uc.mmio_map(0xE000E000, 0x1000, self._scs_read, None, self._scs_write, None)
+        uc.hook_add(UC_HOOK_MEM_WRITE, self._flash_hook, None, P.FLASH_BASE, P.FLASH_BASE + P.FLASH_SIZE - 1)
+        uc.hook_add(UC_HOOK_MEM_WRITE, self._flash_hook, None, 0, P.FLASH_SIZE - 1)
+        uc.hook_add(UC_HOOK_MEM_UNMAPPED, self._unmapped_hook)
+        uc.hook_add(UC_HOOK_INTR, self._intr_hook)
+        for addr in self.watches:
+            uc.hook_add(UC_HOOK_CODE, self._watch_hook, addr, addr, addr)
+        for site in self.wfi_sites:
+            uc.hook_add(UC_HOOK_CODE, self._wfi_hook, None, site, site)
+        self.uc = uc
+
+    def find_wfi(self, elf_path):
+        """WFI sites of an image (unicorn's core just ends the run there)."""
+        from elftools.elf.elffile import ELFFile
+        with open(elf_path, "rb") as f:
+            for sec in ELFFile(f).iter_sections():
+                if sec["sh_flags"] & 4 and sec["sh_type"] == "SHT_PROGBITS":
+                    data, base = sec.data(), sec["sh_addr"]
+                    for i in range(0, len(data) - 1, 2):
+                        if data[i] == 0x30 and data[i + 1] == 0xBF:
+                            self.wfi_sites.add(base + i)
+
+    def mem_write(self, addr, data):
+        """A bus master (DMA) writes memory."""
+        self.uc.mem_write(addr, bytes(data))
+
+    def flash_store(self, off, data):
+        """The flash controller changes the array."""
+        self.flash[off:off + len(data)] = data
+
+    def _mmio_read(self, uc, off, size, page):
+        addr = page + off
+        for b in self.by_page[page]:
+            if b.base <= addr < b.base + 0x400:
+                v = b.read(addr - b.base, self.now)
+                return (v >> (8 * (addr & 3))) & ((1 << (8 * size)) - 1) if size < 4 else v
+        self.unmodelled.add(addr)
+        return 0
+
+    def _mmio_write(self, uc, off, size, val, page):
+        addr = page + off
+        for b in self.by_page[page]:
+            if b.base <= addr < b.base + 0x400:
+                b.write(addr - b.base, val, self.now)
+                return
+        self.unmodelled.add(addr)
+
+    def _scs_read(self, uc, off, size, _):
+        return self.scs.read(off, self.now)
+
+    def _scs_write(self, uc, off, size, val, _):
+        self.scs.write(off, val, self.now)
+
+    def _flash_hook(self, uc, access, addr, size, value, _):
+        off = addr & (P.FLASH_SIZE - 1)
+        self.flash_writes.append((off, bytes(self.flash[off:off + size]), size, value))
+
+    def _unmapped_hook(self, uc, access, addr, size, value, _):
+        self.fault = ("unmapped", addr)
+        return False
+
+    def _intr_hook(self, uc, intno, _):
+        self.fault = ("exception %d" % intno, uc.reg_read(A.UC_ARM_REG_PC))
+        uc.emu_stop()
+
+    def _watch_hook(self, uc, addr, size, watch):
+        hits = self.watches[watch]
+        if len(hits) < 1000:
+            hits.append((self.now, self.instructions))
+
+    def _wfi_hook(self, uc, addr, size, _):
+        self.wfi_at = addr
+
+    # ---- reset and exceptions -------------------------------------------------
+
+    def _power_on(self):
+        self._map()
+        self._core_reset()
+
+    def request_reset(self, reason):
+        """AIRCR.SYSRESETREQ or the IWDG: reset at the end of this slice."""
+        if self.reset_request is None:
+            self.reset_request = reason
+
+    def _system_reset(self, reason):
+        """System reset (RM0444 §5.1.2): peripherals and core to reset values,
+        SRAM and flash keep their contents; RCC_CSR records the cause."""
+        self.resets.append((self.now, reason))
+        self.rcc.set_reset_flags(RESET_PIN | (RESET_IWDG if reason == "iwdg" else RESET_SFT))
+        for b in self.blocks:
+            b.reset()
+        self.scs.reset()
+        self.ram = bytearray(self.uc.mem_read(RAM_BASE, RAM_SIZE))
+        self.uc = None
+        self._map()
+        self._core_reset()
+
+    def _core_reset(self):
+        """Take SP and the reset vector from address 0 (the flash alias)."""
+        sp = int.from_bytes(self.flash[0:4], "little")
+        pc = int.from_bytes(self.flash[4:8], "little")
+        self.uc.reg_write(A.UC_ARM_REG_MSP, sp)
+        self.uc.reg_write(A.UC_ARM_REG_SP, sp)
+        self.uc.reg_write(A.UC_ARM_REG_PRIMASK, 0)
+        self.uc.reg_write(A.UC_ARM_REG_IPSR, 0)
+        self.pc = pc & ~1
+        self.active = []
+        self.reset_request = None
+        self.locked_up = False
+
+    def _pending_exception(self):
+        """Highest-priority pending exception that may preempt, or None."""
+        primask = self.uc.reg_read(A.UC_ARM_REG_PRIMASK) & 1
+        cur = min([self.scs.prio(e) for e in self.active], default=256)
+        if primask:
+            cur = min(cur, 0)
+        best = None
+        cands = [16 + i for i in range(32) if self.scs.pending & self.scs.enabled & (1 << i)]
+        cands += sorted(self.scs.pend_sys)
+        for exc in cands:
+            p = self.scs.prio(exc)
+            if p < cur and (best is None or p < self.scs.prio(best)):
+                best = exc
+        return best
+
+    def _enter(self, exc, ret_pc):
+        """Exception entry (ARMv6-M B1.5.6): push R0-R3, R12, LR, the return
+        address and xPSR on the main stack (8-byte aligned, bit 9 of the
+        stacked xPSR records the realignment), EXC_RETURN in LR, IPSR = exc,
+        PC from the vector table at VTOR."""
+        uc = self.uc
+        sp = uc.reg_read(A.UC_ARM_REG_SP)
+        xpsr = uc.reg_read(A.UC_ARM_REG_XPSR)
+        align = 4 if sp & 4 else 0
+        frame_sp = (sp - 32 - align) & 0xFFFFFFFF
+        regs = [uc.reg_read(r) for r in (A.UC_ARM_REG_R0, A.UC_ARM_REG_R1, A.UC_ARM_REG_R2, A.UC_ARM_REG_R3,
+                                         A.UC_ARM_REG_R12, A.UC_ARM_REG_LR)]
+        stacked_psr = (xpsr & ~(1 << 9)) | (1 << 24) | ((1 << 9) if align else 0)
+        frame = b"".join(v.to_bytes(4, "little") for v in regs + [ret_pc & ~1, stacked_psr])
+        try:
+            uc.mem_write(frame_sp, frame)
+            vec = int.from_bytes(uc.mem_read(self.scs.vtor + 4 * exc, 4), "little")
+        except UcError:
+            self.locked_up = True
+            self.faults.append((self.now, "lockup: stacking", ret_pc))
+            return
+        handler_mode = bool(self.active)
+        uc.reg_write(A.UC_ARM_REG_SP, frame_sp)
+        uc.reg_write(A.UC_ARM_REG_LR, 0xFFFFFFF1 if handler_mode else 0xFFFFFFF9)
+        uc.reg_write(A.UC_ARM_REG_IPSR, exc)
+        self.active.append(exc)
+        if exc >= 16:
+            self.scs.pending &= ~(1 << (exc - 16))
+        self.scs.pend_sys.discard(exc)
+        self.pc = vec & ~1
+
+    def _exit(self, exc_return):
+        """Exception return (ARMv6-M B1.5.8): a branch to EXC_RETURN in Handler
+        mode pops the frame the entry pushed and goes back to the previous
+        mode. unicorn's core does not do it (it faults at 0xFFFFFFF8)."""
+        uc = self.uc
+        sp = uc.reg_read(A.UC_ARM_REG_SP)
+        words = [int.from_bytes(uc.mem_read(sp + 4 * i, 4), "little") for i in range(8)]
+        for reg, val in zip((A.UC_ARM_REG_R0, A.UC_ARM_REG_R1, A.UC_ARM_REG_R2, A.UC_ARM_REG_R3,
+                             A.UC_ARM_REG_R12, A.UC_ARM_REG_LR), words):
+            uc.reg_write(reg, val)
+        psr = words[7]
+        self.active.pop()
+        if exc_return & 0xF == 0xD:
+            self.faults.append((self.now, "return to PSP not modelled", words[6]))
+        uc.reg_write(A.UC_ARM_REG_SP, (sp + 32 + (4 if psr & (1 << 9) else 0)) & 0xFFFFFFFF)
+        uc.reg_write(A.UC_ARM_REG_APSR, psr & 0xF0000000)
+        uc.reg_write(A.UC_ARM_REG_IPSR, self.active[-1] if self.active else 0)
+        self.pc = words[6] & ~1
+
+    def _sync_active(self):
+        """Exception returns happened inside unicorn: drop finished ones."""
+        ipsr = self.uc.reg_read(A.UC_ARM_REG_IPSR) & 0x3F
+        while self.active and self.active[-1] != ipsr:
+            self.active.pop()
+
+    def _fault(self, kind, pc):
+        """HardFault (or lockup inside NMI/HardFault: the core stops, B1.5.15)."""
+        self.faults.append((self.now, kind, pc))
+        if any(e in (2, 3) for e in self.active):
+            self.locked_up = True
+            return
+        self._enter(3, pc)
+
+    # ---- running -------------------------------------------------------------
+
+    def _levels(self):
+        """Peripheral interrupt lines into the NVIC pending bits (level
+        sensitive: an active interrupt does not pend again until it returns)."""
+        for irq, block in ((15, self.tim2), (16, self.tim3), (27, self.usart1), (12, self.adc)):
+            if block.irq() and (16 + irq) not in self.active:
+                self.scs.pending |= 1 << irq
+
+    def _tick_all(self):
+        for b in self.blocks:
+            b.tick(self.now)
+        self.scs.tick(self.now)
+
+    def _next_event(self):
+        times = [b.next_event(self.now) for b in self.blocks] + [self.scs.next_event(self.now)]
+        times = [t for t in times if t is not None and t > self.now]
+        return min(times) if times else self.now + P.NS // 1000
+
+    def _undo_flash_writes(self):
+        """Flash is RAM to unicorn: undo the stores, hand them to the controller."""
+        writes, self.flash_writes = self.flash_writes, []
+        for off, old, size, value in reversed(writes):
+            self.flash[off:off + size] = old
+        for off, old, size, value in writes:
+            self.flashc.array_write(P.FLASH_BASE + off, size, value, self.now)
+
+    def _run_slice(self, ns):
+        """Runs the CPU for `ns` of virtual time (or to a WFI or a fault)."""
+        count = max(1, int(self.hz * ns // P.NS))
+        self.flash_writes, self.fault, self.wfi_at = [], None, None
+        err = None
+        try:
+            self.uc.emu_start(self.pc | 1, 0xFFFFFFFF, 0, count)
+        except UcError as e:
+            err = e
+        self.pc = self.uc.reg_read(A.UC_ARM_REG_PC)
+        self.instructions += count
+        self.now += ns
+        self._undo_flash_writes()
+        if (self.pc & 0xFFFFFFF0) == 0xFFFFFFF0 and self.active:
+            self._exit(self.pc | 1)
+            return False
+        if self.fault or err:
+            kind = self.fault[0] if self.fault else str(err)
+            self._fault(kind, self.pc)
+            return False
+        return self.wfi_at is not None and self.pc == self.wfi_at + 2
+
+    def step(self, ns=1000):
+        """One slice: CPU, peripherals, interrupts, resets."""
+        self._sync_active()
+        exc = self._pending_exception()
+        if exc is not None:
+            self._enter(exc, self.pc)
+        if self.locked_up:
+            sleep = True
+            self.now += ns
+        else:
+            sleep = self._run_slice(ns)
+        self._sync_active()
+        self._tick_all()
+        self._levels()
+        if self.reset_request:
+            self._system_reset(self.reset_request)
+            return
+        if sleep:
+            self._sleep()
+
+    def _sleep(self):
+        """WFI: time passes to the next event until an interrupt is pending
+        (PRIMASK does not stop the wake-up, B1.5.19)."""
+        while True:
+            if self.scs.pending & self.scs.enabled or self.scs.pend_sys or self.reset_request:
+                return
+            self.now = max(self.now, self._next_event())
+            self._tick_all()
+            self._levels()
+            if self.reset_request:
+                self._system_reset(self.reset_request)
+                return
+
+    def run_until(self, t_ns, stop=None):
+        """Runs until virtual time t_ns, or until stop() is true."""
+        while self.now < t_ns:
+            self.step()
+            if stop is not None and stop():
+                return True
+        return False
+
+    # ---- the bus ---------------------------------------------------------------
+
+    def bit_ns(self, baud):
+        return P.NS / baud
+
+    def send(self, data, baud, start=None):
+        """Puts bytes on the wire back to back from `start` (default: now).
+        Returns the end of the last stop bit."""
+        t = self.now if start is None else start
+        bit = self.bit_ns(baud)
+        for byte in data:
+            self.usart1.receive_at(t + 9.5 * bit, byte)
+            t += 10 * bit
+        return t
+
+    def take_output(self):
+        """Bytes the MCU put on the wire since the last call: [(start, byte)]."""
+        out, self.usart1.wire_out = self.usart1.wire_out, []
+        return out
+
+
+def flash_from_images(boot=None, app_kmfw=None, elf=None):
+    """The 64 KiB flash contents from the images (ELF load segments; the
+    update image at the application region 0x08002000)."""
+    from elftools.elf.elffile import ELFFile
+    flash = bytearray(b"\xff" * P.FLASH_SIZE)
+    for path in [p for p in (boot, elf) if p]:
+        with open(path, "rb") as f:
+            for seg in ELFFile(f).iter_segments():
+                if seg["p_type"] != "PT_LOAD" or not seg["p_filesz"]:
+                    continue
+                addr = seg["p_paddr"] - P.FLASH_BASE
+                if 0 <= addr < P.FLASH_SIZE:
+                    flash[addr:addr + seg["p_filesz"]] = seg.data()
+    if app_kmfw:
+        with open(app_kmfw, "rb") as f:
+            img = f.read()
+        flash[0x2000:0x2000 + len(img)] = img
+    return bytes(flash)
+
+
+def symbol(elf_path, name):
+    """Address of a symbol of an ELF."""
+    from elftools.elf.elffile import ELFFile
+    with open(elf_path, "rb") as f:
+        for s in ELFFile(f).get_section_by_name(".symtab").iter_symbols():
+            if s.name == name:
+                return s["st_value"] & ~1
+    raise KeyError(name)
+
+
+def make(args, watch=()):
+    """A machine from command-line style arguments."""
+    elves = [p for p in (args.boot, args.elf, args.app_elf) if p]
+    return Machine(flash_from_images(args.boot, args.app, args.elf), elves=elves, watch=watch)
+
+
+def serve_tcp(m, port, baud):
+    """Byte port: what a client sends goes on the wire at the current
+    virtual time with the bit timing of `baud`; what the MCU sends comes back."""
+    srv = socket.socket()
+    srv.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    srv.bind(("127.0.0.1", port))
+    srv.listen(1)
+    conn, _ = srv.accept()
+    conn.setblocking(False)
+    wire_free = 0
+    while True:
+        try:
+            data = conn.recv(4096)
+            if data == b"":
+                return
+            wire_free = m.send(data, baud, max(m.now, wire_free))
+        except BlockingIOError:
+            pass
+        m.run_until(m.now + 100_000)
+        out = m.take_output()
+        if out:
+            conn.sendall(bytes(b for _t, b in out))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--boot")
+    ap.add_argument("--app", help="update image (.kmfw) for the application region")
+    ap.add_argument("--app-elf", help="the application's ELF (its symbols and WFI sites)")
+    ap.add_argument("--elf", help="a stand-alone image linked at 0x08000000")
+    ap.add_argument("--ms", type=float, default=10.0)
+    ap.add_argument("--tcp", type=int)
+    ap.add_argument("--baud", type=int, default=1000000)
+    a = ap.parse_args()
+    m = make(a)
+    if a.tcp:
+        serve_tcp(m, a.tcp, a.baud)
+        return 0
+    m.run_until(int(a.ms * 1e6))
+    print("t=%.3f ms instructions=%d pc=0x%08x resets=%s faults=%s unmodelled=%s" % (
+        m.now / 1e6, m.instructions, m.pc, m.resets, m.faults, sorted(hex(x) for x in m.unmodelled)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
