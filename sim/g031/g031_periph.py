@@ -124,6 +124,7 @@ class Flash(Block):
         self.half = None         # first word of a double word: (addr, value)
 
     def read(self, off, now):
+        self.tick(now)  # BSY1 and EOP change together
         v = self.r.get(off, 0)
         if off == self.SR:
             v = (v & ~self.BSY1) | (self.BSY1 if now < self.busy_until else 0)
@@ -138,6 +139,8 @@ class Flash(Block):
             self._cr(val, now)
         elif off == 0x00:
             self.r[0] = val & 0x70F                      # ACR: latency reads back
+        elif off == 0x18:
+            self.r[0x18] &= ~(val & 0xC0000000)          # ECCR: ECCC/ECCD rc_w1 (§3.7.6)
         else:
             super().write(off, val, now)
 
@@ -161,7 +164,7 @@ class Flash(Block):
             return
         if now < self.busy_until:
             return  # §3.7.5: CR not writable while BSY1
-        self.r[self.CR] = val & 0xC00FFFFF & ~(1 << 16)
+        self.r[self.CR] = val & 0xDF071FFF & ~(1 << 16)  # §3.7.5 bits
         if val & (1 << 31):
             self.key_state = 0
         if val & (1 << 16) and val & 2:

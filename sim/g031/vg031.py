@@ -172,6 +172,7 @@ class Machine:
         self.resets = []            # [(time, reason)]
         self.faults = []            # [(time, kind, pc)]
         self.reset_request = None
+        self.slice_ns = 1000        # interrupts are taken between slices
         self.wfi_sites = set()
         self.watches = {addr: [] for addr in watch}   # address: [(time, instructions before the slice)]
         for path in elves:
@@ -458,8 +459,17 @@ class Machine:
             return False
         return self.wfi_at is not None and self.pc == self.wfi_at + 2
 
-    def step(self, ns=1000):
+    def hang(self, addr=0x0800E7F0):
+        """Fault injection for tests: the CPU parks in `b .` at addr (an
+        erased cell below the store) with interrupts masked, as a main
+        loop stuck for ever would; only the IWDG gets it out."""
+        self.flash[addr - P.FLASH_BASE:addr - P.FLASH_BASE + 2] = b"\xfe\xe7"
+        self.uc.reg_write(A.UC_ARM_REG_PRIMASK, 1)
+        self.pc = addr
+
+    def step(self, ns=None):
         """One slice: CPU, peripherals, interrupts, resets."""
+        ns = self.slice_ns if ns is None else ns
         self._sync_active()
         exc = self._pending_exception()
         if exc is not None:

@@ -1,0 +1,193 @@
+#!/usr/bin/env python3
+"""Unit tests of the virtual G031's peripheral models against RM0444
+behaviour (sim/g031/g031_periph.py), without a CPU."""
+import os
+import sys
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "sim", "g031"))
+import g031_periph as P  # noqa: E402
+
+
+class FakeMachine:
+    """The little a peripheral asks of the machine."""
+    def __init__(self):
+        self.flash = bytearray(b"\xff" * P.FLASH_SIZE)
+        self.resets = []
+        self.sensors = {}
+
+    def pclk(self):
+        return 64_000_000
+
+    def flash_store(self, off, data):
+        self.flash[off:off + len(data)] = data
+
+    def request_reset(self, why):
+        self.resets.append(why)
+
+
+def unlocked_flash():
+    m = FakeMachine()
+    f = P.Flash(m)
+    f.write(0x08, 0x45670123, 0)
+    f.write(0x08, 0xCDEF89AB, 0)
+    return m, f
+
+
+class FlashTests(unittest.TestCase):
+    def test_reset_locked_and_key_sequence_unlocks(self):  # RM0444 §3.3.6
+        m, f = unlocked_flash()
+        self.assertEqual(f.read(0x14, 0) >> 31, 0)
+        self.assertEqual(P.Flash(FakeMachine()).read(0x14, 0) >> 31, 1)
+
+    def test_wrong_key_locks_until_reset(self):  # §3.3.6
+        f = P.Flash(FakeMachine())
+        f.write(0x08, 0x12345678, 0)
+        f.write(0x08, 0x45670123, 0)
+        f.write(0x08, 0xCDEF89AB, 0)
+        self.assertEqual(f.read(0x14, 0) >> 31, 1)
+        f.reset()
+        f.write(0x08, 0x45670123, 0)
+        f.write(0x08, 0xCDEF89AB, 0)
+        self.assertEqual(f.read(0x14, 0) >> 31, 0)
+
+    def test_double_word_program_busy_then_eop(self):  # §3.3.8, DS12992 tPROG
+        m, f = unlocked_flash()
+        f.write(0x14, (1 << 24) | 1, 0)
+        f.array_write(0x08000100, 4, 0x11223344, 0)
+        f.array_write(0x08000104, 4, 0x55667788, 0)
+        self.assertTrue(f.read(0x10, 1000) & (1 << 16))
+        self.assertEqual(m.flash[0x100:0x108], b"\xff" * 8)
+        sr = f.read(0x10, P.FLASH_PROG_NS)
+        self.assertEqual(sr & ((1 << 16) | 1), 1)
+        self.assertEqual(bytes(m.flash[0x100:0x108]), bytes.fromhex("4433221188776655"))
+
+    def test_program_over_programmed_cell_is_progerr(self):  # §3.3.8
+        m, f = unlocked_flash()
+        m.flash[0x200] = 0
+        f.write(0x14, 1, 0)
+        f.array_write(0x08000200, 4, 0, 0)
+        f.array_write(0x08000204, 4, 0, 0)
+        self.assertTrue(f.read(0x10, 0) & (1 << 3))
+
+    def test_second_word_elsewhere_is_pgaerr_and_byte_is_sizerr(self):  # §3.3.8
+        m, f = unlocked_flash()
+        f.write(0x14, 1, 0)
+        f.array_write(0x08000300, 4, 0, 0)
+        f.array_write(0x08000310, 4, 0, 0)
+        self.assertTrue(f.read(0x10, 0) & (1 << 5))
+        f.array_write(0x08000300, 1, 0, 0)
+        self.assertTrue(f.read(0x10, 0) & (1 << 6))
+
+    def test_write_without_pg_is_pgserr(self):  # §3.7.4 PGSERR
+        m, f = unlocked_flash()
+        f.array_write(0x08000300, 4, 0, 0)
+        self.assertTrue(f.read(0x10, 0) & (1 << 7))
+        self.assertEqual(m.flash[0x300], 0xFF)
+
+    def test_page_erase_takes_erase_time_and_pnb_has_10_bits(self):  # §3.3.7, §3.7.5
+        m, f = unlocked_flash()
+        m.flash[31 * 2048:31 * 2048 + 4] = b"\0\0\0\0"
+        f.write(0x14, (1 << 24) | 2 | (31 << 3) | (1 << 16), 0)
+        self.assertTrue(f.read(0x10, P.FLASH_ERASE_NS - 1) & (1 << 16))
+        self.assertEqual(f.read(0x10, P.FLASH_ERASE_NS) & 1, 1)
+        self.assertEqual(bytes(m.flash[31 * 2048:31 * 2048 + 4]), b"\xff" * 4)
+
+
+class RccTests(unittest.TestCase):
+    def test_reset_value_has_hsi_on_and_ready(self):  # §5.4.1 (SVD corrected)
+        r = P.Rcc(FakeMachine())
+        self.assertEqual(r.read(0, 0) & 0x500, 0x500)
+
+    def test_pll_ready_and_sws_follow(self):  # §5.4.1, §5.4.3
+        r = P.Rcc(FakeMachine())
+        r.write(0x0C, 2 | (8 << 8) | (1 << 28) | (1 << 29), 0)
+        r.write(0, 0x500 | (1 << 24), 0)
+        self.assertTrue(r.read(0, 0) & (1 << 25))
+        r.write(0x08, 2, 0)
+        self.assertEqual((r.read(0x08, 0) >> 3) & 7, 2)
+        self.assertEqual(r.sysclk(), 64_000_000)
+
+    def test_reset_flags_sticky_until_rmvf(self):  # §5.4 RCC_CSR
+        r = P.Rcc(FakeMachine())
+        r.set_reset_flags(1 << 29)
+        r.reset()
+        self.assertTrue(r.read(0x60, 0) & (1 << 29))
+        r.write(0x60, 1 << 23, 0)
+        self.assertEqual(r.read(0x60, 0) & 0xFE000000, 0)
+
+
+class UsartTests(unittest.TestCase):
+    def usart(self):
+        u = P.Usart(FakeMachine())
+        u.write(0x0C, 556, 0)            # 64 MHz / 556 = 115108 baud
+        u.write(0x00, 1 | 4 | 8, 0)
+        return u
+
+    def test_tx_byte_takes_ten_bit_times_then_tc(self):  # §33.5.5
+        u = self.usart()
+        u.write(0x28, 0x55, 0)
+        self.assertEqual(u.read(0x1C, 0) & (1 << 6), 0)
+        end = 10 * 556 * P.NS / 64_000_000
+        u.tick(end - 1)
+        self.assertEqual(u.wire_out, [])
+        u.tick(end)
+        self.assertEqual(u.wire_out, [(0, 0x55)])
+        self.assertTrue(u.read(0x1C, end) & (1 << 6))
+
+    def test_second_byte_sets_ore_and_keeps_first(self):  # §33.5.6
+        u = self.usart()
+        u.receive_at(100, 0x11)
+        u.receive_at(200, 0x22)
+        u.tick(300)
+        isr = u.read(0x1C, 300)
+        self.assertTrue(isr & (1 << 3) and isr & (1 << 5))
+        self.assertEqual(u.read(0x24, 300), 0x11)
+        self.assertEqual(u.read(0x1C, 300) & (1 << 5), 0)
+
+    def test_half_duplex_hears_own_byte_only_with_re(self):  # §33.5.14
+        u = self.usart()
+        u.write(0x08, 8, 0)
+        u.write(0x28, 0xA5, 0)
+        u.tick(10 ** 9)
+        self.assertEqual(u.read(0x24, 0), 0xA5)
+        u.write(0x00, 1 | 8, 0)
+        u.write(0x28, 0x5A, 10 ** 9)
+        u.tick(2 * 10 ** 9)
+        self.assertEqual(u.read(0x1C, 0) & (1 << 5), 0)
+
+
+class TimIwdgTests(unittest.TestCase):
+    def test_psc_loaded_at_update_and_compare_sets_cc1if(self):  # §22.3.1, §22.3.7
+        t = P.Tim2(FakeMachine())
+        t.write(0x2C, 0xFFFFFFFF, 0)
+        t.write(0x28, 63, 0)
+        t.write(0x14, 1, 0)
+        t.write(0x10, 0, 0)
+        t.write(0x34, 1000, 0)
+        t.write(0x00, 1, 0)
+        self.assertEqual(t.read(0x24, 999_000), 999)
+        t.tick(999_000)
+        self.assertEqual(t.read(0x10, 0) & 2, 0)
+        t.tick(1_000_000)
+        self.assertTrue(t.read(0x10, 0) & 2)
+        t.write(0x10, ~2, 0)                 # rc_w0
+        self.assertEqual(t.read(0x10, 0) & 2, 0)
+
+    def test_iwdg_resets_after_reload_period(self):  # §27.3
+        m = FakeMachine()
+        w = P.Iwdg(m)
+        w.write(0, 0xCCCC, 0)
+        w.write(0, 0x5555, 0)
+        w.write(4, 4, 0)                      # /64
+        w.write(8, 249, 0)                    # 250 * 64 / 32 kHz = 500 ms
+        self.assertEqual(w.read(0x0C, 0), 3)  # PVU, RVU while updating
+        w.write(0, 0xAAAA, 0)
+        w.tick(499_999_999)
+        self.assertEqual(m.resets, [])
+        w.tick(500_000_000)
+        self.assertEqual(m.resets, ["iwdg"])
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=1)
