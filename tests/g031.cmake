@@ -22,9 +22,6 @@ if(KM_DEBIAN_PYTHON AND KM_G031_PY_OK EQUAL 0)
               ${KM_G031_IMAGES} Images.${t})
     set_tests_properties(${name} PROPERTIES LABELS g031 TIMEOUT 600)
   endforeach()
-  # The ID write is refused under the emulator today (status bit 6): see
-  # docs/virtual-g031.md "Open". Listed as Disabled, not silently absent.
-  set_tests_properties(g031_register_write_survives_system_reset PROPERTIES DISABLED TRUE)
 else()
   message(WARNING "/usr/bin/python3 with unicorn and elftools missing (tools/install-deps): g031 tests not registered")
 endif()

@@ -8,8 +8,8 @@ runs the shipped, unmodified images and answers on an emulated bus.
 
 Unicorn gives the Cortex-M0 instruction set and memory; this file adds
 what the core around it does: the NVIC, SCB and SysTick (ARMv6-M B3.2-B3.4),
-exception entry with the stacked frame (B1.5.6; the return is done by
-unicorn's core once IPSR is set), HardFault on an unmapped access,
+exception entry with the stacked frame (B1.5.6) and its return (B1.5.8:
+unicorn's core does not unstack), HardFault on an unmapped access,
 system reset (AIRCR, IWDG) with flash kept. Virtual time advances one
 instruction per core clock (CPI 1, an approximation: the M0+ takes 2-3
 cycles for loads, branches and flash wait states); the CPU runs in
@@ -275,8 +275,16 @@ class Machine:
         self.scs.write(off, val, self.now)
 
     def _flash_hook(self, uc, access, addr, size, value, _):
+        """A CPU store into the flash array reaches the controller at once:
+        the second word of a double word starts the program (RM0444 §3.3.8),
+        so the driver's very next FLASH_SR read must see BSY1, before it
+        locks CR again. unicorn still writes the value into its RAM copy of
+        the array; that store is undone at the next store or the end of the
+        slice, so the controller always sees the array as it is."""
+        self._undo_flash_writes()
         off = addr & (P.FLASH_SIZE - 1)
-        self.flash_writes.append((off, bytes(self.flash[off:off + size]), size, value))
+        self.flash_writes.append((off, bytes(self.flash[off:off + size])))
+        self.flashc.array_write(P.FLASH_BASE + off, size, value, self.now)
 
     def _unmapped_hook(self, uc, access, addr, size, value, _):
         self.fault = ("unmapped", addr)
@@ -430,12 +438,11 @@ class Machine:
         return min(times) if times else self.now + P.NS // 1000
 
     def _undo_flash_writes(self):
-        """Flash is RAM to unicorn: undo the stores, hand them to the controller."""
+        """Flash is RAM to unicorn: undo the CPU's stores into the array (the
+        controller took each one when it was made, see _flash_hook)."""
         writes, self.flash_writes = self.flash_writes, []
-        for off, old, size, value in reversed(writes):
-            self.flash[off:off + size] = old
-        for off, old, size, value in writes:
-            self.flashc.array_write(P.FLASH_BASE + off, size, value, self.now)
+        for off, old in reversed(writes):
+            self.flash[off:off + len(old)] = old
 
     def _run_slice(self, ns):
         """Runs the CPU for `ns` of virtual time (or to a WFI or a fault)."""

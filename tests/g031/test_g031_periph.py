@@ -189,5 +189,51 @@ class TimIwdgTests(unittest.TestCase):
         self.assertEqual(m.resets, ["iwdg"])
 
 
+# A bare-metal program (arm-none-eabi-as of the listing beside it) that does
+# what boards/stm32g031/flash.c does for one double word (RM0444 §3.3.6,
+# §3.3.8): unlock, CR = EOPIE | PG, the two words, r5 = FLASH_SR right after
+# the second, wait while BSY1, r7 = FLASH_SR, lock, park.
+PROGRAM_ONE_DOUBLE_WORD = bytes.fromhex(
+    "0948"      # ldr  r0, =0x40022000      FLASH
+    "0a49"      # ldr  r1, =0x45670123      KEY1
+    "8160"      # str  r1, [r0, #8]         KEYR
+    "0a49"      # ldr  r1, =0xCDEF89AB      KEY2
+    "8160"      # str  r1, [r0, #8]
+    "0a49"      # ldr  r1, =0x01000001      EOPIE | PG
+    "4161"      # str  r1, [r0, #0x14]      CR
+    "0a4a"      # ldr  r2, =0x08000800      the double word
+    "0a4b"      # ldr  r3, =0x11223344
+    "1360"      # str  r3, [r2]
+    "0a4b"      # ldr  r3, =0x55667788
+    "5360"      # str  r3, [r2, #4]         second word: starts the program
+    "0569"      # ldr  r5, [r0, #0x10]      SR at once
+    "0469"      # 1: ldr r4, [r0, #0x10]
+    "640c"      # lsrs r4, r4, #17          BSY1 -> carry
+    "fcd2"      # bcs  1b
+    "0769"      # ldr  r7, [r0, #0x10]      SR after
+    "0849"      # ldr  r1, =0x80000000      LOCK
+    "4161"      # str  r1, [r0, #0x14]
+    "fee7"      # b    .
+    "00200240" "23016745" "ab89efcd" "01000001" "00080008" "44332211" "88776655" "00000080")
+
+
+class MachineFlashTests(unittest.TestCase):
+    """The machine hands CPU stores into the array to the FLASH model."""
+
+    def test_second_word_sets_bsy1_before_the_next_instruction(self):  # §3.3.8
+        import vg031
+        from unicorn import arm_const as A
+        image = bytearray(b"\xff" * 0x800)
+        image[0:8] = (0x20002000).to_bytes(4, "little") + (0x08000101).to_bytes(4, "little")
+        image[0x100:0x100 + len(PROGRAM_ONE_DOUBLE_WORD)] = PROGRAM_ONE_DOUBLE_WORD
+        m = vg031.Machine(bytes(image))
+        m.run_until(300_000)   # 300 us: tPROG is 85 us in the model
+        sr_at_once, sr_after = m.uc.reg_read(A.UC_ARM_REG_R5), m.uc.reg_read(A.UC_ARM_REG_R7)
+        self.assertTrue(sr_at_once & (1 << 16), "BSY1 not set after the second word: SR=%#x" % sr_at_once)
+        self.assertEqual(sr_after & 0xC3FB, 1, "SR after: %#x (EOP alone expected)" % sr_after)
+        self.assertEqual(bytes(m.flash[0x800:0x808]), bytes.fromhex("4433221188776655"))
+        self.assertEqual(m.faults, [])
+
+
 if __name__ == "__main__":
     unittest.main(verbosity=1)

@@ -10,6 +10,7 @@ import os
 import sys
 import unittest
 import argparse
+import zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "..", "sim", "g031"))
@@ -50,6 +51,30 @@ def exchange(m, data, wait_ms=5):
     return bytes(b for _t, b in out), ((out[0][0] - end) / 1000 if out else None)
 
 
+def stored_snapshots(m, key=0x0F):
+    """Value of `key` in each confirmed snapshot in the emulated store pages
+    (docs/store.md "On-flash format", 8-byte cells): {key: value} of the
+    one with the highest generation, {} if none."""
+    elf = os.path.join(IMAGES, "km-servo-app-stm32g031.elf")
+    start = vg031.symbol(elf, "__km_store_start") - 0x08000000
+    size = vg031.symbol(elf, "__km_store_end") - 0x08000000 - start
+    best = None
+    for page in range(start, start + size, 2048):
+        d = bytes(m.flash[page:page + 2048])
+        count = d[1]
+        if d[0] != 0x53 or not 0 < count <= 32:
+            continue
+        body = (12 + 5 * count + 4 + 7) // 8 * 8
+        crc_ok = zlib.crc32(d[:body - 4]) == int.from_bytes(d[body - 4:body], "little")
+        if not crc_ok or d[body:body + 16] != bytes(16):   # commit cell and K
+            continue
+        gen = int.from_bytes(d[4:8], "little")
+        entries = {d[12 + 5 * i]: int.from_bytes(d[13 + 5 * i:17 + 5 * i], "little") for i in range(count)}
+        if key in entries and (best is None or gen > best[0]):
+            best = (gen, entries[key])
+    return {} if best is None else {key: best[1]}
+
+
 class Images(unittest.TestCase):
     def test_standalone_image_reaches_main_loop(self):
         elf = os.path.join(IMAGES, "km-servo-stm32g031.elf")
@@ -87,9 +112,15 @@ class Images(unittest.TestCase):
         m, (poll,) = boot_and_app()
         self.assertTrue(to_main_loop(m, poll))
         m.run_until(m.now + 2 * MS)
-        exchange(m, frame(0, 0x03, 0x0F, b"\x07"), wait_ms=60)          # ID 0 -> 7 (persisted)
+        # ID 0 -> 7 (persisted; a write answers only at response level 1,
+        # docs/protocol.md §3). The session's first commit on blank flash
+        # erases all three store pages (docs/store.md "Commit"): 3 x 22 ms
+        # in the model, so the ping waits for it.
+        self.assertEqual(exchange(m, frame(0, 0x03, 0x0F, b"\x07"), wait_ms=200)[0], b"")
         answer, _ = exchange(m, frame(7, 0x01))
         self.assertEqual(answer[:4], bytes.fromhex("F9F50702"), answer.hex(" "))
+        self.assertEqual(answer[4] & 0x40, 0, "write refused (status bit 6): " + answer.hex(" "))
+        self.assertEqual(stored_snapshots(m), {0x0F: 7}, "the store's pages do not hold ID 7")
         exchange(m, frame(7, 0x03, 0x02, b"\xe1\xe2\xe3\xe4"), wait_ms=1)  # restart
         self.assertTrue(m.run_until(m.now + 200 * MS, stop=lambda: bool(m.resets)), "no reset")
         self.assertEqual(m.resets[0][1], "sysresetreq")
