@@ -6,6 +6,8 @@ import sys
 import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "sim", "g031"))
+import g031_deps  # noqa: E402
+g031_deps.require()
 import g031_periph as P  # noqa: E402
 
 
