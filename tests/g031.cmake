@@ -18,6 +18,9 @@ endif()
 add_test(NAME g031_periph_models
   COMMAND ${KM_DEBIAN_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/g031/test_g031_periph.py)
 set_tests_properties(g031_periph_models PROPERTIES LABELS g031)
+add_test(NAME g031_regs_header_matches_svd
+  COMMAND ${KM_DEBIAN_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/g031/test_g0_regs_vs_svd.py)
+set_tests_properties(g031_regs_header_matches_svd PROPERTIES LABELS g031)
 foreach(t test_standalone_image_reaches_main_loop test_bootloader_starts_app_to_main_loop
           test_ping_and_register_read_answered test_hung_main_loop_ends_in_iwdg_reset
           test_register_write_survives_system_reset)

@@ -38,7 +38,7 @@
 #define FLASH_CR_PG            (1u << 0)     /* §3.7.5 */
 #define FLASH_CR_PER           (1u << 1)
 #define FLASH_CR_PNB_SHIFT     3u
-#define FLASH_CR_PNB_MASK      (0x7Fu << 3)
+#define FLASH_CR_PNB_MASK      (0x3FFu << 3) /* PNB[12:3], 10 bits (SVD; 32 pages here) */
 #define FLASH_CR_STRT          (1u << 16)
 #define FLASH_CR_EOPIE         (1u << 24)   /* EOP is only flagged with EOPIE set */
 #define FLASH_CR_LOCK          (1u << 31)
