@@ -611,9 +611,13 @@ def main():
     if a.tcp:
         serve_tcp(m, a.tcp, a.baud)
         return 0
+    import time
+    real = time.perf_counter()
     m.run_until(int(a.ms * 1e6))
+    real = time.perf_counter() - real
     print("t=%.3f ms instructions=%d pc=0x%08x resets=%s faults=%s unmodelled=%s" % (
         m.now / 1e6, m.instructions, m.pc, m.resets, m.faults, sorted(hex(x) for x in m.unmodelled)))
+    print("speed: %.0f virtual us per real second (%.3f s real)" % (m.now / 1e3 / real, real))
     return 0
 
 
