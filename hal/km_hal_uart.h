@@ -20,23 +20,6 @@ typedef void (*km_uart_rx_handler_t)(void *ctx, uint8_t byte, uint32_t tick, boo
  * rate cannot be produced within 2 % by this board's clock. */
 bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx);
 
-/* The longest pause, in microseconds, that this UART's *delivery* can put
- * between two bytes of one frame that were back to back on the wire. A real
- * UART interrupts at line rate: 0. An emulated one (QEMU, host-sim) hands
- * bytes over when the host schedules it, which can stall for milliseconds;
- * its floor is a run-time option of the board. The app drops a frame after
- * max(the parser's rule, this floor) of silence (PROTOCOL.md §7). */
-uint32_t km_hal_uart_gap_floor_us(void);
-
-/* The least super-ID / multi-ID read (0x82) answer slot, in microseconds,
- * on an emulated bus whose servos are scheduled by a host: the slot rule
- * (docs/protocol-decisions.md "Super-ID answer slots") gives slots of a few
- * byte times, shorter than a loaded host's scheduling jitter, so answers
- * could overtake each other there. A real UART, and an emulated one run
- * without the option: 0, the real rule. The app hands it to the
- * dispatcher (km_servo_set_slot_floor_us) at every start. */
-uint32_t km_hal_uart_slot_floor_us(void);
-
 /* Start sending `len` bytes; the buffer must stay valid until
  * km_hal_uart_tx_busy() returns false. Returns false if a send is under way. */
 bool km_hal_uart_send(const uint8_t *data, uint16_t len);

@@ -143,8 +143,8 @@ void km_servo_set_reset_cause(km_servo_t *s, uint8_t cause);
 void km_servo_set_active_baud(km_servo_t *s, uint32_t baud);
 
 /* docs/protocol-decisions.md "Answer slots on emulated buses": the super-ID
- * and 0x82 slots are at least `us` (km_hal_uart_slot_floor_us(); 0 on real
- * boards: the slot rule alone). Capped at KM_SLOT_FLOOR_MAX_US, so the
+ * and 0x82 slots are at least `us` (an emulated board's km_app_set_bus_floors();
+ * 0 on real boards: the slot rule alone). Capped at KM_SLOT_FLOOR_MAX_US, so the
  * last slot (250 x floor) still fits the 32-bit delay. */
 #define KM_SLOT_FLOOR_MAX_US 1000000u
 void km_servo_set_slot_floor_us(km_servo_t *s, uint32_t us);

@@ -27,13 +27,6 @@ void hs_plant_prepare_exec(void);
  * file cannot be read or is malformed. */
 bool hs_scenario_load(const char *path);
 
-/* --gap-floor-us: what km_hal_uart_gap_floor_us() reports (default
- * HS_GAP_FLOOR_DEFAULT_US). */
-#define HS_GAP_FLOOR_DEFAULT_US 20000u
-void hs_uart_set_gap_floor_us(uint32_t us);
-/* --slot-floor-us: what km_hal_uart_slot_floor_us() reports (default 0). */
-void hs_uart_set_slot_floor_us(uint32_t us);
-
 /* File descriptor to poll for bus input (-1 when none, or when the host-side
  * receive buffer is full: the socket then keeps the rest, TCP flow control
  * holds the sender, and nothing is dropped). */

@@ -7,15 +7,20 @@
  * NOR rules; sensors read the simulated plant.
  *
  * --gap-floor-us N: the least silence inside a frame that drops it, in µs
- * (km_hal_uart_gap_floor_us(); the app uses the larger of this and the
- * parser's rule of max(10 byte times, 1 ms)). Default 20000: bytes are
- * handed over only when the host runs this process, and a stall longer than
- * the real gap would drop a frame that was whole on the wire. 0 gives the
- * real rule, for tests on a quiet host. A restart re-executes with the same
- * arguments, so the option survives it.
+ * (handed to the app with km_app_set_bus_floors(); the app uses the larger
+ * of this and the parser's rule of max(10 byte times, 1 ms)). Default
+ * 20000. The UART (hs_uart.c) paces bytes at line rate, stamps each with
+ * its wire time and holds the emulated clock at a byte that is due but not
+ * yet handed over (hs_time.c), so a frame that reached the socket whole is
+ * never cut by the gap rule, however late the host runs this process. What
+ * it cannot undo is a pause before the bytes reach it: a frame split over
+ * two TCP segments (or pty reads) with a host stall between them arrives
+ * with that stall inside. A floor well above scheduler stalls covers that;
+ * 0 gives the real rule, which the bus tests use. A restart re-executes
+ * with the same arguments, so the option survives it.
  *
  * --slot-floor-us N: the least super-ID and 0x82 answer slot, in µs
- * (km_hal_uart_slot_floor_us(), docs/protocol-decisions.md "Answer slots on
+ * (km_app_set_bus_floors(), docs/protocol-decisions.md "Answer slots on
  * emulated buses"); default 0, the slot rule alone. Survives a restart.
  *
  * --product pot|encoder: the product emulated (boards/sim-common/
@@ -37,10 +42,14 @@
 #include "hs_flash.h"
 #include "hs_io.h"
 #include "km_app.h"
+#include "km_sim_board.h"
 #include "km_sim_product.h"
 
 void hs_system_set_argv(char **argv);
 void hs_board_set_flash(const km_flash_t *flash);
+
+/* --gap-floor-us when not given: host scheduling stalls, not the real rule. */
+#define HS_GAP_FLOOR_DEFAULT_US 20000u
 
 /* The products' baud range (boards/sim-common/km_sim_product.c). */
 #define HS_BAUD_MIN 9600u
@@ -88,6 +97,8 @@ int main(int argc, char **argv)
     const char *listen_at = NULL;
     const char *flash_path = NULL;
     int use_pty = 0;
+    uint32_t gap_floor_us = HS_GAP_FLOOR_DEFAULT_US;
+    uint32_t slot_floor_us = 0u;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--listen") == 0 && i + 1 < argc) {
             listen_at = argv[++i];
@@ -104,17 +115,13 @@ int main(int argc, char **argv)
         } else if (strcmp(argv[i], "--report-baud") == 0) {
             hs_uart_set_report_baud(true);
         } else if (strcmp(argv[i], "--gap-floor-us") == 0 && i + 1 < argc) {
-            uint32_t us;
-            if (!prv_parse_u32(argv[++i], &us)) {
+            if (!prv_parse_u32(argv[++i], &gap_floor_us)) {
                 return prv_usage(argv[0]);
             }
-            hs_uart_set_gap_floor_us(us);
         } else if (strcmp(argv[i], "--slot-floor-us") == 0 && i + 1 < argc) {
-            uint32_t us;
-            if (!prv_parse_u32(argv[++i], &us)) {
+            if (!prv_parse_u32(argv[++i], &slot_floor_us)) {
                 return prv_usage(argv[0]);
             }
-            hs_uart_set_slot_floor_us(us);
         } else if (strcmp(argv[i], "--product") == 0 && i + 1 < argc) {
             const char *p = argv[++i];
             if (strcmp(p, "pot") == 0) {
@@ -148,5 +155,5 @@ int main(int argc, char **argv)
             return 1;
         }
     }
-    km_app_run();
+    km_sim_board_run(gap_floor_us, slot_floor_us);
 }

@@ -77,9 +77,6 @@ static uint32_t s_rx_budget = KM_RX_QUEUE_SIZE; /* bytes the app's queue surely 
 static uint64_t s_byte_ns = (HS_BITS_PER_BYTE * 1000000000ull) / 115200u;
 static uint64_t s_tx_end_ns;            /* the last answer's last stop bit */
 static bool s_tx_busy;                  /* what tx_busy() last told the app */
-static uint32_t s_gap_floor_us = HS_GAP_FLOOR_DEFAULT_US;
-
-static uint32_t s_slot_floor_us;
 static uint32_t s_wire_baud;   /* the master's rate; 0 = the servo's own */
 static uint32_t s_uart_baud = 115200u;
 static bool s_report_baud;
@@ -97,36 +94,6 @@ void hs_uart_set_report_baud(bool on)
 static uint32_t prv_wire_baud(void)
 {
     return s_wire_baud != 0u ? s_wire_baud : s_uart_baud;
-}
-
-void hs_uart_set_gap_floor_us(uint32_t us)
-{
-    s_gap_floor_us = us;
-}
-
-void hs_uart_set_slot_floor_us(uint32_t us)
-{
-    s_slot_floor_us = us;
-}
-
-/* The run-time option --slot-floor-us (default 0: the slot rule alone;
- * docs/protocol-decisions.md "Answer slots on emulated buses"). */
-uint32_t km_hal_uart_slot_floor_us(void)
-{
-    return s_slot_floor_us;
-}
-
-/* The run-time option (--gap-floor-us, default 20 ms). This UART paces bytes
- * at line rate, stamps each with its wire time and holds the emulated clock
- * at a byte that is due but not yet handed over (hs_time.c), so a frame that
- * reached the socket whole is never cut by the gap rule, however late the
- * host runs this process. What it cannot undo is a pause before the bytes
- * reach it: a frame split over two TCP segments (or pty reads) with a host
- * stall between them arrives with that stall inside. A floor well above
- * scheduler stalls covers that; bus tests use 0, the real rule. */
-uint32_t km_hal_uart_gap_floor_us(void)
-{
-    return s_gap_floor_us;
 }
 
 /* A restart re-executes the program (hs_system.c); the bus must stay

@@ -35,6 +35,13 @@ km_board_motor_cmd_t km_board_motor_command(void);
  * unset (magic not written). boards/sim-common/main.c passes it on. */
 uint32_t km_board_option_product(void);
 
+/* The bus floors at 0x20000004 and 0x2000000C (README.md "Run-time
+ * options"): what this emulated bus needs beyond the real rules, handed to
+ * the app by boards/sim-common/main.c (km_app_set_bus_floors). Without the
+ * option words: a 20 ms gap floor and no slot floor. */
+uint32_t km_board_option_gap_floor_us(void);
+uint32_t km_board_option_slot_floor_us(void);
+
 /* Replace the readings km_hal_sensors_read() returns. */
 void km_board_sensors_publish(const km_sensors_t *readings);
 

@@ -131,7 +131,7 @@ bool km_hal_uart_tx_busy(void)
  * which can pause for milliseconds between two bytes of one frame; 20 ms
  * by default, so a frame is not cut by a host stall. 0 (set by the loader
  * word) gives the parser's real rule. */
-uint32_t km_hal_uart_gap_floor_us(void)
+uint32_t km_board_option_gap_floor_us(void)
 {
     if (s_config.magic != PRV_CONFIG_MAGIC) {
         return PRV_GAP_FLOOR_DEFAULT_US;
@@ -144,7 +144,7 @@ uint32_t km_hal_uart_gap_floor_us(void)
  * super-ID slot at 115200 baud. 0 by default (the slot rule alone); the
  * loader word sets a floor (docs/protocol-decisions.md "Answer slots on
  * emulated buses"). */
-uint32_t km_hal_uart_slot_floor_us(void)
+uint32_t km_board_option_slot_floor_us(void)
 {
     if (s_config.magic != PRV_CONFIG_MAGIC) {
         return 0u;
@@ -152,7 +152,7 @@ uint32_t km_hal_uart_slot_floor_us(void)
     return s_config.slot_floor_us;
 }
 
-/* Not a UART option, but it lives in the same words (one RAM block the
+/* Not a bus option, but it lives in the same words (one RAM block the
  * linker script places at 0x20000000); the board's main reads it. */
 uint32_t km_board_option_product(void)
 {

@@ -111,3 +111,12 @@ km_plant_t *km_sim_board_plant(void)
     return &s_plant;
 }
 
+/* The app's main loop with this emulated bus's floors (km_sim_board.h). */
+_Noreturn void km_sim_board_run(uint32_t gap_floor_us, uint32_t slot_floor_us)
+{
+    km_app_init();
+    km_app_set_bus_floors(gap_floor_us, slot_floor_us);
+    for (;;) {
+        km_app_poll();
+    }
+}

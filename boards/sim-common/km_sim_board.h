@@ -3,6 +3,7 @@
 #define KM_SIM_BOARD_H
 
 #include <stdbool.h>
+#include <stdint.h>
 
 #include "km_plant.h"
 #include "km_sim_scenario.h"
@@ -18,6 +19,12 @@ km_plant_t *km_sim_board_plant(void);
  *           false at power-on (a fresh plant at rest at 0). */
 void km_sim_board_keep(const km_plant_physics_t *ph);
 bool km_sim_board_recall(km_plant_physics_t *out);
+
+/* The app on a simulated board: km_app_init(), then this emulated bus's
+ * floors (km_app_set_bus_floors: each board's run-time options), then
+ * km_app_poll() for ever. A restart runs the board's main() again, so
+ * the floors are handed over at every start. */
+_Noreturn void km_sim_board_run(uint32_t gap_floor_us, uint32_t slot_floor_us);
 
 /* Provided by each simulated board: the scenario to play (km_sim_scenario.h),
  * NULL with *n = 0 when there is none. */

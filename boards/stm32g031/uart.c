@@ -103,21 +103,6 @@ bool km_hal_uart_tx_busy(void)
     return s_tx_busy;
 }
 
-/* 0: the RXNE interrupt runs at top priority (see km_hal_uart_init) and
- * stamps every byte as it completes, so bytes that were back to back on the
- * wire reach the parser one byte time apart and the parser's own gap rule
- * holds unchanged. */
-uint32_t km_hal_uart_gap_floor_us(void)
-{
-    return 0u;
-}
-
-/* 0: a real bus, the slot rule alone. */
-uint32_t km_hal_uart_slot_floor_us(void)
-{
-    return 0u;
-}
-
 static void prv_rx(uint32_t isr, uint32_t cr1)
 {
     if ((isr & (USART_ISR_ORE | USART_ISR_FE | USART_ISR_NE | USART_ISR_PE)) != 0u) {

@@ -30,20 +30,3 @@ bool km_hal_uart_tx_busy(void)
 {
     return false;
 }
-
-/* 0 on a real UART: its RX interrupt stamps each byte as it arrives, so a
- * frame's bytes are never further apart than they were on the wire. Only an
- * emulated UART whose delivery the host schedules (QEMU, host-sim) needs a
- * floor above the parser's gap rule. */
-uint32_t km_hal_uart_gap_floor_us(void)
-{
-    return 0u;
-}
-
-/* 0 on a real UART: answers start when the servo's own timer says, so the
- * slot rule holds as written. Only an emulated bus, whose servos the host
- * schedules, may need a longer slot. */
-uint32_t km_hal_uart_slot_floor_us(void)
-{
-    return 0u;
-}

@@ -389,21 +389,26 @@ void km_app_init(void)
     km_rx_queue_init(&s_rxq);
     const uint32_t baud = prv_open_bus(km_servo_active_baud(&s_servo));
     km_servo_set_active_baud(&s_servo, baud);
-    /* docs/protocol-decisions.md "Answer slots on emulated buses": 0 on a
-     * real UART, an option on emulated boards. */
-    km_servo_set_slot_floor_us(&s_servo, km_hal_uart_slot_floor_us());
-    /* docs/protocol-decisions.md "Inter-byte gap": the parser's rule, or
-     * the UART's delivery floor on an emulated board, whichever is longer. */
-    uint32_t gap_us = km_parser_default_gap_us(baud);
-    const uint32_t floor_us = km_hal_uart_gap_floor_us();
-    if (gap_us < floor_us) {
-        gap_us = floor_us;
-    }
-    km_parser_init(&s_parser, prv_us_to_ticks(gap_us));
+    /* docs/protocol-decisions.md "Inter-byte gap": the parser's rule (an
+     * emulated board raises it with km_app_set_bus_floors()). The slot
+     * floor is 0, the real rule: km_servo_init() cleared it. */
+    km_parser_init(&s_parser, prv_us_to_ticks(km_parser_default_gap_us(baud)));
 
     s_last_control_tick = km_hal_time_now();
     s_tick_period = prv_us_to_ticks(KM_APP_TICK_US);
     s_next_tick = s_last_control_tick;
+}
+
+/* Emulated buses: the gap floor raises the parser's rule at the baud the
+ * bus was opened at; the slot floor goes to the dispatcher (km_app.h). */
+void km_app_set_bus_floors(uint32_t gap_floor_us, uint32_t slot_floor_us)
+{
+    km_servo_set_slot_floor_us(&s_servo, slot_floor_us);
+    uint32_t gap_us = km_parser_default_gap_us(km_servo_active_baud(&s_servo));
+    if (gap_us < gap_floor_us) {
+        gap_us = gap_floor_us;
+    }
+    km_parser_set_gap(&s_parser, prv_us_to_ticks(gap_us));
 }
 
 void km_app_poll(void)

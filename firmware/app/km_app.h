@@ -30,6 +30,17 @@ bool km_board_boot_request(void);
  * the app's state, so a test may call it again to model a reset. */
 void km_app_init(void);
 
+/* Emulated buses only: the floors their delivery needs, which a real UART
+ * never does (docs/architecture.md "Boards and the build"). gap_floor_us:
+ * the least silence inside a frame that drops it, when longer than the
+ * parser's rule (docs/protocol-decisions.md "Inter-byte gap"); an emulator
+ * that hands bytes over when the host schedules it can stall inside a
+ * frame. slot_floor_us: the least super-ID / 0x82 answer slot ("Answer
+ * slots on emulated buses"). km_app_init() sets both back to 0, the real
+ * rules, so a simulated board calls this after every km_app_init() and
+ * before the first km_app_poll(). A real board never calls it. */
+void km_app_set_bus_floors(uint32_t gap_floor_us, uint32_t slot_floor_us);
+
 /* One pass of the main loop: report the last answer's timing, hand a
  * waiting answer to TX, parse up to 64 received bytes, restart if one is
  * due and nothing is left to send, run the control tick when due, else

@@ -38,7 +38,6 @@ bool km_bootb_uart_init(uint32_t baud);         /* false: the board cannot make 
 bool km_bootb_uart_rx(uint8_t *byte);           /* a received byte, if any */
 void km_bootb_uart_tx(const uint8_t *p, uint32_t n); /* returns after the last stop bit */
 uint32_t km_bootb_now_us(void);
-uint32_t km_bootb_gap_floor_us(void);           /* least inter-byte gap (QEMU: 20 ms) */
 
 _Noreturn void km_bootb_reset(void);
 /* Starts the application whose vector table is at `vectors`. */

@@ -275,7 +275,7 @@ static void test_s7_gap_delivery_floor(void **state)
     (void)state;
     kf_power_on();
     kf_world.gap_floor_us = 20000u;
-    kf_boot(KM_RESET_POWER_ON); /* the floor is read at boot */
+    kf_boot(KM_RESET_POWER_ON); /* the board hands the floor over at boot */
     const uint8_t ping[] = {0xF9, 0xFF, 0x00, 0x02, 0x01, 0xFC};
     for (int i = 0; i < 4; i++) { /* every time, not every other time */
         kf_send_at(kf_world.now, ping, 3);

@@ -125,10 +125,10 @@ static void test_mread_slot_start_1mbit(void **state)
     }
 }
 
-/* "Answer slots on emulated buses": the board's slot floor
- * (km_hal_uart_slot_floor_us) reaches the dispatcher at start: with 5 ms,
- * position 2 answers 200 + 2 x 5000 us after the frame. */
-static void test_mread_slot_floor_from_the_hal(void **state)
+/* "Answer slots on emulated buses": an emulated board's slot floor
+ * (km_app_set_bus_floors after km_app_init) reaches the dispatcher: with
+ * 5 ms, position 2 answers 200 + 2 x 5000 us after the frame. */
+static void test_mread_slot_floor_from_the_board(void **state)
 {
     (void)state;
     kf_power_on();
@@ -223,7 +223,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_mread_slot_start_on_the_wire),
         cmocka_unit_test(test_mread_slot_start_1mbit),
-        cmocka_unit_test(test_mread_slot_floor_from_the_hal),
+        cmocka_unit_test(test_mread_slot_floor_from_the_board),
         cmocka_unit_test(test_mread_longest_list_and_one_more),
         cmocka_unit_test(test_mread_figure_20_servos_1mbit),
     };

@@ -225,6 +225,9 @@ void kf_boot(km_reset_cause_t cause)
     kf_world.boots++;
     kf_world.reads_at_boot = kf_world.nor.count.reads;
     km_app_init();
+    /* An emulated board: its bus floors after every start, as
+     * boards/sim-common's km_sim_board_run() hands them over. */
+    km_app_set_bus_floors(kf_world.gap_floor_us, kf_world.slot_floor_us);
 }
 
 void kf_power_on(void)
@@ -465,17 +468,6 @@ bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx)
     kf_world.rx_handler = handler;
     kf_world.rx_ctx = ctx;
     return true;
-}
-
-uint32_t km_hal_uart_slot_floor_us(void)
-{
-    prv_call();
-    return kf_world.slot_floor_us;
-}
-
-uint32_t km_hal_uart_gap_floor_us(void)
-{
-    return kf_world.gap_floor_us;
 }
 
 bool km_hal_uart_send(const uint8_t *data, uint16_t len)

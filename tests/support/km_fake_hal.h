@@ -46,8 +46,8 @@ typedef struct {
 typedef struct {
     /* knobs a test may set after kf_power_on() */
     uint32_t cpu_ticks_per_call;
-    uint32_t gap_floor_us;
-    uint32_t slot_floor_us;
+    uint32_t gap_floor_us;       /* emulated bus floors, handed to km_app_set_bus_floors() */
+    uint32_t slot_floor_us;      /* at every kf_boot() */
     uint32_t unmakeable_baud;
     int32_t position, current_ma, voltage_mv, temperature_c10; /* sensors */
     uint8_t sensor_faults;

@@ -42,11 +42,6 @@ uint32_t km_bootb_now_us(void)
     return NRF_REG(NRF_TIMER0, TIMER_CC(0));
 }
 
-uint32_t km_bootb_gap_floor_us(void)
-{
-    return 20000u; /* QEMU hands bytes over when the host schedules it (README) */
-}
-
 uint32_t km_bootb_hw_version(void)
 {
     return 0x10u;

@@ -42,11 +42,6 @@ uint32_t km_bootb_now_us(void)
     return TIM_CNT(TIM2_BASE_R);
 }
 
-uint32_t km_bootb_gap_floor_us(void)
-{
-    return 0u; /* polled at 16 MHz: bytes are stamped as they complete */
-}
-
 uint32_t km_bootb_hw_version(void)
 {
     return 0x10u;
