@@ -1,8 +1,10 @@
 # km_add_image: one bare-metal firmware image per call, for any board.
 #
 #   km_add_image(NAME <name> LINKER_SCRIPT <file.ld>
-#                SOURCES <src>... [LIBS <target>...] [DEFINES <def>...])
+#                [SOURCES <src>...] [LIBS <target>...] [DEFINES <def>...])
 #
+# SOURCES may be left out when a library of LIBS brings the sources (an
+# interface library such as boards/sim-common's, compiled into the image).
 # Emits <name>.elf (the target, named <name>), <name>.bin, <name>.hex,
 # <name>.map and <name>.size next to it: the size report (arm-none-eabi-size
 # and the per-module flash/RAM table of tools/footprint), also printed after
@@ -20,8 +22,8 @@ find_package(Python3 COMPONENTS Interpreter REQUIRED)
 
 function(km_add_image)
   cmake_parse_arguments(IMG "" "NAME;LINKER_SCRIPT" "SOURCES;LIBS;DEFINES" ${ARGN})
-  if(NOT IMG_NAME OR NOT IMG_LINKER_SCRIPT OR NOT IMG_SOURCES)
-    message(FATAL_ERROR "km_add_image: NAME, LINKER_SCRIPT and SOURCES are required")
+  if(NOT IMG_NAME OR NOT IMG_LINKER_SCRIPT OR NOT (IMG_SOURCES OR IMG_LIBS))
+    message(FATAL_ERROR "km_add_image: NAME, LINKER_SCRIPT and SOURCES or LIBS are required")
   endif()
   set(out ${CMAKE_CURRENT_BINARY_DIR}/${IMG_NAME})
 

@@ -4,7 +4,6 @@
 # fail (and print the diff) when a checked-in file is stale.
 add_executable(km_regdoc ${CMAKE_SOURCE_DIR}/tools/regdoc.c ${CMAKE_SOURCE_DIR}/tools/regdoc_table.c
   ${CMAKE_SOURCE_DIR}/tools/regdoc_json.c)
-target_include_directories(km_regdoc PRIVATE ${CMAKE_SOURCE_DIR}/tools)
 target_link_libraries(km_regdoc PRIVATE km_protocol)
 add_test(NAME regdoc_up_to_date
   COMMAND sh -c "\"$<TARGET_FILE:km_regdoc>\" | diff -u \"${CMAKE_SOURCE_DIR}/docs/registers.md\" -")

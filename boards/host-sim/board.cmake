@@ -1,2 +1,10 @@
-# host-sim: native build, no CPU flags. The UART's gap floor is a run-time
-# option (--gap-floor-us, hs_main.c), not a build setting.
+# The host-sim board's declaration (cmake/km_boards.cmake): the firmware as
+# a native Linux program, built with the host compiler and no CPU flags.
+# The bus floors are run-time options (--gap-floor-us, --slot-floor-us,
+# hs_main.c), not build settings.
+set(KM_BOARD_DESCRIPTION "The firmware as a native program (software in the loop)")
+set(KM_BOARD_TOOLCHAIN)
+set(KM_BOARD_BUILD_TYPE Debug)
+set(KM_BOARD_COMPILE_OPTIONS)
+set(KM_BOARD_LINK_OPTIONS)
+set(KM_BOARD_HOST_SOURCES)

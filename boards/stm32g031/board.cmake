@@ -1,9 +1,17 @@
-# STM32G031 (Cortex-M0+) flags for every object of this build: the core,
-# one section per function/object so --gc-sections drops what is unused,
+# The STM32G031 servo board's declaration (cmake/km_boards.cmake): a
+# Cortex-M0+ built with Debian's arm-none-eabi-gcc. Every object of its
+# build gets one section per function/object so --gc-sections drops what
+# is unused, and -fstack-usage: a .su file per object, the frames
+# tools/image-check sums over the call graph to bound the stack. Links with
 # newlib-nano without the C start-up files (startup.c is ours) and no heap.
-# -fstack-usage: a .su file per object, the frames tools/image-check sums
-# over the call graph to bound the stack.
-set(KM_CPU_FLAGS -mcpu=cortex-m0plus -mthumb)
-add_compile_options(${KM_CPU_FLAGS} -ffunction-sections -fdata-sections -fstack-usage)
-add_link_options(${KM_CPU_FLAGS} --specs=nano.specs --specs=nosys.specs
-                 -nostartfiles -Wl,--gc-sections)
+set(KM_BOARD_DESCRIPTION "STM32G031 servo board (Cortex-M0+)")
+set(KM_BOARD_TOOLCHAIN arm-none-eabi)
+set(KM_BOARD_BUILD_TYPE MinSizeRel)
+set(KM_BOARD_COMPILE_OPTIONS -mcpu=cortex-m0plus -mthumb -ffunction-sections -fdata-sections
+    -fstack-usage)
+set(KM_BOARD_LINK_OPTIONS -mcpu=cortex-m0plus -mthumb --specs=nano.specs --specs=nosys.specs
+    -nostartfiles -Wl,--gc-sections)
+# The only board code that runs without the MCU, host-tested by
+# tests/board/test_stm32g031_*.c: fixed-point sensor conversions and their
+# calibration, the USART divider, reset-cause decoding.
+set(KM_BOARD_HOST_SOURCES sensor_convert.c board_config.c usart_brr.c reset_cause.c)

@@ -131,7 +131,7 @@ static bool prv_try_schedule_answer(void)
 /* Measurement hook, called from the main loop after each answer started:
  * the frame's end tick, the tick the answer was handed to the UART, and the
  * delay asked for. Empty here; the QEMU timing image (boards/qemu-microbit/
- * test/answer_timing.c) prints it to measure answer-delay accuracy. */
+ * tests/firmware/qemu-microbit/answer_timing.c) prints it to measure answer-delay accuracy. */
 __attribute__((weak)) void km_app_answer_started(uint32_t frame_end, uint32_t started, uint32_t delay_us)
 {
     (void)frame_end;

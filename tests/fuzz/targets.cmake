@@ -10,9 +10,7 @@ function(km_fuzz_target_links target)
   if(target MATCHES "fuzz_servo$")
     target_link_libraries(${target} PRIVATE km_fake_hal km_app km_fake_hal)
   elseif(target MATCHES "fuzz_store$")
-    target_include_directories(${target} PRIVATE ${CMOCKA_INCLUDE_DIR}
-                               ${CMAKE_SOURCE_DIR}/tests/support)
-    target_link_libraries(${target} PRIVATE km_app)
+    target_link_libraries(${target} PRIVATE km_app km_test_support)
   endif()
 endfunction()
 

@@ -1,0 +1,65 @@
+# Every board found by cmake/km_boards.cmake, from the host build:
+#
+# 1. Its pure parts, the board.cmake's KM_BOARD_HOST_SOURCES (code that runs
+#    without the MCU: conversions, dividers, decoders), compiled for the host
+#    as km_board_host_<board>, and every tests/board/test_<board>_*.c a
+#    cmocka test that links it (label unit; '-' in a board's name is '_'
+#    in the file's). A test file with no such board, or a board whose host
+#    sources no test links, fails the configure: nothing goes untested
+#    without a word.
+#
+# 2. A board with a cross toolchain builds images: board_<board>_image_check
+#    runs tools/image-check again on every image of its build tree (no heap,
+#    stack within the linker script's reserve, the flash-busy RAM rule where
+#    the board's image-check.json names RAM roots), so CI shows the
+#    build-time checks as tests (label board). It reads the board's build
+#    (its preset's binaryDir, else build/<board>; the cache variable
+#    KM_BUILD_DIR_<board, - as _> points elsewhere); no image fails with the advice.
+find_package(Python3 COMPONENTS Interpreter REQUIRED)
+
+km_boards_list(KM_BOARDS)
+file(GLOB KM_BOARD_TEST_SRCS CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/board/test_*.c)
+set(KM_BOARD_TESTS_CLAIMED)
+foreach(board ${KM_BOARDS})
+  string(REPLACE "-" "_" board_id ${board})
+  km_board_read(${board})
+
+  file(GLOB tests CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/board/test_${board_id}_*.c)
+  list(APPEND KM_BOARD_TESTS_CLAIMED ${tests})
+  if(KM_BOARD_HOST_SOURCES AND NOT tests)
+    message(FATAL_ERROR "boards/${board}: KM_BOARD_HOST_SOURCES but no tests/board/test_${board_id}_*.c")
+  endif()
+  if(tests AND NOT KM_BOARD_HOST_SOURCES)
+    message(FATAL_ERROR "tests/board/test_${board_id}_*.c: boards/${board} declares no KM_BOARD_HOST_SOURCES")
+  endif()
+  if(tests)
+    list(TRANSFORM KM_BOARD_HOST_SOURCES PREPEND ${KM_ROOT_DIR}/boards/${board}/)
+    add_library(km_board_host_${board_id} STATIC ${KM_BOARD_HOST_SOURCES})
+    target_include_directories(km_board_host_${board_id} PUBLIC ${KM_ROOT_DIR}/boards/${board})
+    target_link_libraries(km_board_host_${board_id} PUBLIC km_hal)
+    foreach(src ${tests})
+      get_filename_component(name ${src} NAME_WE)
+      add_executable(${name} ${src})
+      target_link_libraries(${name} PRIVATE km_board_host_${board_id} km_test_support ${CMOCKA_LIBRARY})
+      add_test(NAME ${name} COMMAND ${name})
+      set_tests_properties(${name} PROPERTIES LABELS unit)
+    endforeach()
+  endif()
+
+  if(KM_BOARD_TOOLCHAIN)
+    km_board_build_dir(${board} dir preset)
+    set(KM_BUILD_DIR_${board_id} ${dir} CACHE PATH "${board} build read by board_${board_id}_image_check")
+    add_test(NAME board_${board_id}_image_check
+      COMMAND ${CMAKE_COMMAND} -DPYTHON=${Python3_EXECUTABLE} -DTOOL=${CMAKE_SOURCE_DIR}/tools/image-check
+              -DCONFIG=${KM_ROOT_DIR}/boards/${board}/image-check.json
+              -DIMAGES=${KM_BUILD_DIR_${board_id}} -DSU_ROOT=${KM_BUILD_DIR_${board_id}}
+              -DBOARD=${board}
+              -P ${CMAKE_SOURCE_DIR}/cmake/image_check_all.cmake)
+    set_tests_properties(board_${board_id}_image_check PROPERTIES LABELS board)
+  endif()
+endforeach()
+
+list(REMOVE_ITEM KM_BOARD_TEST_SRCS ${KM_BOARD_TESTS_CLAIMED})
+if(KM_BOARD_TEST_SRCS)
+  message(FATAL_ERROR "tests/board/: no board for ${KM_BOARD_TEST_SRCS} (test_<board>_*.c)")
+endif()
