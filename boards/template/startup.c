@@ -1,0 +1,66 @@
+/* Template: the vector table and the reset handler of a Cortex-M. The
+ * reset handler lays out RAM for C (.data copied from flash, .bss zeroed)
+ * and calls main(). Add your MCU's device interrupts after the 16 core
+ * entries (its reference manual's vector table), each a weak alias of the
+ * default handler that a driver overrides by defining it, and make the
+ * default handler take your fault path (free the bridge, record, reset:
+ * boards/stm32g031/fault.c). */
+#include <stdint.h>
+
+/* Linker script symbols (board.ld): addresses only, never read as objects. */
+extern uint32_t __data_load[];
+extern uint32_t __data_start[];
+extern uint32_t __data_end[];
+extern uint32_t __bss_start[];
+extern uint32_t __bss_end[];
+extern uint32_t __stack_top[];
+
+int main(void);
+void Reset_Handler(void);
+void Default_Handler(void);
+
+/* Weak so a driver defines the real one simply by naming it. */
+#define KM_WEAK_HANDLER(name) void name(void) __attribute__((weak, alias("Default_Handler")))
+KM_WEAK_HANDLER(NMI_Handler);
+KM_WEAK_HANDLER(HardFault_Handler);
+KM_WEAK_HANDLER(SVC_Handler);
+KM_WEAK_HANDLER(PendSV_Handler);
+KM_WEAK_HANDLER(SysTick_Handler);
+
+typedef void (*km_vector_t)(void);
+
+/* The 16 core entries; the linker keeps the table at the start of flash. */
+__attribute__((section(".isr_vector"), used)) const km_vector_t km_vectors[16] = {
+    (km_vector_t)(uintptr_t)__stack_top,
+    Reset_Handler,
+    NMI_Handler,
+    HardFault_Handler,
+    0, 0, 0, 0, 0, 0, 0,
+    SVC_Handler,
+    0, 0,
+    PendSV_Handler,
+    SysTick_Handler,
+};
+
+/* Copy .data, zero .bss, run main(). */
+void Reset_Handler(void)
+{
+    /* Word loops on purpose: the linker script aligns both sections to 4. */
+    const uint32_t *src = __data_load;
+    for (uint32_t *dst = __data_start; dst < __data_end; dst++) {
+        *dst = *src++;
+    }
+    for (uint32_t *dst = __bss_start; dst < __bss_end; dst++) {
+        *dst = 0u;
+    }
+    (void)main();
+    for (;;) {
+    }
+}
+
+/* An interrupt nothing handles: park (replace with your fault path). */
+void Default_Handler(void)
+{
+    for (;;) {
+    }
+}
