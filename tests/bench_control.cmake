@@ -8,8 +8,7 @@
 # only on a broken run. tools/bench-control --doc regenerates
 # docs/control-quality.md from the same two programs.
 if(TARGET bench_control)
-  target_sources(bench_control PRIVATE ${CMAKE_SOURCE_DIR}/boards/sim-common/km_sim_product.c)
-  target_include_directories(bench_control PRIVATE ${CMAKE_SOURCE_DIR}/boards/sim-common)
+  target_link_libraries(bench_control PRIVATE km_sim_product)  # the simulated product, compiled in
   set_tests_properties(bench_control PROPERTIES
     ENVIRONMENT "KM_BENCH_CONTROL_DIR=${CMAKE_CURRENT_BINARY_DIR}"
     FIXTURES_SETUP km_control_traces)
