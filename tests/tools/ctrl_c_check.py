@@ -8,16 +8,23 @@ servo process (QEMU or host-sim) behind (issue 11 item 4).
 --demo interrupts tools/servo-demo instead (its build, bus and kmx session;
 its whole process group gets the signal, as from a terminal).
 
-Each run starts servo-bus, sends it SIGINT (as a terminal's Ctrl-C does)
-after a delay drawn uniformly from 0 to 1.3 x the time a first, untouched
-start took to print "ready", waits for it to exit and then looks for
-processes left over, by PID: this script makes itself the child subreaper
+Each run starts servo-bus as a terminal's foreground job (its own process
+group, SIGINT and SIGTERM at their defaults and unblocked whatever this
+script got), sends the group SIGINT (as a terminal's Ctrl-C does) after a
+delay drawn uniformly from 0 to 1.3 x the time a first, untouched start
+took to print "ready", waits for it to exit and then looks for processes
+left over, by PID: this script makes itself the child subreaper
 (prctl PR_SET_CHILD_SUBREAPER), so any servo process that outlives
 servo-bus is re-parented to it, and every process whose parent is this
 script after servo-bus has exited is a leftover (it is killed, and the run
-fails). Also fails a run when servo-bus exits with another status than 0
-or prints a traceback. Prints one line per run and a summary
-"N runs, M left processes behind"; exit status 1 if any did."""
+fails). Also fails a run when servo-bus exits with another status than 0,
+prints a traceback or is still running 30 s after the signal (a signal it
+lost: it would have printed "ready" and served the bus). A ready line
+written after the signal was sent is counted apart ("ready raced the
+signal"): the signal came after servo-bus's final check, in the moment
+before the line went out, and the bus then stops at once. Prints one line
+per run and a summary "N runs, M left processes behind or failed (...)";
+exit status 1 if any did."""
 import argparse
 import ctypes
 import os
@@ -84,13 +91,30 @@ def command_of(pid):
         return "?"
 
 
+def as_a_terminal_job():
+    """In the child before exec: SIGINT and SIGTERM at their defaults and
+    unblocked, as a terminal's foreground job gets them, whatever this
+    script was started with (a shell's background job ignores SIGINT, and
+    an ignored signal sent before servo-bus installs its handlers would be
+    lost: not the launcher's doing)."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
+
+
 def start(argv, errfile):
     # stderr to a file: a leftover servo holding a pipe open would block the reader
     errfile.seek(0)
     errfile.truncate()
     # its own process group, signalled whole, as a terminal's Ctrl-C does
     return subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                            stderr=errfile, text=True, start_new_session=True)
+                            stderr=errfile, text=True, start_new_session=True,
+                            preexec_fn=as_a_terminal_job)
+
+
+def ready_written(p):
+    """True when servo-bus has written something (its ready line) to stdout."""
+    return bool(select.select([p.stdout], [], [], 0)[0])
 
 
 def finish(p, errfile, timeout=30):
@@ -151,12 +175,14 @@ def main():
 
     bad = 0
     early = 0
+    races = 0
     handlers_at = handlers_line()
     t_all = time.monotonic()
     for n in range(1, a.runs + 1):
         delay = rng.uniform(0.0, 1.3 * ready_s)
         p = start(argv, errfile)
         time.sleep(delay)
+        ready_before = ready_written(p)
         os.killpg(p.pid, sig)
         out, err, timed_out = finish(p, errfile)
         if timed_out:
@@ -187,15 +213,21 @@ def main():
             if "Traceback" in err:
                 problems.append("traceback: %s at %s" % (err.strip().splitlines()[-1],
                                                          where[-1] if where else "?"))
-        stage = ("after ready" if ready_text in out else
+        # ready written after the signal was sent: it came after servo-bus's
+        # final check, in the microseconds before the line went out (its
+        # announce_ready); then the bus must stop at once, as after ready
+        raced = ready_text in out and not ready_before
+        stage = ("ready raced the signal" if raced else "after ready" if ready_text in out else
                  "in Python's start-up, nothing started" if in_python_startup else "during start-up")
         early += in_python_startup
+        races += raced
         print("run %2d: SIG%s at %.3f s (%s): %s" % (n, a.signal, delay, stage,
                                                    "; ".join(problems) if problems else "clean"), flush=True)
         bad += bool(problems)
         children()  # reap
-    print("%d runs, %d left processes behind or failed (%d interrupted Python's own start-up; "
-          "%s, %.0f s)" % (a.runs, bad, early, a.backend, time.monotonic() - t_all))
+    print("%d runs, %d left processes behind or failed (%d interrupted Python's own start-up, "
+          "%d ready lines raced the signal; %s, %.0f s)"
+          % (a.runs, bad, early, races, a.backend, time.monotonic() - t_all))
     return 1 if bad else 0
 
 

@@ -1,7 +1,11 @@
 """tools/servo-bus starts and stops cleanly (issue 11 item 4): Ctrl-C at
 random moments of start-up leaves no servo process behind, checked by PID
 (tests/tools/ctrl_c_check.py: 20 runs on host-sim and 20 on QEMU when its
-image and qemu-system-arm are there, about 15 s); a servo-bus killed with
+image and qemu-system-arm are there, about 15 s); a signal that comes at
+the last moments of start-up, after the last servo answered, ends it
+without "ready" (issue 18 item 10: placed there by a profile hook on the
+real script, once before the final check and once inside it while the
+signals are held back); a servo-bus killed with
 SIGKILL takes its servos with it (PR_SET_PDEATHSIG); relaunching with
 --flash-dir after an ID change finds the servo at its stored ID; and the
 start-up refusals are one line each: a missing qemu-system-arm (naming the
@@ -50,6 +54,67 @@ class CtrlC(unittest.TestCase):
                          "no QEMU image or qemu-system-arm")
     def test_ctrl_c_during_start_up_qemu(self):
         self.run_check("qemu", 20)
+
+
+# Runs tools/servo-bus as __main__, unchanged, and sends itself SIGNAL at one
+# point of its start-up, found by a profile hook: "bus" when the Bus object
+# is built (after the servos answered, just before the ready line), "held"
+# right after announce_ready() blocked the stop signals (the kernel then
+# keeps the signal pending). Prints "sent" on stderr when it sent it.
+AT_LAST_MOMENT = r"""
+import os, runpy, signal, sys
+script, where, signame = sys.argv[1:4]
+sig = getattr(signal, signame)
+def hook(frame, event, arg):
+    code = frame.f_code
+    if where == "bus" and event == "return" and code.co_filename == script \
+            and code.co_name == "__init__" and type(frame.f_locals.get("self")).__name__ == "Bus":
+        fire()
+    # signal.pthread_sigmask is signal.py's wrapper: its return, called
+    # from announce_ready, the first time (the block)
+    if where == "held" and event == "return" and code.co_name == "pthread_sigmask" \
+            and frame.f_back.f_code.co_filename == script \
+            and frame.f_back.f_code.co_name == "announce_ready":
+        fire()
+def fire():
+    sys.setprofile(None)
+    os.kill(os.getpid(), sig)
+    print("sent", file=sys.stderr, flush=True)
+sys.argv = [script] + sys.argv[4:]
+sys.setprofile(hook)
+runpy.run_path(script, run_name="__main__")
+"""
+
+
+class SignalBeforeReady(unittest.TestCase):
+    """A stop signal that comes before the ready line ends start-up: no
+    "ready", exit 0, every servo process gone (issue 18 item 10)."""
+
+    def run_until_signal(self, where, signame):
+        host_sim_image()
+        p = subprocess.Popen([sys.executable, "-c", AT_LAST_MOMENT, os.path.realpath(SERVO_BUS), where,
+                              signame, "--ids", "1,2", "--port", "0", "--backend", "host-sim"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        ready = p.stdout.readline()  # "" at exit; after a ready line the bus stays up: stop it
+        if ready:
+            p.terminate()
+        out, err = p.communicate(timeout=60)
+        pids = [int(pid) for pid in re.findall(r"pid (\d+) on port", err)]
+        self.assertEqual(len(pids), 2, err)
+        self.assertIn("\nsent\n", err, "the hook never sent %s" % signame)
+        self.assertEqual((p.returncode, ready + out), (0, ""), err)
+        self.assertEqual(err.splitlines()[-1], "servo-bus: stopping")
+        self.assertNotIn("Traceback", err)
+        self.assertEqual([pid for pid in pids if alive(pid)], [])
+
+    def test_sigint_after_the_last_servo_answered(self):
+        self.run_until_signal("bus", "SIGINT")
+
+    def test_sigterm_after_the_last_servo_answered(self):
+        self.run_until_signal("bus", "SIGTERM")
+
+    def test_sigint_while_the_final_check_holds_signals_back(self):
+        self.run_until_signal("held", "SIGINT")
 
 
 class Lifecycle(unittest.TestCase):
