@@ -7,7 +7,9 @@
 # for two cores. The bus test checks super-ID and 0x82 answer order at
 # 115200 baud on a SCHED_FIFO bus when the host allows it (servo-bus
 # --realtime), else with a 20 ms emulated slot floor (bus_check.py's
-# docstring; docs/protocol-decisions.md "Answer slots on emulated buses").
+# docstring; docs/protocol-decisions.md "Answer slots on emulated buses");
+# the other tests run servo-bus's default scheduling (SCHED_FIFO where the
+# host allows it, else plain).
 #
 # encoder: the encoder product (servo-bus --product encoder: model name,
 # 0x6F turns past 360 deg, stops on 0, restart reads 0) and the pot

@@ -98,6 +98,8 @@ def main():
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(5))
         argv.append("--realtime")
         a.slow_baud = None
+    else:
+        argv.append("--no-realtime")  # servo-bus's default would be SCHED_FIFO where allowed
     print("# slot timing: %s" % ("SCHED_FIFO bus and suite, every check at the bus baud" if realtime
                                  else "plain scheduling"), flush=True)
     if a.gap_floor_us is not None:

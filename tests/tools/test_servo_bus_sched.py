@@ -1,0 +1,106 @@
+"""tools/servo-bus's scheduling (issue 18 item 11): SCHED_FIFO by default
+where the host allows it (servos at 10, the hub at 20 once they are up),
+plain with --no-realtime (also under a real-time parent) and where the host
+does not allow it, --realtime there exits 2, and stderr says which was
+chosen. Real host-sim servos; each policy is read back from the kernel
+(os.sched_getscheduler) for servo-bus and for every servo process."""
+import ctypes
+import os
+import re
+import resource
+import subprocess
+import sys
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from test_kmx import REPO, host_sim_image  # noqa: E402
+
+SERVO_BUS = os.path.join(REPO, "tools", "servo-bus")
+PROBE = "import os; os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(1))"
+PR_CAPBSET_DROP = 24
+CAP_SYS_NICE = 23
+
+
+def no_realtime_here():
+    """In a child before exec: a host that refuses SCHED_FIFO (no
+    CAP_SYS_NICE, also for root after exec, and an rtprio limit of 0)."""
+    ctypes.CDLL(None, use_errno=True).prctl(PR_CAPBSET_DROP, CAP_SYS_NICE, 0, 0, 0)  # EPERM: none to drop
+    resource.setrlimit(resource.RLIMIT_RTPRIO, (0, 0))
+
+
+def realtime_parent():
+    """In a child before exec: SCHED_FIFO 5, as tests/conformance/run_on_bus.py runs."""
+    os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(5))
+
+
+def fifo_allowed(preexec=None):
+    return subprocess.run([sys.executable, "-c", PROBE], stderr=subprocess.DEVNULL,
+                          preexec_fn=preexec).returncode == 0
+
+
+class Scheduling(unittest.TestCase):
+    def start(self, *args, preexec=None):
+        """servo-bus with servos 1, 2 on host-sim: its policy, its priority
+        and its servos' policies once ready, and its scheduling line."""
+        host_sim_image()
+        p = subprocess.Popen([sys.executable, SERVO_BUS, "--ids", "1,2", "--port", "0", "--backend",
+                              "host-sim", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             text=True, preexec_fn=preexec)
+
+        def stop():
+            if p.poll() is None:
+                p.terminate()
+            p.communicate(timeout=30)
+        self.addCleanup(stop)
+        ready = p.stdout.readline()
+        self.assertTrue(ready.startswith("ready 127.0.0.1:"), ready)
+        err = ""
+        while len(re.findall(r"pid \d+ on port", err)) < 2:  # written before ready
+            err += p.stderr.readline()
+        lines = [ln for ln in err.splitlines() if ln.startswith("servo-bus: scheduling: ")]
+        self.assertEqual(len(lines), 1, err)
+        servos = [os.sched_getscheduler(int(pid)) for pid in re.findall(r"pid (\d+) on port", err)]
+        return (os.sched_getscheduler(p.pid), os.sched_getparam(p.pid).sched_priority, servos,
+                lines[0])
+
+    @unittest.skipUnless(fifo_allowed(), "this host refuses SCHED_FIFO (not root, no rtprio "
+                         "limit): the default is plain there, test_not_allowed_falls_back_to_plain")
+    def test_default_is_sched_fifo_where_allowed(self):
+        hub, prio, servos, line = self.start()
+        self.assertEqual((hub, prio, servos), (os.SCHED_FIFO, 20, [os.SCHED_FIFO] * 2))
+        self.assertEqual(line, "servo-bus: scheduling: SCHED_FIFO, servos 10, hub 20 (the host "
+                         "allows it; --no-realtime for plain)")
+
+    def test_no_realtime_is_plain(self):
+        # from a SCHED_FIFO parent where the host allows one: plain all the same
+        parent = realtime_parent if fifo_allowed() else None
+        hub, _, servos, line = self.start("--no-realtime", preexec=parent)
+        self.assertEqual((hub, servos), (os.SCHED_OTHER, [os.SCHED_OTHER] * 2))
+        self.assertEqual(line, "servo-bus: scheduling: plain (--no-realtime)")
+
+    def test_not_allowed_falls_back_to_plain(self):
+        self.assertFalse(fifo_allowed(no_realtime_here), "could not take SCHED_FIFO away")
+        hub, _, servos, line = self.start(preexec=no_realtime_here)
+        self.assertEqual((hub, servos), (os.SCHED_OTHER, [os.SCHED_OTHER] * 2))
+        self.assertEqual(line, "servo-bus: scheduling: plain (SCHED_FIFO not allowed here: [Errno 1] "
+                         "Operation not permitted; root or an rtprio limit allows it)")
+
+    def test_realtime_where_not_allowed_exits_2(self):
+        host_sim_image()
+        r = subprocess.run([sys.executable, SERVO_BUS, "--ids", "1", "--port", "0", "--backend",
+                            "host-sim", "--realtime"], capture_output=True, text=True, timeout=30,
+                           preexec_fn=no_realtime_here)
+        self.assertEqual((r.returncode, r.stdout, r.stderr),
+                         (2, "", "servo-bus: --realtime: cannot enter SCHED_FIFO ([Errno 1] Operation "
+                          "not permitted); needs CAP_SYS_NICE\n"))
+
+    def test_realtime_and_no_realtime_exclude_each_other(self):
+        r = subprocess.run([sys.executable, SERVO_BUS, "--ids", "1", "--port", "0", "--realtime",
+                            "--no-realtime"], capture_output=True, text=True, timeout=30)
+        self.assertEqual(r.returncode, 2)
+        self.assertEqual(r.stderr.splitlines()[-1], "servo-bus: error: argument --no-realtime: not "
+                         "allowed with argument --realtime")
+
+
+if __name__ == "__main__":
+    unittest.main()
