@@ -2,13 +2,17 @@
 # the emulated buses: three servos on host-sim and on QEMU, each started on
 # a free port by run_on_bus.py, which always stops the bus afterwards.
 #
-# Where the host allows SCHED_FIFO (root on CI), the bus runs with
-# servo-bus --realtime and every check, the super-ID / 0x82 slot order and
-# the load run included, runs at 115200 baud: emulated answers then keep the
-# real slot rule (docs/protocol-decisions.md "Answer slots on emulated
-# buses"). Elsewhere, two passes on one bus: everything at 115200 except
-# those checks, which run after the servos are switched to 9600 baud (slots
-# 8.3 ms apart; tests/conformance/README.md has the measured rates).
+# Every one of the 182 checks runs, once: run_on_bus.py names them to the
+# suite one by one and fails a check with no result ("not run"); its last
+# line is "total: N passed, M failed, K skipped", each skip listed above it
+# with its reason. Where the host allows SCHED_FIFO (root on CI), the bus
+# runs with servo-bus --realtime and every check, the super-ID / 0x82 slot
+# order and the load run included, runs at 115200 baud in one pass: emulated
+# answers then keep the real slot rule (docs/protocol-decisions.md "Answer
+# slots on emulated buses"). Elsewhere (servo-bus --no-realtime), two passes
+# on one bus: everything at 115200 except the --slow checks, which run after
+# the servos are switched to 9600 baud (slots 8.3 ms apart;
+# tests/conformance/README.md has the measured rates).
 #
 # The load run here is 10,000 transactions on host-sim and 3,000 on QEMU
 # (printed as such: QEMU on a loaded host still misses a super-ID slot about

@@ -7,15 +7,20 @@
 # servo-bus over RFC 2217) and kmx set-baud, scan --all-bauds, rescue on two
 # host-sim servos, about 23 s; test_servo_bus_stop.py: Ctrl-C at random
 # moments of servo-bus's start-up, 20 runs on host-sim and 20 on QEMU (when
-# built) with no process left (tests/tools/ctrl_c_check.py, by PID), SIGKILL,
+# built) with no process left (tests/tools/ctrl_c_check.py, by PID), a
+# signal at the last moments of start-up ends it without "ready", SIGKILL,
 # --flash-dir relaunch, one-line refusals, about 20 s; test_kmx_shared_id.py:
 # every path that writes an ID refuses a taken or shared one, scan flags an ID
 # two servos answer on and its command separates them, about 10 s;
 # test_kmx_url_ctrl_c.py: rfc2217:// and socket:// buses, Ctrl-C anywhere in
 # kmx (16 runs interrupted at random), about 15 s; test_servo_update.py:
 # servo-update's one-line refusals and its checks before touching a servo,
-# about 5 s; all need the host-sim preset built). Whole py_tools run: 130 s
-# measured on the shared 2-core machine with other builds running.
+# about 5 s; test_servo_bus_sched.py: SCHED_FIFO by default where allowed,
+# --no-realtime, the fallback, policies read back from the kernel, about
+# 2 s; test_run_on_bus.py: the conformance wrapper runs every check it
+# names, on a SCHED_FIFO and a plain bus, and counts a check not run as a
+# failure, about 12 s; all need the host-sim preset built). Whole py_tools
+# run: 130 s measured on the shared 2-core machine with other builds running.
 # unittest exits non-zero when any test fails or errors, which fails the CTest test;
 # FAIL_REGULAR_EXPRESSION also catches a run that collected no tests at all.
 find_program(KM_PYTHON3 python3)

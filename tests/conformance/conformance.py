@@ -5,7 +5,8 @@
     conformance.py --bus serial:/dev/ttyUSB0@115200 --ids 1,2,3
     conformance.py --bus pty:/dev/pts/5 --ids 1
     conformance.py --list                      names, basis, what each checks
-    conformance.py ... --only 'reg.*' --only cmd.ping   (exact name, glob or prefix)
+    conformance.py ... --only 'reg.*' --only cmd.ping   (exact name, glob or prefix;
+                                               =NAME: that name alone)
     conformance.py ... --exclude super. --exclude load   (the same, left out)
     conformance.py ... --load 100000           the full load run (default 100000)
 
@@ -14,8 +15,10 @@ hardware. Expectations come from /work/shared/spec/PROTOCOL.md (spec.py);
 checks named "decision:..." test a point the spec leaves open and
 docs/protocol-decisions.md settles. Output: one line per check, "PASS name",
 "FAIL name: why" or "SKIP name: why" (a check that cannot be observed on this
-bus, e.g. a baud change on a TCP bus), lines starting "#" are figures; then
-"N passed, M failed, K skipped". Exit status 1 on any failure.
+bus, e.g. a baud change on a TCP bus; after a bus error, every check left:
+"SKIP name: not run: the bus failed in CHECK"), lines starting "#" are
+figures; then "N passed, M failed, K skipped", one result per check
+selected. Exit status 1 on any failure.
 
 The servos under test (--ids) must answer on the bus; other servos may share
 it. Checks restore what they change (ID, baud, limits, modes), so the suite
@@ -51,16 +54,18 @@ def parse_ids(text):
     return ids
 
 
+def matches(name, pattern):
+    """--only/--exclude: "=NAME" that name alone, else the exact name, a glob or a prefix."""
+    if pattern.startswith("="):
+        return name == pattern[1:]
+    return name == pattern or fnmatch.fnmatchcase(name, pattern) or name.startswith(pattern)
+
+
 def selected(checks, patterns):
+    """The checks any of the patterns match, in suite order (all without patterns)."""
     if not patterns:
         return list(checks)
-    out = []
-    for c in checks:
-        for p in patterns:
-            if c.name == p or fnmatch.fnmatchcase(c.name, p) or c.name.startswith(p):
-                out.append(c)
-                break
-    return out
+    return [c for c in checks if any(matches(c.name, p) for p in patterns)]
 
 
 def main(argv=None):
@@ -72,9 +77,10 @@ def main(argv=None):
     ap.add_argument("--ids", type=parse_ids, default=[1, 2, 3], help="servos under test (1,2,3)")
     ap.add_argument("--list", action="store_true", help="list the checks and exit")
     ap.add_argument("--only", action="append", default=[], metavar="NAME",
-                    help="run only this check (exact name, glob, or prefix); repeatable")
+                    help="run only this check (exact name, glob, or prefix; =NAME: that name "
+                    "alone); repeatable")
     ap.add_argument("--exclude", action="append", default=[], metavar="NAME",
-                    help="leave this check out (exact name, glob, or prefix); repeatable")
+                    help="leave this check out (as --only); repeatable")
     ap.add_argument("--load", type=int, default=100000, metavar="N",
                     help="transactions in the load run (default 100000)")
     ap.add_argument("--timeout", type=float, default=0.5, help="s to wait for a due answer")
@@ -143,6 +149,9 @@ def main(argv=None):
             except (OSError, ConnectionError, KmxError) as e:
                 print("FAIL %s: bus error: %s" % (c.name, e), flush=True)
                 failed += 1
+                for left in checks[checks.index(c) + 1:]:
+                    print("SKIP %s: not run: the bus failed in %s" % (left.name, c.name), flush=True)
+                    skipped += 1
                 break
             except Exception as e:  # a bug in the check itself: say where
                 print("FAIL %s: error in the check: %r" % (c.name, e), flush=True)

@@ -10,7 +10,16 @@ Starts tools/servo-bus on a free port (--port 0: it prints the port in its
 hub as a serial port whose baud the suite sets and changes) with the same
 --ids and SUITE-ARGS, and always stops the bus (SIGTERM, then SIGKILL),
 also when the suite fails, times out or this wrapper is interrupted.
-Exit status: the suite's, or 1 when the bus does not come up.
+
+Every check SUITE-ARGS name (their --only/--exclude, as conformance.py
+--list gives them; all 182 without) runs, each exactly once: the passes
+get the names one by one (--only =NAME). The closing lines count the
+results against those names: a named check with no result line, or with
+two, is a FAIL ("not run: ..."), as is a result for a check not named; each
+SKIP is listed with its reason ("# skipped NAME: why"), and the last line
+is "total: N passed, M failed, K skipped" over every named check. Exit
+status 1 on any failure (a check not run included) or when the bus does
+not come up.
 
 --bus-baud N: before the suite, every servo is switched to N baud over the
 protocol (broadcast write 0x10, broadcast restart), as tests/bus/bus_check.py
@@ -20,18 +29,19 @@ follow the servos' baud (docs/protocol-decisions.md "Super-ID answer slots").
 --slot-timing: "realtime" runs the bus with servo-bus --realtime (hub and
 emulators under SCHED_FIFO) and the suite under SCHED_FIFO below them, so
 emulated super-ID and 0x82 answers keep the real slot rule at 115200
-(docs/protocol-decisions.md "Answer slots on emulated buses"); "auto" (the
+(docs/protocol-decisions.md "Answer slots on emulated buses"): every named
+check then runs in one pass at the bus baud, --slow included. "auto" (the
 default) does so when the host allows SCHED_FIFO (root, or an rtprio
-limit), else "plain". --slow-baud applies only to a plain bus.
+limit), else "plain" (servo-bus --no-realtime).
 
---slow-baud N --slow NAME...: two passes on the same bus (plain bus only). The suite first
-runs without the checks NAME (exact, glob or prefix, as --only), then every
-servo is switched to N baud and the suite runs those checks alone. For the
-checks that need super-ID answers in slot order: an emulated servo starts
-its answer when the host schedules it, so with three emulators and the hub
-sharing two cores the order of slots 0.7 ms apart (115200 baud) is not
-kept, while 8.3 ms apart (9600 baud) it is (tests/conformance/README.md).
-The last line sums both passes: "N passed, M failed, K skipped".
+--slow-baud N --slow NAME...: on a plain bus only, two passes on the same
+bus: first every named check that NAME (as --only: exact, glob, prefix or
+=NAME) does not match, then every servo is switched to N baud and the
+named checks it matches run. For the checks that need super-ID answers in
+slot order: an emulated servo starts its answer when the host schedules
+it, so with three emulators and the hub sharing two cores the order of
+slots 0.7 ms apart (115200 baud) is not kept under plain scheduling, while
+8.3 ms apart (9600 baud) it is (tests/conformance/README.md).
 """
 import argparse
 import os
@@ -43,8 +53,10 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
+SUITE = os.path.join(HERE, "conformance.py")
 sys.path.insert(0, HERE)
 import wire as W  # noqa: E402
+import conformance as S  # noqa: E402  (its check selection: S.matches)
 
 
 def switch_baud(port, ids, baud, old):
@@ -79,6 +91,111 @@ def realtime_allowed():
     return True
 
 
+def split_selection(suite):
+    """(the suite's --only/--exclude patterns as conformance.py arguments,
+    its other arguments)."""
+    sp = argparse.ArgumentParser(add_help=False, allow_abbrev=False)
+    sp.add_argument("--only", action="append", default=[])
+    sp.add_argument("--exclude", action="append", default=[])
+    sel, rest = sp.parse_known_args(suite)
+    return sum((["--only", x] for x in sel.only), []) + sum((["--exclude", x] for x in sel.exclude), []), rest
+
+
+def named_checks(selection):
+    """The names of the checks conformance.py selects with these
+    --only/--exclude arguments, in suite order (its --list)."""
+    out = subprocess.run([sys.executable, SUITE, "--list"] + selection, stdout=subprocess.PIPE,
+                         text=True, check=True).stdout.splitlines()
+    return [line.split()[0] for line in out[:-1]]
+
+
+def plan_passes(names, realtime, bus_baud, slow_baud, slow):
+    """[(baud or None, [check names])]: every named check in one pass at the
+    bus baud on a SCHED_FIFO bus (or without --slow-baud); on a plain bus,
+    the checks --slow matches in a second pass at --slow-baud."""
+    late = [n for n in names if any(S.matches(n, p) for p in slow)]
+    if realtime or not slow_baud or not late:
+        return [(bus_baud, names)]
+    return [(bus_baud, [n for n in names if n not in late]), (slow_baud, late)]
+
+
+RESULT = re.compile(r"(PASS|FAIL|SKIP) (\S+?)(?:: (.*))?$")
+
+
+def tally(names, lines):
+    """Counts the suite's result lines against the checks named: [passed,
+    failed, skipped], the skips as (name, reason), and a FAIL line for each
+    named check without exactly one result (not run, or reported twice) and
+    each result of a check not named."""
+    counts, skips, problems = [0, 0, 0], [], []
+    seen = {}
+    for line in lines:
+        m = RESULT.match(line)
+        if not m:
+            continue
+        kind, name, why = m.groups()
+        seen[name] = seen.get(name, 0) + 1
+        if name not in names:
+            problems.append("FAIL %s: ran, but not one of the checks named" % name)
+            continue
+        counts["PASS FAIL SKIP".split().index(kind)] += 1
+        if kind == "SKIP":
+            skips.append((name, why))
+    for name in names:
+        if seen.get(name, 0) == 0:
+            problems.append("FAIL %s: not run: the suite printed no result for it" % name)
+        elif seen[name] > 1:
+            problems.append("FAIL %s: %d results for one check" % (name, seen[name]))
+    counts[1] += len(problems)
+    return counts, skips, problems
+
+
+def run_pass(port, ids, baud, names, args):
+    """One conformance.py run on the bus at `baud` over exactly `names`;
+    its output lines (echoed), or None when it ended without its summary."""
+    out = subprocess.run([sys.executable, SUITE, "--bus", "rfc2217:127.0.0.1:%d@%d" % (port, baud),
+                          "--ids", ids] + args + sum((["--only", "=" + n] for n in names), []),
+                         stdout=subprocess.PIPE, text=True)
+    sys.stdout.write(out.stdout)
+    sys.stdout.flush()
+    lines = out.stdout.strip().splitlines()
+    if not lines or not SUMMARY.match(lines[-1]) or out.returncode not in (0, 1):
+        print("FAIL suite: exit %d without its summary line" % out.returncode, flush=True)
+    return lines
+
+
+SUMMARY = re.compile(r"(\d+) passed, (\d+) failed, (\d+) skipped$")
+
+
+def run_suite(port, a, realtime, t0):
+    """Every pass, then the closing lines: each skip with its reason and
+    "total: N passed, M failed, K skipped" over every check named. Exit
+    status: 1 on any failure, a check not run included."""
+    selection, rest = split_selection([x for x in a.suite if x != "--"])
+    names = named_checks(selection)
+    print("# %d checks named" % len(names), flush=True)
+    if not names:
+        print("FAIL suite: the --only/--exclude arguments name no check", flush=True)
+        return 1
+    lines, crashed, now = [], False, 115200
+    for baud, group in plan_passes(names, realtime, a.bus_baud, a.slow_baud, a.slow):
+        if baud and baud != now:
+            switch_baud(port, [int(x) for x in a.ids.split(",")], baud, now)
+            now = baud
+            print("# bus: servos switched to %d baud (%d checks)" % (baud, len(group)), flush=True)
+        out = run_pass(port, a.ids, now, group, rest)
+        crashed |= not out or not SUMMARY.match(out[-1])
+        lines += out
+    counts, skips, problems = tally(names, lines)
+    print("# run time %.1f s" % (time.monotonic() - t0))
+    for line in problems:
+        print(line)
+    for name, why in skips:
+        print("# skipped %s: %s" % (name, why))
+    print("total: %d passed, %d failed, %d skipped" % tuple(counts), flush=True)
+    return 1 if counts[1] or crashed else 0
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--backend", required=True, choices=("host-sim", "qemu"))
@@ -97,7 +214,6 @@ def main():
         # Below the hub (20) and the servos (10); the suite inherits it.
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(5))
         argv.append("--realtime")
-        a.slow_baud = None
     else:
         argv.append("--no-realtime")  # servo-bus's default would be SCHED_FIFO where allowed
     print("# slot timing: %s" % ("SCHED_FIFO bus and suite, every check at the bus baud" if realtime
@@ -120,33 +236,7 @@ def main():
         port = int(line.rsplit(":", 1)[1])
         print("# bus: %s, %s servos %s, up in %.1f s" % (line, a.backend, a.ids, time.monotonic() - t0),
               flush=True)
-        ids = [int(x) for x in a.ids.split(",")]
-        suite = [x for x in a.suite if x != "--"]
-        passes = [(a.bus_baud, suite + sum((["--exclude", p] for p in a.slow), []))]
-        if a.slow_baud and a.slow:
-            passes.append((a.slow_baud, suite + sum((["--only", p] for p in a.slow), [])))
-        totals = [0, 0, 0]
-        now = 115200
-        for baud, args in passes:
-            if baud and baud != now:
-                switch_baud(port, ids, baud, now)
-                now = baud
-                print("# bus: servos switched to %d baud" % baud, flush=True)
-            out = subprocess.run([sys.executable, os.path.join(HERE, "conformance.py"),
-                                  "--bus", "rfc2217:127.0.0.1:%d@%d" % (port, now),
-                                  "--ids", a.ids] + args, stdout=subprocess.PIPE, text=True)
-            sys.stdout.write(out.stdout)
-            sys.stdout.flush()
-            last = (out.stdout.strip().splitlines() or [""])[-1]
-            m = re.match(r"(\d+) passed, (\d+) failed, (\d+) skipped", last)
-            if not m or out.returncode not in (0, 1):
-                print("FAIL suite: exit %d, no summary line" % out.returncode, flush=True)
-                return 1
-            totals = [t + int(x) for t, x in zip(totals, m.groups())]
-        if len(passes) > 1:
-            print("# both passes:")
-            print("%d passed, %d failed, %d skipped" % tuple(totals), flush=True)
-        return 1 if totals[1] else 0
+        return run_suite(port, a, realtime, t0)
     except KeyboardInterrupt:
         return 1
     finally:
@@ -157,7 +247,6 @@ def main():
             except subprocess.TimeoutExpired:
                 bus.kill()
                 bus.wait()
-        print("# run time %.1f s" % (time.monotonic() - t0), flush=True)
 
 
 if __name__ == "__main__":
