@@ -8,11 +8,23 @@
 # with its reason. Where the host allows SCHED_FIFO (root on CI), the bus
 # runs with servo-bus --realtime and every check, the super-ID / 0x82 slot
 # order and the load run included, runs at 115200 baud in one pass: emulated
-# answers then keep the real slot rule (docs/protocol-decisions.md "Answer
-# slots on emulated buses"). Elsewhere (servo-bus --no-realtime), two passes
+# answers then keep the real slot rule on host-sim, QEMU's with a slot floor
+# (below; docs/protocol-decisions.md "Answer slots on emulated buses").
+# Elsewhere (servo-bus --no-realtime), two passes
 # on one bus: everything at 115200 except the --slow checks, which run after
 # the servos are switched to 9600 baud (slots 8.3 ms apart;
 # tests/conformance/README.md has the measured rates).
+#
+# QEMU runs with a 20 ms slot floor (servo-bus --slot-floor-us 20000: every
+# super-ID and 0x82 slot of the emulated boards at least 20 ms, the rest of
+# the protocol at 115200; the suite checks the order of the answers, not
+# their times). Its emulators answer late behind host stalls even under
+# SCHED_FIFO: on this 2-core host at load average 8-9 the 7 slot-order
+# checks failed in 3 of 20 runs at the real slot rule and passed 20 of 20
+# with the floor at load 12 (tools/bench-superid --realtime --no-hog: 0.33 %
+# order errors, answer lateness up to 6 ms). host-sim keeps the real rule
+# (20 of 20 at the same load): it is the reference, and the rule itself is
+# checked in virtual time by tests/app.
 #
 # The load run here is 10,000 transactions on host-sim and 3,000 on QEMU
 # (printed as such: QEMU on a loaded host still misses a super-ID slot about
@@ -23,7 +35,7 @@
 find_program(KM_PYTHON3_CONF python3)
 if(KM_PYTHON3_CONF)
   foreach(backend host-sim qemu)
-    set(extra "")
+    set(extra --slot-floor-us 20000)  # QEMU: slots past the host's stalls (above)
     set(load 3000)
     if(backend STREQUAL "host-sim")
       set(extra --gap-floor-us 0)  # host-sim paces bytes: the real gap rule

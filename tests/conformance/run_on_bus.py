@@ -2,7 +2,7 @@
 """Run the conformance suite on an emulated bus (what CTest runs).
 
     run_on_bus.py --backend host-sim|qemu [--ids 1,2,3] [--bus-baud N]
-                  [--slot-timing auto|realtime|plain]
+                  [--slot-timing auto|realtime|plain] [--slot-floor-us N]
                   [--slow-baud N --slow NAME...] [--] SUITE-ARGS...
 
 Starts tools/servo-bus on a free port (--port 0: it prints the port in its
@@ -20,6 +20,10 @@ SKIP is listed with its reason ("# skipped NAME: why"), and the last line
 is "total: N passed, M failed, K skipped" over every named check. Exit
 status 1 on any failure (a check not run included) or when the bus does
 not come up.
+
+--slot-floor-us N: passed to servo-bus (every super-ID and 0x82 answer slot
+of the emulated boards at least N us; the suite checks the answers'
+order, not their times). CTest gives QEMU 20000 (tests/conformance.cmake).
 
 --bus-baud N: before the suite, every servo is switched to N baud over the
 protocol (broadcast write 0x10, broadcast restart), as tests/bus/bus_check.py
@@ -202,6 +206,7 @@ def main():
     ap.add_argument("--ids", default="1,2,3")
     ap.add_argument("--bus-baud", type=int)
     ap.add_argument("--gap-floor-us", type=int)
+    ap.add_argument("--slot-floor-us", type=int)
     ap.add_argument("--slow-baud", type=int)
     ap.add_argument("--slow", action="append", default=[])
     ap.add_argument("--slot-timing", choices=("auto", "realtime", "plain"), default="auto")
@@ -220,6 +225,10 @@ def main():
                                  else "plain scheduling"), flush=True)
     if a.gap_floor_us is not None:
         argv += ["--gap-floor-us", str(a.gap_floor_us)]
+    if a.slot_floor_us is not None:
+        argv += ["--slot-floor-us", str(a.slot_floor_us)]
+        print("# slot floor: every super-ID and 0x82 answer slot at least %d us (servo-bus "
+              "--slot-floor-us)" % a.slot_floor_us, flush=True)
     t0 = time.monotonic()
     # Same process group as this wrapper: a CTest timeout that kills the
     # group takes the bus (and its servos) with it.
