@@ -181,8 +181,10 @@ def main():
     for n in range(1, a.runs + 1):
         delay = rng.uniform(0.0, 1.3 * ready_s)
         p = start(argv, errfile)
+        started = time.monotonic()
         time.sleep(delay)
         ready_before = ready_written(p)
+        sent = time.monotonic() - started  # a loaded host oversleeps
         os.killpg(p.pid, sig)
         out, err, timed_out = finish(p, errfile)
         if timed_out:
@@ -221,8 +223,8 @@ def main():
                  "in Python's start-up, nothing started" if in_python_startup else "during start-up")
         early += in_python_startup
         races += raced
-        print("run %2d: SIG%s at %.3f s (%s): %s" % (n, a.signal, delay, stage,
-                                                   "; ".join(problems) if problems else "clean"), flush=True)
+        print("run %2d: SIG%s at %.3f s, drawn %.3f (%s): %s"
+              % (n, a.signal, sent, delay, stage, "; ".join(problems) if problems else "clean"), flush=True)
         bad += bool(problems)
         children()  # reap
     print("%d runs, %d left processes behind or failed (%d interrupted Python's own start-up, "
