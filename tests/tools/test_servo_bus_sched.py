@@ -1,21 +1,36 @@
 """tools/servo-bus's scheduling (issue 18 item 11): SCHED_FIFO by default
-where the host allows it (servos at 10, the hub at 20 once they are up),
-plain with --no-realtime (also under a real-time parent) and where the host
-does not allow it, --realtime there exits 2, and stderr says which was
-chosen. Real host-sim servos; each policy is read back from the kernel
-(os.sched_getscheduler) for servo-bus and for every servo process."""
+where the host allows it (servos at 10, the hub at 20), plain with
+--no-realtime (also under a real-time parent) and where the host does not
+allow it, --realtime there exits 2, and stderr says which was chosen. Real
+host-sim servos; each policy is read back from the kernel
+(os.sched_getscheduler) for servo-bus and for every servo process. And the
+guard against a guest that busy-loops: three QEMU servos sent into the
+update bootloader (which polls its UART) go to plain scheduling and all
+three still answer, instead of two of them holding both cores at SCHED_FIFO
+and starving the third and every ordinary process (about 10 s)."""
 import ctypes
 import os
 import re
 import resource
+import shutil
+import socket
 import subprocess
 import sys
+import tempfile
+import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from test_kmx import REPO, host_sim_image  # noqa: E402
+sys.path.insert(0, os.path.join(REPO, "tools"))
+import kmbus  # noqa: E402
 
 SERVO_BUS = os.path.join(REPO, "tools", "servo-bus")
+BOOT_IMAGE = os.path.join(os.environ.get("KM_BUILD_QEMU") or os.path.join(REPO, "build", "qemu"),
+                          "boards", "qemu-microbit", "km-servo-boot-qemu-microbit.elf")
+# docs/update.md §4: 0x78 ENTER and START, broadcast
+ENTER = kmbus.encode_command(kmbus.ID_BROADCAST, 0x78, 0x01, bytes([0xB1, 0xB2, 0xB3, 0xB4]))
+START = kmbus.encode_command(kmbus.ID_BROADCAST, 0x78, 0x07, bytes([0xE1, 0xE2, 0xE3, 0xE4]))
 PROBE = "import os; os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(1))"
 PR_CAPBSET_DROP = 24
 CAP_SYS_NICE = 23
@@ -68,8 +83,8 @@ class Scheduling(unittest.TestCase):
     def test_default_is_sched_fifo_where_allowed(self):
         hub, prio, servos, line = self.start()
         self.assertEqual((hub, prio, servos), (os.SCHED_FIFO, 20, [os.SCHED_FIFO] * 2))
-        self.assertEqual(line, "servo-bus: scheduling: SCHED_FIFO, servos 10, hub 20 (the host "
-                         "allows it; --no-realtime for plain)")
+        self.assertEqual(line, "servo-bus: scheduling: SCHED_FIFO, servos 10, hub 20, a busy-looping "
+                         "servo plain (the host allows it; --no-realtime for plain)")
 
     def test_no_realtime_is_plain(self):
         # from a SCHED_FIFO parent where the host allows one: plain all the same
@@ -101,6 +116,75 @@ class Scheduling(unittest.TestCase):
         self.assertEqual(r.stderr.splitlines()[-1], "servo-bus: error: argument --no-realtime: not "
                          "allowed with argument --realtime")
 
+
+
+def policies(pid):
+    """The scheduling policy of every thread of a process."""
+    out = set()
+    for tid in os.listdir("/proc/%d/task" % pid):
+        try:
+            out.add(os.sched_getscheduler(int(tid)))
+        except OSError:
+            pass
+    return out
+
+
+def ping(sock, dev_id, timeout):
+    """True when dev_id answers a ping on the bus before the timeout."""
+    sock.sendall(kmbus.ping(dev_id))
+    parser, end = kmbus.Parser(), time.monotonic() + timeout
+    while time.monotonic() < end:
+        sock.settimeout(max(0.01, end - time.monotonic()))
+        try:
+            data = sock.recv(4096)
+        except socket.timeout:
+            return False
+        if any(f.id == dev_id for f in parser.feed(data)):
+            return True
+    return False
+
+
+class BusyGuest(unittest.TestCase):
+    @unittest.skipUnless(fifo_allowed(), "this host refuses SCHED_FIFO: no real-time servo to guard")
+    @unittest.skipUnless(os.path.isfile(BOOT_IMAGE) and shutil.which("qemu-system-arm"),
+                         "no QEMU bootloader image or qemu-system-arm")
+    def test_servos_in_the_polling_bootloader_go_plain_and_answer(self):
+        errlog = tempfile.TemporaryFile(mode="w+")
+        self.addCleanup(errlog.close)
+        p = subprocess.Popen([sys.executable, SERVO_BUS, "--ids", "1,2,3", "--port", "0", "--image",
+                              BOOT_IMAGE], stdout=subprocess.PIPE, stderr=errlog, text=True)
+
+        def stop():
+            p.terminate()
+            p.communicate(timeout=30)
+        self.addCleanup(stop)
+        ready = p.stdout.readline()
+        self.assertTrue(ready.startswith("ready 127.0.0.1:"), ready)
+        errlog.seek(0)
+        pids = {int(i): int(pid) for i, pid in re.findall(r"servo id (\d+): pid (\d+) on port",
+                                                          errlog.read())}
+        self.assertEqual({policy for pid in pids.values() for policy in policies(pid)},
+                         {os.SCHED_FIFO})
+        sock = socket.create_connection(("127.0.0.1", int(ready.rsplit(":", 1)[1])), timeout=5)
+        self.addCleanup(sock.close)
+        sock.sendall(ENTER)
+        deadline = time.monotonic() + 60  # the guard looks once a second; a slow host
+        busy = []
+        while len(busy) < 3 and time.monotonic() < deadline:
+            time.sleep(0.5)
+            errlog.seek(0)
+            busy = re.findall(r"servo id (\d+): its guest busy-loops \(\d+ % of a core\): plain "
+                              r"scheduling for it from now on", errlog.read())
+        self.assertEqual(sorted(busy), ["1", "2", "3"])
+        self.assertEqual({policy for pid in pids.values() for policy in policies(pid)},
+                         {os.SCHED_OTHER})
+        for dev_id in (1, 2, 3):  # the bootloader answers a ping
+            self.assertTrue(ping(sock, dev_id, 5.0), "servo %d silent in its bootloader" % dev_id)
+        sock.sendall(START)  # back to the application, plain from now on
+        for dev_id in (1, 2, 3):
+            deadline = time.monotonic() + 20
+            while not ping(sock, dev_id, 0.5):
+                self.assertLess(time.monotonic(), deadline, "servo %d silent after START" % dev_id)
 
 if __name__ == "__main__":
     unittest.main()
