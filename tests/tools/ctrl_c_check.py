@@ -202,13 +202,16 @@ def main():
         where = [ln.strip() for ln in err.splitlines() if ln.strip().startswith("File ")]
         # Python's own start-up, before servo-bus's first line (its signal
         # handlers) runs: the default SIGINT action, or KeyboardInterrupt
-        # while the interpreter imports or compiles the script ("line 0").
+        # while the interpreter initialises, imports site or compiles the
+        # script (printed with a traceback, in a "Fatal Python error", or
+        # alone: exit 1 with "KeyboardInterrupt" only, 2 in 200 early runs).
         # Nothing is started then; counted apart, not a failure.
         if a.demo and p.returncode in (0, 130, -sig):
             p.returncode = 0  # the demo's own goodbye, or killed before its trap
+        interrupted = err.strip().endswith("KeyboardInterrupt")
         in_python_startup = not a.demo and not left and (
             (p.returncode == -sig and not err.strip()) or
-            ("Traceback" in err and not after_handlers(where, handlers_at)))
+            (interrupted and not after_handlers(where, handlers_at)))
         if not in_python_startup:
             if p.returncode != 0:
                 problems.append("exit status %d" % p.returncode)
