@@ -62,11 +62,16 @@ class EveryNamedCheckRuns(unittest.TestCase):
         found = results(r.stdout)
         self.assertEqual({n: len(found.get(n, [])) for n in names}, {n: 1 for n in names}, r.stdout)
         self.assertEqual(sorted(found), sorted(names), r.stdout)
-        self.assertEqual(r.returncode, 0, r.stdout + r.stderr[-2000:])
         closing = r.stdout.strip().splitlines()[-1]
         m = CLOSING.match(closing)
         self.assertTrue(m, closing)
-        self.assertEqual([int(x) for x in m.groups()], [8, 0, 0], r.stdout)
+        passed, failed, skipped = (int(x) for x in m.groups())
+        # Whether each check passes is conformance_*'s business: a host
+        # stall can still swap two answers here. What this test holds is
+        # that every named check ran once and the closing line counts it.
+        self.assertEqual((passed + failed + skipped, skipped), (8, 0), r.stdout)
+        self.assertEqual(failed, sum(line.startswith("FAIL ") for line in r.stdout.splitlines()))
+        self.assertEqual(r.returncode, 1 if failed else 0, r.stdout + r.stderr[-2000:])
         return r.stdout
 
     @unittest.skipUnless(fifo_allowed(), "this host refuses SCHED_FIFO (not root, no rtprio limit): "
