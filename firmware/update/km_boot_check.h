@@ -15,6 +15,20 @@
  * be NULL) with its header whatever the verdict. */
 bool km_boot_check(const km_flash_t *region, const km_image_target_t *t, km_image_header_t *h);
 
+/* Where a checked image starts: its vector table's first two words. */
+typedef struct {
+    uint32_t sp;  /* initial stack pointer */
+    uint32_t pc;  /* reset vector (Thumb: bit 0 set) */
+} km_boot_entry_t;
+
+/* The entry check (docs/update.md §3) of an image km_boot_check passed,
+ * read through the region: the initial SP lies in [sp_lo, sp_hi] and the
+ * reset vector is a Thumb address whose first halfword lies inside the
+ * image, from its vector table to its length (not merely inside the
+ * region). False on a read error. Fills *e whatever the verdict. */
+bool km_boot_entry(const km_flash_t *region, const km_image_header_t *h, uint32_t sp_lo,
+                   uint32_t sp_hi, km_boot_entry_t *e);
+
 /* CRC-32 of region bytes [from, to), continuing crc; false on a read error. */
 bool km_boot_crc(const km_flash_t *region, uint32_t from, uint32_t to, uint32_t *crc);
 

@@ -139,6 +139,16 @@ static inline void rig_make_image(rig_image_t *im, uint32_t length, uint32_t ver
     rig_put32(im->bytes + 28, km_crc32(0u, im->bytes, 28u));
 }
 
+/* Gives im a sound vector table (initial SP, reset vector inside the
+ * image) for the entry check (docs/update.md §3) and its CRCs again. */
+static inline void rig_set_entry(rig_image_t *im, uint32_t sp, uint32_t pc)
+{
+    rig_put32(im->bytes + KM_IMAGE_VECTORS, sp);
+    rig_put32(im->bytes + KM_IMAGE_VECTORS + 4u, pc);
+    rig_put32(im->bytes + 24, km_crc32(0u, im->bytes + 32, im->length - 32u));
+    rig_put32(im->bytes + 28, km_crc32(0u, im->bytes, 28u));
+}
+
 static inline uint32_t rig_blocks(const rig_image_t *im)
 {
     return (im->length + KM_UPDATE_BLOCK - 1u) / KM_UPDATE_BLOCK;
