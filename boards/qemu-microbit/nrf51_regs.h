@@ -70,6 +70,7 @@
 #define TIMER_INT_COMPARE(n) (1u << (16u + (n)))
 #define TIMER_MODE 0x504u
 #define TIMER_BITMODE 0x508u
+#define TIMER_BITMODE_16 0u
 #define TIMER_BITMODE_32 3u
 #define TIMER_PRESCALER 0x510u
 #define TIMER_CC(n) (0x540u + 4u * (n))
@@ -83,6 +84,7 @@
 
 /* WDT (RM §25) */
 #define WDT_TASKS_START 0x000u
+#define WDT_RUNSTATUS 0x400u /* bit 0: running */
 #define WDT_CRV 0x504u
 #define WDT_RREN 0x508u
 #define WDT_CONFIG 0x50Cu
@@ -120,6 +122,12 @@ static inline void nrf_irq_enable(uint32_t irq)
 {
     NRF_REG(SCS_NVIC_ICPR, 0) = 1u << irq;
     NRF_REG(SCS_NVIC_ISER, 0) = 1u << irq;
+}
+
+static inline void nrf_irq_disable(uint32_t irq)
+{
+    NRF_REG(SCS_NVIC_ICER, 0) = 1u << irq;
+    NRF_REG(SCS_NVIC_ICPR, 0) = 1u << irq;
 }
 
 static inline void nrf_irq_pend(uint32_t irq)

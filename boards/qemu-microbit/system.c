@@ -180,9 +180,17 @@ _Noreturn void km_hal_system_reset(void)
 }
 
 /* Not modelled by QEMU 7.2 (the WDT range is an "unimplemented device": writes
- * are ignored), so in QEMU this never bites; the code is for the real part. */
+ * are ignored), so in QEMU this never bites; the code is for the real part.
+ * CONFIG, CRV and RREN cannot change once the WDT runs (nRF51 RM §25), and
+ * neither a soft reset nor a jump stops it: started by the bootloader
+ * (docs/update.md §3a, with this application's 500 ms and RR0) or by an
+ * earlier run of this image, it is left as it is and kicked. */
 void km_hal_watchdog_start(uint32_t timeout_ms)
 {
+    if ((NRF_REG(NRF_WDT, WDT_RUNSTATUS) & 1u) != 0u) {
+        km_hal_watchdog_kick();
+        return;
+    }
     uint64_t ticks = (uint64_t)timeout_ms * PRV_WDT_CLK_HZ / 1000u;
     if (ticks < 15u) {
         ticks = 15u; /* RM: CRV minimum is 15 */

@@ -33,6 +33,9 @@
 #define KM_APP_TICK_US KM_CONTROL_TICK_US /* control tick: 1 kHz */
 #define KM_APP_RX_BUDGET 64u      /* bytes parsed per loop pass: bounds tick jitter */
 #define KM_APP_WATCHDOG_MS 500u
+/* docs/update.md §3a: the main loop has served the bus this long before
+ * the start is confirmed to the bootloader (its trial timer: 2 s). */
+#define KM_APP_CONFIRM_US 1000000u
 
 static km_rx_queue_t s_rxq;
 static km_parser_t s_parser;
@@ -72,6 +75,8 @@ static volatile uint32_t s_tx_refused;   /* answers the UART would not take (dia
 static bool s_reply_waiting;
 static uint32_t s_reply_end;
 static bool s_restart_pending;
+static bool s_boot_confirmed;    /* km_board_boot_confirm() was called */
+static uint32_t s_confirm_at;    /* tick at which the start is confirmed */
 
 static void ISR_rx_byte(void *ctx, uint8_t byte, uint32_t tick, bool lost)
 {
@@ -334,6 +339,21 @@ __attribute__((weak)) bool km_board_boot_request(void)
     return false;
 }
 
+/* No bootloader, no trial to confirm (a board with one defines it). */
+__attribute__((weak)) void km_board_boot_confirm(void)
+{
+}
+
+/* docs/update.md §3a: once the main loop has run KM_APP_CONFIRM_US with
+ * the bus open, the start was good; told the bootloader once per boot. */
+static void prv_confirm_boot(uint32_t now)
+{
+    if (!s_boot_confirmed && (int32_t)(now - s_confirm_at) >= 0) {
+        s_boot_confirmed = true;
+        km_board_boot_confirm();
+    }
+}
+
 static const km_servo_ops_t s_ops = {
     .commit = prv_ops_commit,
     .restart = prv_ops_restart,
@@ -362,6 +382,7 @@ void km_app_init(void)
     s_tx_refused = 0;
     s_reply_waiting = false;
     s_restart_pending = false;
+    s_boot_confirmed = false;
 
     km_hal_system_init();
     /* First, so a fault or a hang anywhere later (a store mount on bad
@@ -397,6 +418,7 @@ void km_app_init(void)
     s_last_control_tick = km_hal_time_now();
     s_tick_period = prv_us_to_ticks(KM_APP_TICK_US);
     s_next_tick = s_last_control_tick;
+    s_confirm_at = s_last_control_tick + prv_us_to_ticks(KM_APP_CONFIRM_US);
 }
 
 /* Emulated buses: the gap floor raises the parser's rule at the baud the
@@ -426,6 +448,7 @@ void km_app_poll(void)
         s_next_tick += s_tick_period;
         prv_control_tick(now);
         km_hal_watchdog_kick();
+        prv_confirm_boot(now);
     } else if (prv_bridge_driving() || !km_app_userdata_maintain()) {
         /* Check and sleep under the lock: WFI still wakes on an interrupt
          * that became pending after the check (a byte, the answer timer,

@@ -26,6 +26,11 @@ _Noreturn void km_app_run(void);
  * ENTER is refused with bit 5). */
 bool km_board_boot_request(void);
 
+/* A board with a bootloader defines this (docs/update.md §3a): the app
+ * calls it once per boot, after its main loop has served the bus for 1 s,
+ * to confirm the start to the bootloader's trial. Weak default: nothing. */
+void km_board_boot_confirm(void);
+
 /* Boot: hal, store mount, dispatcher, control, bus. Resets every piece of
  * the app's state, so a test may call it again to model a reset. */
 void km_app_init(void);

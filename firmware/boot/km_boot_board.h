@@ -1,7 +1,10 @@
 /* What a board gives its bootloader (docs/update.md §3, §5): polled UART,
  * a microsecond clock, the application region and the user-data store as
- * km_flash_t, and the jump. The bootloader runs with interrupts masked and
- * polls, so it needs no handler of its own. */
+ * km_flash_t, the shared RAM words (km_boot_trial.h), the watchdog, and
+ * the jump that starts an image on trial. The bootloader enables no
+ * interrupt and polls, so it needs no handler of its own. A board's
+ * boot_layout.h also names BOOT_RAM_BASE and BOOT_SHARED_ADDR: the range
+ * an image's initial stack pointer must lie in. */
 #ifndef KM_BOOT_BOARD_H
 #define KM_BOOT_BOARD_H
 
@@ -9,20 +12,10 @@
 #include <stdint.h>
 
 #include "km_hal_flash.h"
+#include "km_boot_trial.h"
 #include "km_image.h"
 
 #define KM_BOOT_VERSION 0x10u             /* 0x0C bootloader byte: v1.0 */
-#define KM_BOOT_REQUEST_MAGIC 0x55504454u /* "stay in update mode" (0x78 ENTER) */
-#define KM_BOOT_APP_MAGIC 0x41505021u     /* the application is running (nRF51 forwarding) */
-
-/* The top 16 bytes of RAM, shared by bootloader and application; neither
- * loaded nor zeroed by either. */
-typedef struct {
-    uint32_t request;       /* KM_BOOT_REQUEST_MAGIC: the app asked for update mode */
-    uint32_t app_running;   /* KM_BOOT_APP_MAGIC while the app runs */
-    uint32_t boot_version;  /* KM_BOOT_VERSION, for the app's 0x0C */
-    uint32_t check;         /* ~boot_version */
-} km_boot_shared_t;
 
 volatile km_boot_shared_t *km_bootb_shared(void);
 
@@ -39,8 +32,15 @@ bool km_bootb_uart_rx(uint8_t *byte);           /* a received byte, if any */
 void km_bootb_uart_tx(const uint8_t *p, uint32_t n); /* returns after the last stop bit */
 uint32_t km_bootb_now_us(void);
 
+/* Reloads the watchdog if a reset left it running (nRF51: a soft reset
+ * may); harmless when it is not. */
+void km_bootb_watchdog_kick(void);
+
 _Noreturn void km_bootb_reset(void);
-/* Starts the application whose vector table is at `vectors`. */
-_Noreturn void km_bootb_start(uint32_t vectors);
+/* Starts the image whose vector table is at `vectors` (initial SP `sp`,
+ * reset vector `pc`, both checked by km_boot_entry) on trial: arms the
+ * watchdog, on the nRF51 also the trial timer (docs/update.md §3a), then
+ * jumps. */
+_Noreturn void km_bootb_start(uint32_t vectors, uint32_t sp, uint32_t pc);
 
 #endif

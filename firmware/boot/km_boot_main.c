@@ -1,14 +1,17 @@
 /* The bootloader (docs/update.md §3): the first code after reset. Starts
- * the application if the boot check passes and no update was asked for;
- * otherwise stays in update mode and answers on the bus at the stored ID
- * and baud (user data readable) or ID 0 at 115200, through the frame
- * decoder (km_boot_rx.c: the parser's frames in less code) and the update
- * state machine. Portable: the board is behind
- * km_boot_board.h. */
+ * the application on trial (§3a: the start counted, the watchdog armed) if
+ * the boot and entry checks pass, no update was asked for and the image
+ * has not failed its trial KM_BOOT_TRIAL_MAX times in a row; otherwise
+ * stays in update mode and answers on the bus at the stored ID and baud
+ * (user data readable) or ID 0 at 115200, through the frame decoder
+ * (km_boot_rx.c: the parser's frames in less code) and the update state
+ * machine. Portable: the board is behind km_boot_board.h and its
+ * boot_layout.h. */
 #include <stdbool.h>
 #include <stdint.h>
 
 #include "km_app_userdata.h"
+#include "boot_layout.h"
 #include "km_boot_board.h"
 #include "km_boot_check.h"
 #include "km_boot_rx.h"
@@ -18,6 +21,7 @@
 
 #define PRV_FALLBACK_BAUD 115200u
 #define PRV_ANSWER_DELAY_US 200u   /* the 0x12 default: the master turns its line around */
+#define PRV_KICK_US 50000u         /* watchdog reloads: 10 per 500 ms timeout */
 
 /* An emulated bus's least inter-byte gap, set by the simulated board's
  * build (boards/qemu-microbit: 20 ms, as QEMU hands bytes over when the
@@ -30,6 +34,7 @@
 static km_boot_serve_t s_serve;
 static km_boot_rx_t s_rx;
 static km_boot_reply_t s_reply;
+static uint32_t s_kicked_us;   /* when the watchdog was last reloaded */
 
 /* ID and baud from the user data (what a mount of a schema of 0x0F and
  * 0x10 would load: km_store_peek), or the fallback (docs/update.md §3). */
@@ -51,6 +56,17 @@ static void prv_wait_us(uint32_t from, uint32_t us)
     }
 }
 
+/* Reloads a watchdog a soft reset left running (§3a) now and then: a
+ * register write per loop pass would slow the polling (QEMU: an MMIO
+ * access each). */
+static void prv_kick(uint32_t now)
+{
+    if (now - s_kicked_us >= PRV_KICK_US) {
+        s_kicked_us = now;
+        km_bootb_watchdog_kick();
+    }
+}
+
 static void prv_handle(const km_frame_view_t *v)
 {
     km_boot_serve(&s_serve, v, &s_reply);
@@ -63,23 +79,30 @@ static void prv_handle(const km_frame_view_t *v)
     }
 }
 
+/* The boot and entry checks (§3); starts the image if the trial decision
+ * (§3a) says so, else returns whether the region holds a valid image. */
+static bool prv_boot(const km_image_target_t *t, km_image_header_t *h)
+{
+    volatile km_boot_shared_t *sh = km_bootb_shared();
+    km_boot_entry_t e = {0u, 0u};
+    const bool valid = km_boot_check(km_bootb_region(), t, h);
+    const bool ok = valid && km_boot_entry(km_bootb_region(), h, BOOT_RAM_BASE, BOOT_SHARED_ADDR, &e);
+    const km_boot_decision_t d = km_boot_decide(sh, ok);
+    sh->boot_version = KM_BOOT_VERSION;
+    sh->check = ~(uint32_t)KM_BOOT_VERSION;
+    if (d == KM_BOOT_RUN) {
+        km_bootb_start(t->base + h->vectors, e.sp, e.pc);
+    }
+    return ok;
+}
+
 int main(void)
 {
     km_bootb_init();
-    volatile km_boot_shared_t *sh = km_bootb_shared();
-    const bool asked = sh->request == KM_BOOT_REQUEST_MAGIC;
-    sh->request = 0u;
-    sh->app_running = 0u;
-    sh->boot_version = KM_BOOT_VERSION;
-    sh->check = ~(uint32_t)KM_BOOT_VERSION;
-
     km_bootb_factory();
     const km_image_target_t *t = km_bootb_target();
     km_image_header_t h;
-    const bool valid = km_boot_check(km_bootb_region(), t, &h);
-    if (valid && !asked) {
-        km_bootb_start(t->base + h.vectors);
-    }
+    const bool valid = prv_boot(t, &h);
 
     /* Update mode. */
     uint8_t id;
@@ -91,6 +114,7 @@ int main(void)
     }
     km_update_init(&s_serve.upd, km_bootb_region(), t);
     s_serve.id = id;
+    s_serve.shared = km_bootb_shared();
     s_serve.version = ((uint32_t)KM_BOOT_VERSION << 24) | (km_bootb_hw_version() << 16) |
                       (valid ? (h.version & 0xFFFFu) : 0u);
     uint32_t gap = km_parser_default_gap_us(baud);
@@ -103,8 +127,10 @@ int main(void)
     for (;;) {
         uint8_t b;
         km_frame_view_t v;
-        const bool got = km_bootb_uart_rx(&b) ? km_boot_rx_feed(&s_rx, b, km_bootb_now_us(), &v)
-                                              : km_boot_rx_poll(&s_rx, km_bootb_now_us(), &v);
+        const bool in = km_bootb_uart_rx(&b);
+        const uint32_t now = km_bootb_now_us();
+        prv_kick(now);
+        const bool got = in ? km_boot_rx_feed(&s_rx, b, now, &v) : km_boot_rx_poll(&s_rx, now, &v);
         if (got) {
             prv_handle(&v);
         }

@@ -76,6 +76,9 @@ void km_boot_serve(km_boot_serve_t *s, const km_frame_view_t *f, km_boot_reply_t
     case KM_CMD_UPDATE: {
         km_update_answer_t a;
         km_update_frame(&s->upd, f->body, f->body_len, &a);
+        if (s->upd.state == KM_UPD_STATE_COMMITTED || a.action == KM_UPD_ACT_RESTART) {
+            km_boot_trial_fresh(s->shared); /* a new image, or START: new tries */
+        }
         if (a.action == KM_UPD_ACT_RESTART) {
             r->action = KM_BOOT_ACT_RESTART;
         } else if (a.action == KM_UPD_ACT_EXCEPTION) {

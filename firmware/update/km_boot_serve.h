@@ -3,12 +3,15 @@
  * restart (write 0x02 E1 E2 E3 E4), and 0x78 on the update state machine.
  * Anything else sets status bit 5 (PROTOCOL.md §4), answered by the next
  * ping. Frames to its own ID and broadcast (never answered) run; the rest
- * are ignored. Pure: frame view in, answer bytes and an action out. */
+ * are ignored. A committed image and START give the image new tries
+ * (§3a: km_boot_trial_fresh on the shared words); the standard restart
+ * keeps the count. Pure: frame view in, answer bytes and an action out. */
 #ifndef KM_BOOT_SERVE_H
 #define KM_BOOT_SERVE_H
 
 #include <stdint.h>
 
+#include "km_boot_trial.h"
 #include "km_frame.h"
 #include "km_update.h"
 
@@ -17,6 +20,7 @@ typedef struct {
     uint8_t id;          /* the ID it answers on (stored, or the fallback 0) */
     uint8_t status;      /* unreported status bits (bit 5) */
     uint32_t version;    /* the 0x0C answer */
+    volatile km_boot_shared_t *shared; /* the words shared with the application */
 } km_boot_serve_t;
 
 typedef enum {

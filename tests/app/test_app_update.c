@@ -2,7 +2,9 @@
  * the real main loop on the fake board: STATUS answers state 0, ENTER
  * restarts into the bootloader when the board has one (nothing after it
  * runs) and is refused with bit 5 when it has none, every other
- * sub-command is bit 5, broadcast is never answered. */
+ * sub-command is bit 5, broadcast is never answered. And the trial (§3a):
+ * the start is confirmed to the bootloader once per boot, after the main
+ * loop has served the bus for 1 s, not before. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -17,6 +19,16 @@
 /* This test's board: a bootloader present or not, and what it was asked. */
 static bool s_has_bootloader;
 static unsigned s_requests;
+static unsigned s_confirms;        /* km_board_boot_confirm() calls */
+static uint32_t s_confirm_now;     /* virtual time of the last one */
+static unsigned s_confirm_boot;    /* kf_world.boots then */
+
+void km_board_boot_confirm(void)
+{
+    s_confirms++;
+    s_confirm_now = kf_world.now;
+    s_confirm_boot = kf_world.boots;
+}
 
 bool km_board_boot_request(void)
 {
@@ -47,6 +59,7 @@ static int prv_setup(void **state)
     (void)state;
     s_has_bootloader = false;
     s_requests = 0u;
+    s_confirms = 0u;
     kf_power_on();
     assert_true(kf_run_for(20000u));
     uint8_t drop[64];
@@ -115,6 +128,32 @@ static void test_other_sub_commands_bit5(void **state)
     assert_int_equal(s_requests, 0);
 }
 
+/* §3a: booted at 1000 us (kf_power_on), the app serves the bus and
+ * confirms its start once, 1 s after its init; a restart boots it again,
+ * which confirms again 1 s later. */
+static void test_start_confirmed_after_one_second(void **state)
+{
+    (void)state;
+    assert_true(kf_run_until(1000u + 990000u));
+    assert_int_equal(s_confirms, 0);
+    prv_send("F9 FF 00 02 01 FC"); /* it serves the bus meanwhile */
+    prv_answered("F9 F5 00 02 00 FD");
+    assert_true(kf_run_until(1000u + 1010000u));
+    assert_int_equal(s_confirms, 1);
+    assert_in_range(s_confirm_now - 1000u, 1000000u, 1002000u);
+    assert_true(kf_run_for(3000000u));
+    assert_int_equal(s_confirms, 1);
+    const unsigned boots = kf_world.boots;
+    const uint32_t sent = kf_world.now;
+    prv_send("F9 FF 00 07 03 02 E1 E2 E3 E4 69"); /* the standard restart */
+    assert_int_equal(kf_world.boots, boots + 1u);
+    assert_true(kf_run_until(sent + 900000u));
+    assert_int_equal(s_confirms, 1);
+    assert_true(kf_run_until(sent + 1100000u));
+    assert_int_equal(s_confirms, 2);
+    assert_int_equal(s_confirm_boot, boots + 1u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -122,6 +161,7 @@ int main(void)
         cmocka_unit_test_setup(test_enter_without_bootloader_is_bit5, prv_setup),
         cmocka_unit_test_setup(test_enter_with_bootloader_restarts, prv_setup),
         cmocka_unit_test_setup(test_other_sub_commands_bit5, prv_setup),
+        cmocka_unit_test_setup(test_start_confirmed_after_one_second, prv_setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -15,6 +15,7 @@
 static rig_t s_r;
 static km_boot_serve_t s_s;
 static km_boot_reply_t s_rep;
+static km_boot_shared_t s_sh; /* the words shared with the application */
 
 static int prv_setup(void **state)
 {
@@ -24,6 +25,8 @@ static int prv_setup(void **state)
     km_update_init(&s_s.upd, &s_r.region, &s_r.target);
     s_s.id = 7u;
     s_s.version = 0x10100100u;
+    memset(&s_sh, 0, sizeof s_sh);
+    s_s.shared = &s_sh;
     return 0;
 }
 
@@ -108,6 +111,30 @@ static void test_update_frames(void **state)
     prv_answer_is("F9 F5 07 02 20 D6");
 }
 
+/* §3a: an image that used up its tries (the bootloader stays in update
+ * mode) gets new ones from START, not from the standard restart, nor
+ * from anything else the bootloader answers. */
+static void test_start_gives_new_tries(void **state)
+{
+    (void)state;
+    for (uint32_t i = 0; i < KM_BOOT_TRIAL_MAX; i++) {
+        assert_int_equal(km_boot_decide(&s_sh, true), KM_BOOT_RUN);
+    }
+    assert_int_equal(km_boot_decide(&s_sh, true), KM_BOOT_STAY_GAVE_UP);
+    prv_frame("F9 FF 07 02 01 F5");                  /* ping */
+    prv_frame("F9 FF 07 05 78 04 00 00 77");          /* STATUS */
+    prv_frame("F9 FF 07 07 78 01 B1 B2 B3 B4 AE");    /* ENTER: ends a session */
+    prv_frame("F9 FF 07 07 78 07 E1 E2 E3 E5 E7");    /* START, bad magic */
+    prv_frame("F9 FF FE 07 03 02 E1 E2 E3 E4 6B");    /* the standard restart */
+    assert_int_equal(s_rep.action, KM_BOOT_ACT_RESTART);
+    assert_int_equal(km_boot_attempts(&s_sh), KM_BOOT_TRIAL_MAX);
+    assert_int_equal(km_boot_decide(&s_sh, true), KM_BOOT_STAY_GAVE_UP);
+    prv_frame("F9 FF FE 07 78 07 E1 E2 E3 E4 F1");    /* START, broadcast */
+    assert_int_equal(s_rep.action, KM_BOOT_ACT_RESTART);
+    assert_int_equal(km_boot_attempts(&s_sh), 0);
+    assert_int_equal(km_boot_decide(&s_sh, true), KM_BOOT_RUN);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -115,6 +142,7 @@ int main(void)
         cmocka_unit_test_setup(test_bit5_life_cycle, prv_setup),
         cmocka_unit_test_setup(test_restart, prv_setup),
         cmocka_unit_test_setup(test_update_frames, prv_setup),
+        cmocka_unit_test_setup(test_start_gives_new_tries, prv_setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,7 +1,9 @@
 /* The bootloader's board part for the nRF51 (km_boot_board.h): HFCLK and
  * TIMER0 at 1 MHz, UART0 polled, the NVMC over the application region,
- * the jump, and QEMU's factory slot (docs/update.md §6). The store region
- * is boards/qemu-microbit/flash.c's, the driver the application uses. */
+ * the start on trial (WDT and the TIMER2 trial timer, docs/update.md §3a),
+ * and QEMU's factory slot (docs/update.md §6). The store region is
+ * boards/qemu-microbit/flash.c's, the driver the application uses. */
+#include <stddef.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -16,6 +18,15 @@
 #define PRV_CELL 4u
 #define PRV_PIN_TXD 24u
 #define PRV_PIN_RXD 25u
+
+/* boot_startup.c's stubs read these two words by address. */
+_Static_assert(BOOT_SHARED_ADDR + offsetof(km_boot_shared_t, app_running) == BOOT_APP_RUNNING_ADDR,
+               "app_running address");
+_Static_assert(BOOT_SHARED_ADDR + offsetof(km_boot_shared_t, confirmed) == BOOT_CONFIRMED_ADDR,
+               "confirmed address");
+_Static_assert(BOOT_APP_MAGIC_WORD == KM_BOOT_APP_MAGIC && BOOT_CONFIRMED_WORD == KM_BOOT_CONFIRMED_MAGIC,
+               "magic words");
+_Static_assert(BOOT_SHARED_ADDR + sizeof(km_boot_shared_t) == 0x20004000, "the top of RAM");
 
 volatile km_boot_shared_t *km_bootb_shared(void)
 {
@@ -72,6 +83,7 @@ static km_flash_result_t prv_erase(void *ctx, uint32_t page)
     if (page >= BOOT_REGION_SIZE / BOOT_PAGE) {
         return KM_FLASH_ERR_ALIGN;
     }
+    km_bootb_watchdog_kick(); /* 112 erases of 21 ms outlast the 500 ms watchdog */
     prv_mode(NVMC_CONFIG_EEN);
     NRF_REG(NRF_NVMC, NVMC_ERASEPAGE) = BOOT_REGION_BASE + page * BOOT_PAGE;
     prv_ready();
@@ -226,17 +238,45 @@ _Noreturn void km_bootb_reset(void)
     }
 }
 
-_Noreturn void km_bootb_start(uint32_t vectors)
+void km_bootb_watchdog_kick(void)
 {
-    const uint32_t sp = *(const volatile uint32_t *)(uintptr_t)vectors;
-    const uint32_t pc = *(const volatile uint32_t *)(uintptr_t)(vectors + 4u);
-    /* A table that cannot be the application's: stay reachable instead. */
-    if (sp < 0x20000000u || sp > BOOT_SHARED_ADDR || (pc & 1u) == 0u ||
-        pc < vectors || pc >= BOOT_REGION_BASE + BOOT_REGION_SIZE) {
-        km_bootb_shared()->request = KM_BOOT_REQUEST_MAGIC;
-        km_bootb_reset();
-    }
+    NRF_REG(NRF_WDT, WDT_RR0) = WDT_RR_RELOAD;
+}
+
+/* The watchdog on silicon (QEMU 7.2 ignores it): the application's own
+ * settings, which its km_hal_watchdog_start cannot change once it runs. */
+static void prv_watchdog_start(void)
+{
+    NRF_REG(NRF_WDT, WDT_CONFIG) = WDT_CONFIG_SLEEP_RUN | WDT_CONFIG_HALT_PAUSE;
+    NRF_REG(NRF_WDT, WDT_CRV) = BOOT_WDT_MS * 32768u / 1000u;
+    NRF_REG(NRF_WDT, WDT_RREN) = 1u;
+    NRF_REG(NRF_WDT, WDT_TASKS_START) = 1u;
+}
+
+/* The trial timer (docs/update.md §3a): TIMER2's COMPARE0 interrupt after
+ * 2 s, taken by boot_startup.c's km_boot_trial, which resets unless the
+ * application has confirmed (and stopped this timer) by then. */
+static void prv_trial_timer_start(void)
+{
+    NRF_REG(BOOT_TRIAL_TIMER, TIMER_TASKS_STOP) = 1u;
+    NRF_REG(BOOT_TRIAL_TIMER, TIMER_MODE) = 0u;
+    NRF_REG(BOOT_TRIAL_TIMER, TIMER_BITMODE) = TIMER_BITMODE_16;
+    NRF_REG(BOOT_TRIAL_TIMER, TIMER_PRESCALER) = BOOT_TRIAL_PRESCALER;
+    NRF_REG(BOOT_TRIAL_TIMER, TIMER_SHORTS) = 0u;
+    NRF_REG(BOOT_TRIAL_TIMER, TIMER_CC(0)) = BOOT_TRIAL_TICKS;
+    NRF_REG(BOOT_TRIAL_TIMER, TIMER_EVENTS_COMPARE(0)) = 0u;
+    NRF_REG(BOOT_TRIAL_TIMER, TIMER_INTENSET) = TIMER_INT_COMPARE(0);
+    NRF_REG(BOOT_TRIAL_TIMER, TIMER_TASKS_CLEAR) = 1u;
+    nrf_irq_enable(BOOT_TRIAL_IRQ);
+    NRF_REG(BOOT_TRIAL_TIMER, TIMER_TASKS_START) = 1u;
+}
+
+_Noreturn void km_bootb_start(uint32_t vectors, uint32_t sp, uint32_t pc)
+{
+    (void)vectors; /* no VTOR: boot_startup.c forwards to BOOT_APP_VECTORS */
     km_bootb_shared()->app_running = KM_BOOT_APP_MAGIC;
+    prv_watchdog_start();
+    prv_trial_timer_start();
     __asm__ volatile(
         "msr msp, %0 \n"
         "bx  %1      \n"

@@ -7,7 +7,15 @@
  * with LR untouched, so the exception return and the stacked frame are the
  * application's own, as if the core had vectored there: six instructions
  * more per exception. Otherwise (the bootloader runs with no interrupt
- * enabled) it is a fault: reset. */
+ * enabled) it is a fault: reset.
+ *
+ * Two entries are the trial's (docs/update.md §3a): HardFault and the
+ * trial timer's interrupt (TIMER2) go to km_boot_trial, which resets
+ * while the application has not confirmed its start (the start was
+ * counted before the jump), and forwards like every other entry once it
+ * has. So an image that faults before it confirms is reset even if its
+ * own HardFault handler is garbage, and one that hangs is reset by the
+ * timer after 2 s. */
 #include <stdint.h>
 
 #include "boot_layout.h"
@@ -22,6 +30,7 @@ extern uint32_t __stack_top[];
 int main(void);
 void km_boot_reset_handler(void);
 void km_boot_forward(void);
+void km_boot_trial(void);
 
 #define PRV_STR2(x) #x
 #define PRV_STR(x) PRV_STR2(x)
@@ -50,22 +59,47 @@ __attribute__((naked)) void km_boot_forward(void)
         ".ltorg                            \n");
 }
 
+/* The trial's entries: reset unless the application confirmed its start
+ * (the confirmed word holds its magic), else forward. r0-r3 are stacked. */
+__attribute__((naked)) void km_boot_trial(void)
+{
+    __asm__ volatile(
+        ".syntax unified                   \n"
+        "ldr  r0, =" PRV_STR(BOOT_CONFIRMED_ADDR) "\n"
+        "ldr  r0, [r0]                     \n"
+        "ldr  r1, =" PRV_STR(BOOT_CONFIRMED_WORD) "\n"
+        "cmp  r0, r1                       \n"
+        "bne  1f                           \n"
+        "ldr  r0, =km_boot_forward         \n"
+        "bx   r0                           \n"
+        "1:                                \n"
+        "ldr  r0, =" PRV_STR(BOOT_AIRCR) "\n"
+        "ldr  r1, =" PRV_STR(BOOT_AIRCR_RESET) "\n"
+        "dsb                               \n"
+        "str  r1, [r0]                     \n"
+        "dsb                               \n"
+        "2: b 2b                           \n"
+        ".ltorg                            \n");
+}
+
 typedef void (*km_vector_t)(void);
 
-/* 16 core entries + 32 nRF51 interrupts, all but two forwarded. */
+#define PRV_F km_boot_forward
+#define PRV_T km_boot_trial
+
+/* 16 core entries + 32 nRF51 interrupts: the initial SP, the reset, the
+ * trial's two (HardFault, IRQ BOOT_TRIAL_IRQ = TIMER2), the rest forwarded. */
 __attribute__((section(".isr_vector"), used)) const km_vector_t km_vectors[48] = {
     (km_vector_t)(uintptr_t)__stack_top, km_boot_reset_handler,
-    km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward,
-    km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward,
-    km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward,
-    km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward,
-    km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward,
-    km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward,
-    km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward,
-    km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward,
-    km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward, km_boot_forward,
-    km_boot_forward,
+    PRV_F, PRV_T, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F,
+    /* IRQ 0-15 */
+    PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_T, PRV_F, PRV_F, PRV_F,
+    PRV_F, PRV_F,
+    /* IRQ 16-31 */
+    PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F,
+    PRV_F, PRV_F,
 };
+_Static_assert(BOOT_TRIAL_IRQ == 10, "km_vectors puts km_boot_trial at IRQ 10");
 
 void km_boot_reset_handler(void)
 {

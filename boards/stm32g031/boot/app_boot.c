@@ -1,6 +1,7 @@
 /* The application's half of the handshake with the bootloader (docs/update.md
- * §3): 0x78 ENTER leaves the "stay in update mode" request in the shared
- * RAM words; the app then restarts. Linked only into application images
+ * §3, §3a): 0x78 ENTER leaves the "stay in update mode" request in the
+ * shared RAM words (the app then restarts), and the confirmation of a good
+ * start says so in the same words. Linked only into application images
  * built for the bootloader's region. */
 #include <stdbool.h>
 #include <stdint.h>
@@ -9,12 +10,25 @@
 #include "km_app.h"
 #include "km_boot_board.h"
 
+static volatile km_boot_shared_t *prv_shared(void)
+{
+    return (volatile km_boot_shared_t *)(uintptr_t)BOOT_SHARED_ADDR;
+}
+
 bool km_board_boot_request(void)
 {
-    volatile km_boot_shared_t *sh = (volatile km_boot_shared_t *)(uintptr_t)BOOT_SHARED_ADDR;
-    if (sh->check != ~sh->boot_version) {
+    if (!km_boot_started_by_loader(prv_shared())) {
         return false; /* not started by a bootloader */
     }
-    sh->request = KM_BOOT_REQUEST_MAGIC;
+    prv_shared()->request = KM_BOOT_REQUEST_MAGIC;
     return true;
+}
+
+/* Nothing to stop on this board: its trial is the bootloader's IWDG, which
+ * km_hal_watchdog_start took over. */
+void km_board_boot_confirm(void)
+{
+    if (km_boot_started_by_loader(prv_shared())) {
+        km_boot_confirm(prv_shared());
+    }
 }

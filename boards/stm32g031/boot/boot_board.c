@@ -3,7 +3,7 @@
  * set up), TIM2 at 1 MHz, USART1 single-wire half-duplex on PB6 polled,
  * the flash controller over the application region (erase, double-word
  * program, reads that report a double ECC error), a read-only view of the
- * store, and the jump through VTOR. Runs from flash with no interrupt
+ * store, the IWDG, and the jump through VTOR. Runs from flash with no interrupt
  * enabled, so a page erase simply stalls it (docs/flash-busy.md concerns
  * the application's bus interrupts, which are off here). */
 #include <stdint.h>
@@ -79,6 +79,7 @@ static km_flash_result_t prv_erase(void *ctx, uint32_t page)
     if (page >= BOOT_REGION_SIZE / PRV_PAGE) {
         return KM_FLASH_ERR_ALIGN;
     }
+    km_bootb_watchdog_kick(); /* 25 erases of 40 ms outlast the 512 ms watchdog */
     prv_unlock();
     const uint32_t pnb = (BOOT_REGION_BASE - FLASH_MAIN_BASE) / PRV_PAGE + page;
     FLASH_CR = FLASH_CR_PER | (pnb << FLASH_CR_PNB_SHIFT);
@@ -241,16 +242,32 @@ _Noreturn void km_bootb_reset(void)
     }
 }
 
-_Noreturn void km_bootb_start(uint32_t vectors)
+void km_bootb_watchdog_kick(void)
 {
-    const uint32_t sp = *(const volatile uint32_t *)(uintptr_t)vectors;
-    const uint32_t pc = *(const volatile uint32_t *)(uintptr_t)(vectors + 4u);
-    if (sp < 0x20000000u || sp > BOOT_RAM_END || (pc & 1u) == 0u || pc < vectors ||
-        pc >= BOOT_REGION_BASE + BOOT_REGION_SIZE) {
-        km_bootb_shared()->request = KM_BOOT_REQUEST_MAGIC;
-        km_bootb_reset();
+    IWDG_KR = IWDG_KEY_KICK;
+}
+
+/* The IWDG for the image's trial (docs/update.md §3a): prescaler /4 and
+ * the largest reload, 4096 x 4 / 32 kHz = 512 ms; the application's
+ * km_hal_watchdog_start sets its own prescaler and reload on the running
+ * watchdog (RM0444 §27.3: PR and RLR stay writable after the start; their
+ * update is done when PVU and RVU read 0, waited for here so the
+ * application's first write is taken). */
+static void prv_watchdog_start(void)
+{
+    IWDG_KR = IWDG_KEY_START;
+    IWDG_KR = IWDG_KEY_UNLOCK;
+    IWDG_PR = 0u;
+    IWDG_RLR = 0xFFFu;
+    while (IWDG_SR != 0u) {
     }
+    IWDG_KR = IWDG_KEY_KICK;
+}
+
+_Noreturn void km_bootb_start(uint32_t vectors, uint32_t sp, uint32_t pc)
+{
     km_bootb_shared()->app_running = KM_BOOT_APP_MAGIC;
+    prv_watchdog_start();
     PRV_SCB_VTOR = vectors;
     __asm__ volatile(
         "dsb         \n"

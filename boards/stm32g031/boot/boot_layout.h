@@ -7,7 +7,7 @@
 #define BOOT_REGION_SIZE (25u * 2048u)
 #define BOOT_STORE_BASE 0x0800E800u       /* user-data store: 3 pages */
 #define BOOT_STORE_SIZE (3u * 2048u)
-#define BOOT_SHARED_ADDR 0x20001FF0u      /* km_boot_shared_t: the top 16 bytes of RAM */
-#define BOOT_RAM_END 0x20001FF0u
+#define BOOT_RAM_BASE 0x20000000u
+#define BOOT_SHARED_ADDR 0x20001FE0u      /* km_boot_shared_t: the top 32 bytes of RAM */
 
 #endif
