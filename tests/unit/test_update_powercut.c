@@ -6,8 +6,9 @@
  *    NOR simulator models (random and weak outcomes drawn three times: weak
  *    cells read at random, always erased, always programmed), and
  *  - between every two protocol steps (power lost with RAM, nothing torn).
- * After each cut the servo "boots": km_boot_check(), the bootloader's own
- * decision. Required, every time:
+ * After each cut the servo "boots": km_boot_check() and km_boot_entry(),
+ * the bootloader's own checks, and km_boot_decide() over the RAM words the
+ * cut left as garbage (docs/update.md §3a). Required, every time:
  *  (a) it starts the old image, read back byte for byte, or the new one
  *      only after COMMIT's cell, or it stays in the bootloader: never an
  *      image that is neither, and never the bootloader while the old image
@@ -28,6 +29,7 @@
 #include <cmocka.h>
 
 #include "km_boot_check.h"
+#include "km_boot_trial.h"
 #include "km_store.h"
 #include "km_store_test_schema.h"
 #include "km_update_proto.h"
@@ -59,6 +61,8 @@ static uint32_t s_store_values[KM_STORE_MAX_KEYS];
 
 static unsigned long s_cut_points, s_runs, s_bricks, s_boots[BOOT_KINDS], s_recovered;
 static unsigned long s_step_cuts;
+static unsigned long s_decisions;     /* trial decisions taken over power-cut RAM */
+static uint32_t s_garbage = 0x2545F491u; /* xorshift state of that RAM */
 static unsigned long s_fail[4];
 static const char *s_where;
 static uint32_t s_where_i, s_where_o;
@@ -133,14 +137,46 @@ static void prv_check_store(void)
     }
 }
 
+#define PRV_RAM_LO 0x20000000u
+#define PRV_RAM_HI 0x20001FE0u
+
+/* The bootloader's checks: the image passes the boot check and its entry
+ * (initial SP, reset vector) the entry check. */
+static bool prv_checks(km_image_header_t *h)
+{
+    km_boot_entry_t e;
+    return km_boot_check(&s_r.region, &s_r.target, h) &&
+           km_boot_entry(&s_r.region, h, PRV_RAM_LO, PRV_RAM_HI, &e);
+}
+
+/* §3a: the decision over the RAM words a power cut left (garbage) starts
+ * exactly what the checks pass. */
+static void prv_decide_after_cut(bool app)
+{
+    km_boot_shared_t ram;
+    uint32_t *w = (uint32_t *)(void *)&ram;
+    for (size_t i = 0; i < sizeof ram / 4u; i++) {
+        s_garbage ^= s_garbage << 13;
+        s_garbage ^= s_garbage >> 17;
+        s_garbage ^= s_garbage << 5;
+        w[i] = s_garbage;
+    }
+    s_decisions++;
+    if ((km_boot_decide(&ram, app) == KM_BOOT_RUN) != app) {
+        prv_fail(0, "the trial decision after a power cut differs from the checks");
+    }
+}
+
 /* (a): what the bootloader decides now; `old_possible`: no erase of this
  * update has taken effect yet, `new_possible`: COMMIT's cell was reached. */
 static void prv_boot(bool new_possible)
 {
     km_image_header_t h;
-    const bool app = km_boot_check(&s_r.region, &s_r.target, &h);
+    const bool app = prv_checks(&h);
     /* Twice, so a weak cell that reads differently is caught. */
-    const bool app2 = km_boot_check(&s_r.region, &s_r.target, NULL);
+    km_image_header_t h2;
+    const bool app2 = prv_checks(&h2);
+    prv_decide_after_cut(app);
     if (app != app2 && s_r.sim.weak_reads != KM_NOR_WEAK_RANDOM) {
         prv_fail(0, "boot decision changes between two reads with pinned weak cells");
     }
@@ -180,7 +216,8 @@ static void prv_recover(void)
             return;
         }
     }
-    if (!km_boot_check(&s_r.region, &s_r.target, NULL) || !prv_region_is(&s_new)) {
+    km_image_header_t h;
+    if (!prv_checks(&h) || !prv_region_is(&s_new)) {
         prv_fail(3, "the completed update does not boot the new image");
         return;
     }
@@ -276,7 +313,8 @@ static void prv_prologue(const prv_geom_t *g, bool with_old)
     assert_int_equal(km_store_mount(&st2, &s_r.store, &k_test_schema, s_store_values),
                      KM_STORE_MOUNT_LOADED);
     if (with_old) {
-        assert_true(km_boot_check(&s_r.region, &s_r.target, NULL));
+        km_image_header_t h;
+        assert_true(prv_checks(&h));
     }
 }
 
@@ -349,6 +387,8 @@ static void test_update_survives_every_cut(void **state)
     (void)state;
     rig_make_image(&s_old, 1300u, 0x00100100u, KM_MODEL_STM32G031, 11u);
     rig_make_image(&s_new, 1700u, 0x00100200u, KM_MODEL_STM32G031, 22u);
+    rig_set_entry(&s_old, PRV_RAM_HI, RIG_BASE + 0x4C1u);
+    rig_set_entry(&s_new, PRV_RAM_HI, RIG_BASE + 0x6A1u);
     printf("update power-cut runner (docs/update.md section 7): old image %u B, new %u B (%u blocks)\n",
            s_old.length, s_new.length, rig_blocks(&s_new));
     const size_t ngeoms = s_quick ? 1u : sizeof s_geoms / sizeof s_geoms[0];
@@ -364,6 +404,7 @@ static void test_update_survives_every_cut(void **state)
            s_cut_points, s_runs, s_step_cuts, s_boots[BOOT_OLD], k_boot_name[BOOT_OLD],
            s_boots[BOOT_LOADER], k_boot_name[BOOT_LOADER], s_boots[BOOT_NEW],
            k_boot_name[BOOT_NEW], s_recovered, s_bricks);
+    printf("       trial decisions over power-cut RAM: %lu, each the checks' verdict\n", s_decisions);
     printf("invariant failures: (a) boot %lu, (b) store %lu, (c) flash rules %lu, (d) recovery %lu\n",
            s_fail[0], s_fail[1], s_fail[2], s_fail[3]);
     assert_int_equal(s_fail[0] + s_fail[1] + s_fail[2] + s_fail[3], 0);
