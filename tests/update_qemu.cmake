@@ -22,3 +22,14 @@ if(KM_PYTHON3_UPD)
   set_tests_properties(update_qemu_interrupt PROPERTIES LABELS bus TIMEOUT 300 RUN_SERIAL TRUE
     FAIL_REGULAR_EXPRESSION "Ran 0 tests;FAILED")
 endif()
+
+# A bad image does not brick a servo (docs/update.md §3a): the hang and the
+# crash image (tests/qemu/trial/bad_image.c) to two servos by
+# tools/servo-update; both back in update mode on their IDs within 30 s,
+# then a good image in one pass. About 70 s; RUN_SERIAL like the others.
+if(KM_PYTHON3_UPD)
+  add_test(NAME update_qemu_trial
+    COMMAND ${KM_PYTHON3_UPD} ${CMAKE_SOURCE_DIR}/tests/qemu/update_trial.py)
+  set_tests_properties(update_qemu_trial PROPERTIES LABELS bus TIMEOUT 300 RUN_SERIAL TRUE
+    PASS_REGULAR_EXPRESSION "all checks passed")
+endif()
