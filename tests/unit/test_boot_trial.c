@@ -16,6 +16,7 @@
 
 static km_boot_shared_t s_sh;
 
+/* Every test starts from all-zero words. */
 static int prv_setup(void **state)
 {
     (void)state;
@@ -193,6 +194,7 @@ static void prv_table(uint32_t length, uint32_t sp, uint32_t pc)
     assert_int_equal(s_r.region.program(s_r.region.ctx, KM_IMAGE_VECTORS, w, 8u), KM_FLASH_OK);
 }
 
+/* The entry check of the table prv_table wrote. */
 static bool prv_entry(void)
 {
     km_boot_entry_t e;

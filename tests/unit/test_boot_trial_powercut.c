@@ -58,7 +58,6 @@ static const prv_geom_t s_geoms[] = {
 };
 
 enum { KIND_GOOD, KIND_HANG, KIND_CRASH, KINDS };
-static const char *const k_kind[KINDS] = {"good", "hang", "crash"};
 
 static rig_t s_r;
 static km_boot_shared_t s_ram;
@@ -78,6 +77,7 @@ static unsigned long s_fail[5];
 static const char *s_where;
 static uint32_t s_seed;
 
+/* Counts an invariant failure; prints the first 20. */
 static void prv_fail(int kind, const char *what)
 {
     s_fail[kind]++;
@@ -86,6 +86,7 @@ static void prv_fail(int kind, const char *what)
     }
 }
 
+/* A draw in [0, n) from the scenario's xorshift. */
 static uint32_t prv_rand(uint32_t n)
 {
     s_rng ^= s_rng << 13;
@@ -96,6 +97,7 @@ static uint32_t prv_rand(uint32_t n)
 
 /* ---- images: a rig image with a sound vector table ---------------------- */
 
+/* Image `kind`: `length` bytes, a sound vector table, its CRCs. */
 static void prv_make(int kind, uint32_t length, uint32_t seed)
 {
     rig_image_t *im = &s_img[kind];
@@ -154,6 +156,7 @@ static void prv_reset(void)
 
 /* ---- the bootloader ------------------------------------------------------- */
 
+/* (d): user-data pages as the prologue left them, the flash rules kept. */
 static void prv_check_store(void)
 {
     const uint32_t off = s_r.region_pages * s_r.whole.page_size;
@@ -204,6 +207,7 @@ static int prv_boot(void)
 
 /* ---- the master, through the bootloader's dispatcher ---------------------- */
 
+/* One broadcast frame through the bootloader's dispatcher. */
 static void prv_frame(uint8_t cmd, const uint8_t *body, uint8_t n)
 {
     const km_frame_view_t v = {.id = KM_ID_BROADCAST, .cmd = cmd, .body_len = n, .body = body,
@@ -229,12 +233,14 @@ static void prv_update_step(const rig_image_t *im, uint32_t k)
     }
 }
 
+/* 0x78 START: the image gets new tries (§3a). */
 static void prv_start_frame(void)
 {
     static const uint8_t k_start[5] = {KM_UPD_SUB_START, 0xE1u, 0xE2u, 0xE3u, 0xE4u};
     prv_frame(KM_CMD_UPDATE, k_start, 5u);
 }
 
+/* The standard restart (write 0x02): the count is kept. */
 static void prv_restart_frame(void)
 {
     static const uint8_t k_restart[5] = {0x02u, 0xE1u, 0xE2u, 0xE3u, 0xE4u};
@@ -326,6 +332,7 @@ static void prv_app(int kind)
 
 /* ---- one scenario ----------------------------------------------------------- */
 
+/* A fresh servo: user data in the store, no image, power-on RAM. */
 static void prv_prologue(const prv_geom_t *g)
 {
     rig_init(&s_r, g->page_size, g->cell, g->pages, g->region_pages, g->fill);
@@ -381,6 +388,7 @@ static void prv_settle(void)
     }
 }
 
+/* One random life of PRV_STEPS boots, then the settling of (e). */
 static void prv_scenario(const prv_geom_t *g, uint32_t seed)
 {
     s_seed = seed;
@@ -447,7 +455,6 @@ static void test_trial_survives_cuts_and_resets(void **state)
     printf("invariant failures: (a) image %lu, (b) tries %lu, (c) restart/ENTER %lu, (d) flash %lu, "
            "(e) settle %lu\n",
            s_fail[0], s_fail[1], s_fail[2], s_fail[3], s_fail[4]);
-    (void)k_kind;
     assert_int_equal(s_fail[0] + s_fail[1] + s_fail[2] + s_fail[3] + s_fail[4], 0);
     assert_int_equal(s_max_in_row, KM_BOOT_TRIAL_MAX); /* the limit was reached, not only obeyed */
     assert_true(s_stays[KM_BOOT_STAY_GAVE_UP] > 0u);

@@ -10,11 +10,13 @@
 #include "km_app.h"
 #include "km_boot_board.h"
 
+/* The words shared with the bootloader (km_boot_trial.h). */
 static volatile km_boot_shared_t *prv_shared(void)
 {
     return (volatile km_boot_shared_t *)(uintptr_t)BOOT_SHARED_ADDR;
 }
 
+/* 0x78 ENTER: leave the request for the bootloader (km_app.h). */
 bool km_board_boot_request(void)
 {
     if (!km_boot_started_by_loader(prv_shared())) {
