@@ -21,7 +21,7 @@
  * the bridge (hand-over rules in km_motor_mode.h).
  *
  * While protecting, 0x64 reads 5; motion requests and 0x64 = 2/3 are
- * refused (status bit 6); a request for less motion (km_servo_io.h) is
+ * refused (status bit 6); a request for less motion (km_request.h) is
  * always taken, here and with a hardware fault latched: 0x64 = 0/1 (the
  * output is off anyway) are what 0x64 returns to, a motor stop (0x6E/0x6F
  * = 0, 0x70 stop) leaves motor mode stopped, and ends a hold action's
@@ -29,7 +29,8 @@
  * off, to 2 if the output held position throughout (a hold action), else
  * to 3 (armed: on at the next rotation command, so a released servo never
  * moves by itself). Only this header
- * and km_servo_io.h are the interface; the modules are internals. */
+ * and the shared types of include/km/ are the interface; the modules are
+ * internals. */
 #ifndef KM_CONTROL_H
 #define KM_CONTROL_H
 
@@ -43,7 +44,9 @@
 #include "km_position_loop.h"
 #include "km_protect.h"
 #include "km_selftest.h"
-#include "km_servo_io.h"
+#include "km_live.h"
+#include "km_params.h"
+#include "km_request.h"
 #include "km_servo_mode.h"
 #include "km_speed_est.h"
 

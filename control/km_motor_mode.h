@@ -43,7 +43,8 @@
 #include <stdint.h>
 
 #include "km_output.h"
-#include "km_servo_io.h"
+#include "km_params.h"
+#include "km_request.h"
 
 #define KM_MOTOR_KI_Q8 5120  /* speed loop integrator: PWM per deg of speed error x s, Q8 (20) */
 

@@ -13,7 +13,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "km_servo_io.h"
+#include "km_product.h"
 
 typedef struct {
     int32_t i_acc;        /* integrator, PWM x 256000 */

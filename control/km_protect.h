@@ -44,14 +44,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "km_servo_io.h"
-
-/* 0x32/0x33/0x36 bits, status bits 0-3 */
-#define KM_PROT_VOLTAGE 0x01u
-#define KM_PROT_CURRENT 0x02u
-#define KM_PROT_TEMPERATURE 0x04u
-#define KM_PROT_STALL 0x08u
-#define KM_PROT_ALL 0x0Fu
+#include "km_params.h"
+#include "km_status.h"
 
 #define KM_PROTECT_FIXED_TIME_US 3000000u /* voltage and temperature: 3 s (§5.2) */
 #define KM_PROTECT_STALL_WINDOW 10        /* 0.1 deg: moving more is not a stall */

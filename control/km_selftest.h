@@ -40,7 +40,7 @@
  * Bits 1 (memory: the store found damage) and 0 (crystal) come from the
  * app and the board; bit 7 from the hal. The dispatcher latches every bit
  * until restart and refuses more motion while any is set (§5.2); a
- * request for less motion is always taken (km_servo_io.h). */
+ * request for less motion is always taken (km_request.h). */
 #ifndef KM_SELFTEST_H
 #define KM_SELFTEST_H
 
@@ -48,16 +48,8 @@
 #include <stdint.h>
 
 #include "km_hal_sensors.h"
-#include "km_servo_io.h"
-
-#define KM_HW_CRYSTAL 0x01u
-#define KM_HW_MEMORY 0x02u
-#define KM_HW_TEMPERATURE 0x04u
-#define KM_HW_VOLTAGE 0x08u
-#define KM_HW_CURRENT 0x10u
-#define KM_HW_POSITION 0x20u
-#define KM_HW_MOTOR 0x40u
-#define KM_HW_OTHER 0x80u
+#include "km_params.h"
+#include "km_status.h"
 
 #define KM_SELFTEST_SAMPLES 16u          /* ticks of the power-on check */
 #define KM_SELFTEST_FREE_MIN 4u          /* bridge-free samples the offset check needs */

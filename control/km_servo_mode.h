@@ -41,7 +41,8 @@
 
 #include "km_output.h"
 #include "km_profile.h"
-#include "km_servo_io.h"
+#include "km_params.h"
+#include "km_request.h"
 
 #define KM_STREAM_GAP_US 200000u   /* a 0x68 later than this after the previous one starts a new stream */
 

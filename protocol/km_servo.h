@@ -13,14 +13,10 @@
 #include "km_frame.h"
 #include "km_product.h"
 #include "km_registers.h"
-#include "km_servo_io.h" /* request, live state, control parameters */
-
-/* Status byte bits (§4). */
-#define KM_ST_RUNNING    0x80u
-#define KM_ST_FAILED     0x40u
-#define KM_ST_EXCEPTION  0x20u
-#define KM_ST_HW_FAULT   0x10u
-#define KM_ST_PROTECTION 0x0Fu /* stall, temperature, current, voltage */
+#include "km_live.h"
+#include "km_params.h"
+#include "km_request.h"
+#include "km_status.h"
 
 /* What the firmware provides: narrow, typed, no hardware types. */
 typedef struct {
@@ -104,7 +100,7 @@ void km_servo_set_fault_log(km_servo_t *s, km_fault_log_t *log);
 /* Control sets 0x64 to 5 after a protection (not writable from the bus). */
 void km_servo_set_torque_switch(km_servo_t *s, uint8_t value);
 
-/* The control registers decoded into engineering units (km_servo_io.h). */
+/* The control registers decoded into engineering units (km_params.h). */
 void km_servo_control_params(const km_servo_t *s, km_control_params_t *out);
 
 /* Changes every time a register value changes (a write, a commit, a reset,

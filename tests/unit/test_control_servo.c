@@ -1,7 +1,7 @@
 /* Servo mode on the simulated plant (PROTOCOL.md §5.4, §5.1, §5.3): control
  * stepped against km_plant_step at the 1 kHz tick with a one-tick PWM delay
  * (tests/support/km_plant_rig.h), default plant (20 kg.cm class, 7.4 V) and
- * default gains (protocol/km_product.h, docs/tuning.md).
+ * default gains (include/km/km_product.h, docs/tuning.md).
  *
  * Figures the tests hold (the bounds are what is asserted):
  *  - arrival: the move ends (bit 7 clears) within the arrive band of
