@@ -22,30 +22,60 @@ void km_control_init(km_control_t *c, const km_control_params_t *p)
     c->bridge = km_output_bridge(p->power_on_brake ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE, 0, 0, false);
 }
 
+/* A torque switch for servo mode: motor mode lets go of the bridge. */
+static bool prv_torque(km_control_t *c, km_torque_t torque)
+{
+    if (c->motor.active) {
+        km_motor_mode_release(&c->motor);
+    }
+    return km_servo_mode_torque(&c->servo, torque, c->position);
+}
+
 /* While protecting (km_control.h): a request for less motion is taken,
- * every other torque or motion request refused. 0x64 = 0/1 is remembered
- * for the release; a motor stop stays in force after it. The protection's
- * action keeps the last word on the bridge meanwhile (step 4b). */
+ * every other torque or motion request refused. FREE/BRAKE is remembered
+ * for the release; a motor stop (a run of nothing) stays in force after
+ * it: motor mode takes the bridge, stopped (a servo hold under a hold
+ * action ends: less motion). The protection's action keeps the last word
+ * on the bridge meanwhile (step 4b). */
 static bool prv_request_protecting(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
 {
     if (!km_request_less_motion(req)) {
         return false;
     }
-    if (req->kind != KM_REQ_TORQUE_SWITCH) {
-        /* 0x6E/0x6F = 0, 0x70 stop: motor mode takes the bridge, stopped
-         * (a servo hold under a hold action ends: less motion) */
-        if (!km_motor_mode_request(&c->motor, req, p, c->position)) {
-            return false;
-        }
+    if (req->kind != KM_REQ_TORQUE) {
+        km_motor_mode_run(&c->motor, &req->u.run, p, c->position);
         c->servo.running = false;
         c->servo.streaming = false;
         return true;
     }
-    c->ts_after = req->u.u8;
-    if (c->motor.active) {
+    c->ts_after = req->u.torque;
+    return prv_torque(c, (km_torque_t)req->u.torque);
+}
+
+/* A torque switch or a move: servo mode takes the shaft back from the
+ * motor, restarting from where the shaft is. */
+static bool prv_request_servo(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
+{
+    if (c->motor.active && c->servo.ts == KM_TORQUE_ON) {
+        km_servo_mode_rebase(&c->servo, c->position);
+    }
+    const bool ok = req->kind == KM_REQ_TORQUE
+                        ? km_servo_mode_torque(&c->servo, (km_torque_t)req->u.torque, c->position)
+                        : km_servo_mode_move(&c->servo, &req->u.move, p, c->position);
+    if (ok) {
         km_motor_mode_release(&c->motor);
     }
-    return km_servo_mode_request(&c->servo, req, p, c->position);
+    return ok;
+}
+
+/* A motor run: ends a servo-mode hold or move (km_motor_mode.h); the
+ * variant and 0x5A rules are the dispatcher's. */
+static bool prv_request_motor(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
+{
+    km_motor_mode_run(&c->motor, &req->u.run, p, c->position);
+    c->servo.running = false;
+    c->servo.streaming = false;
+    return true;
 }
 
 bool km_control_request(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
@@ -53,7 +83,7 @@ bool km_control_request(km_control_t *c, const km_request_t *req, const km_contr
     c->requests++;
     c->last_request = *req;
     if (req->kind == KM_REQ_PROTECTION_CLEAR) {
-        return km_protect_clear(&c->prot, req->u.u8); /* refused while its excursion holds */
+        return km_protect_clear(&c->prot, req->u.clear); /* refused while its excursion holds */
     }
     if (req->kind == KM_REQ_ZERO_POSITION) {
         return true; /* the dispatcher moves the offsets; nothing moves here */
@@ -65,40 +95,18 @@ bool km_control_request(km_control_t *c, const km_request_t *req, const km_contr
         return prv_request_protecting(c, req, p);
     }
     switch (req->kind) {
-    case KM_REQ_TORQUE_SWITCH:
-    case KM_REQ_MOVE_TIME:
-    case KM_REQ_MOVE_SPEED:
-    case KM_REQ_SERVO_ADVANCED:
-    case KM_REQ_INTERPOLATE: {
-        /* a servo command (or torque switch) takes the shaft back from the
-         * motor: servo mode restarts from where the shaft is */
-        if (c->motor.active && c->servo.ts == 2u) {
-            km_servo_mode_rebase(&c->servo, c->position);
-        }
-        const bool ok = km_servo_mode_request(&c->servo, req, p, c->position);
-        if (ok) {
-            km_motor_mode_release(&c->motor);
-        }
-        return ok;
-    }
-    case KM_REQ_MOTOR_TORQUE:
-    case KM_REQ_MOTOR_SPEED:
-    case KM_REQ_MOTOR_ADVANCED:
-        /* the variant and 0x5A rules are the dispatcher's; a motor command
-         * ends a servo-mode hold or move (km_motor_mode.h) */
-        if (!km_motor_mode_request(&c->motor, req, p, c->position)) {
-            return false;
-        }
-        c->servo.running = false;
-        c->servo.streaming = false;
-        return true;
+    case KM_REQ_TORQUE:
+    case KM_REQ_MOVE:
+        return prv_request_servo(c, req, p);
+    case KM_REQ_MOTOR:
+        return prv_request_motor(c, req, p);
     default:
         return false; /* not a control request */
     }
 }
 
 /* A protection's action began, changed or ended (km_control.h for 0x64). */
-static void prv_protect_transition(km_control_t *c, km_prot_action_t act, const km_control_params_t *p)
+static void prv_protect_transition(km_control_t *c, km_prot_action_t act)
 {
     const km_prot_action_t was = (km_prot_action_t)c->action;
     if (act == was) {
@@ -107,21 +115,18 @@ static void prv_protect_transition(km_control_t *c, km_prot_action_t act, const 
     c->action = (uint8_t)act;
     if (act == KM_PROT_ACT_NONE) {
         /* released: 0x64 back to what km_control.h says */
-        if (c->ts_after != 2u) {
-            km_request_t q;
-            q.kind = KM_REQ_TORQUE_SWITCH;
-            q.u.u8 = c->ts_after;
-            (void)km_servo_mode_request(&c->servo, &q, p, c->position);
+        if (c->ts_after != KM_TORQUE_ON) {
+            (void)km_servo_mode_torque(&c->servo, (km_torque_t)c->ts_after, c->position);
         }
         return;
     }
     if (was == KM_PROT_ACT_NONE) {
-        c->ts_after = c->servo.ts <= 1u ? c->servo.ts : 3u;
+        c->ts_after = c->servo.ts <= KM_TORQUE_BRAKE ? c->servo.ts : (uint8_t)KM_TORQUE_ARMED;
     }
     if (c->motor.active) {
         km_motor_mode_stop(&c->motor, act == KM_PROT_ACT_FREE ? KM_BRIDGE_FREE : KM_BRIDGE_BRAKE);
     }
-    if (act == KM_PROT_ACT_HOLD && c->servo.ts == 2u && !c->motor.active) {
+    if (act == KM_PROT_ACT_HOLD && c->servo.ts == KM_TORQUE_ON && !c->motor.active) {
         if (was == KM_PROT_ACT_NONE) {
             /* a move stops where the shaft is; a servo already holding
              * keeps its target and its loop: rebasing it would reset the
@@ -131,29 +136,26 @@ static void prv_protect_transition(km_control_t *c, km_prot_action_t act, const 
             if (c->servo.running || c->servo.streaming) {
                 km_servo_mode_rebase(&c->servo, c->position);
             }
-            c->ts_after = 2u;
+            c->ts_after = KM_TORQUE_ON;
         }
-    } else if (c->servo.ts > 1u) {
+    } else if (c->servo.ts > KM_TORQUE_BRAKE) {
         km_servo_mode_protect(&c->servo); /* motion stops; 0x64 = 5 */
-        if (c->ts_after == 2u) {
-            c->ts_after = 3u; /* the output was let go: armed, not holding */
+        if (c->ts_after == KM_TORQUE_ON) {
+            c->ts_after = KM_TORQUE_ARMED; /* the output was let go: armed, not holding */
         }
     }
 }
 
 /* §5.2 0x35: a hardware fault stops everything, the output free. */
-static void prv_hw_fault(km_control_t *c, const km_control_params_t *p)
+static void prv_hw_fault(km_control_t *c)
 {
-    km_request_t q;
-    q.kind = KM_REQ_TORQUE_SWITCH;
-    q.u.u8 = 0;
     if (c->motor.active) {
         km_motor_mode_stop(&c->motor, KM_BRIDGE_FREE);
     }
-    if (c->servo.ts != 5u) {
-        (void)km_servo_mode_request(&c->servo, &q, p, c->position);
+    if (c->servo.ts != KM_TORQUE_PROTECTED) {
+        (void)km_servo_mode_torque(&c->servo, KM_TORQUE_FREE, c->position);
     }
-    c->ts_after = 0;
+    c->ts_after = KM_TORQUE_FREE;
 }
 
 /* §5.1: reported position = sensor + level-1 + level-2 zero offsets, with
@@ -187,7 +189,7 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     const uint8_t hw = km_selftest_step(&c->selftest, in, p, drive, c->bridge.mode == KM_BRIDGE_FREE, dt_us);
     if (hw != c->hw) {
         c->hw = hw;
-        prv_hw_fault(c, p);
+        prv_hw_fault(c);
     }
     const km_protect_in_t pin = {
         .voltage_mv = in->voltage_mv,
@@ -198,7 +200,7 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
         .servo_mode = !c->motor.active,
     };
     km_protect_events_t ev;
-    prv_protect_transition(c, km_protect_step(&c->prot, &pin, p, dt_us, &ev), p);
+    prv_protect_transition(c, km_protect_step(&c->prot, &pin, p, dt_us, &ev));
 
     int32_t limit = p->torque_limit < p->max_torque ? p->torque_limit : p->max_torque;
     const uint32_t ilimit = p->current_limit_ma < p->max_current_ma ? p->current_limit_ma : p->max_current_ma;
@@ -209,7 +211,7 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     if (c->motor.active) {
         /* 2b. motor mode owns the bridge (servo mode's output is unused);
          * 0x5A = 1 (servo only) stops it. Output limited by 0x5B. */
-        if (p->control_mode == 1u && c->motor.running) {
+        if (p->control_mode == KM_MODE_SERVO_ONLY && c->motor.running) {
             km_motor_mode_stop(&c->motor, p->idle_brake ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE);
         }
         km_bridge_mode_t mode;
@@ -244,7 +246,7 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     }
     /* 4b. the protection's action has the last word on the bridge */
     if (c->action == KM_PROT_ACT_FREE || c->action == KM_PROT_ACT_BRAKE ||
-        (c->action == KM_PROT_ACT_HOLD && c->servo.ts != 2u)) {
+        (c->action == KM_PROT_ACT_HOLD && c->servo.ts != KM_TORQUE_ON)) {
         c->bridge.mode = c->action == KM_PROT_ACT_BRAKE ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE;
         c->bridge.pwm = 0;
     }
@@ -264,7 +266,7 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     live->rotation_ms = c->motor.active ? c->motor.rotation_ms : c->servo.rotation_ms;
     live->running = c->motor.active ? c->motor.running : c->servo.running;
     live->protecting = c->action != KM_PROT_ACT_NONE;
-    live->torque_switch = live->protecting ? 5u : c->servo.ts;
+    live->torque_switch = live->protecting ? (uint8_t)KM_TORQUE_PROTECTED : c->servo.ts;
     live->protections = km_protect_active(&c->prot);
     live->hw_faults = c->hw;
     live->time_ms = c->time_ms;

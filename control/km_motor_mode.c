@@ -51,47 +51,36 @@ static void prv_start(km_motor_mode_t *m, bool speed_mode, int32_t value, km_bri
     m->rotation_rem_us = 0;
 }
 
-bool km_motor_mode_request(km_motor_mode_t *m, const km_request_t *req, const km_control_params_t *p,
-                           int32_t position)
+/* The output once a run stops. */
+static km_bridge_mode_t prv_after(const km_motor_run_t *run, const km_control_params_t *p)
 {
-    const km_bridge_mode_t idle = p->idle_brake ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE;
-    switch (req->kind) {
-    case KM_REQ_MOTOR_TORQUE: {
-        const int32_t v = req->u.i16;
-        prv_start(m, false, v > 1000 ? 1000 : (v < -1000 ? -1000 : v), idle);
-        return true;
+    if (run->after == KM_AFTER_IDLE) {
+        return p->idle_brake ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE;
     }
-    case KM_REQ_MOTOR_SPEED:
-        prv_start(m, true, prv_speed(p, req->u.i16), idle);
-        return true;
-    case KM_REQ_MOTOR_ADVANCED: {
-        const uint8_t c = req->u.adv.control;
-        const km_bridge_mode_t after = (c & 0x02u) ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE;
-        if (c & 0x80u) {
-            m->active = true;
-            km_motor_mode_stop(m, after);
-            return true;
-        }
-        const uint8_t p1_kind = (uint8_t)((c >> 4) & 3u);
-        const bool speed_mode = ((c >> 2) & 3u) == 1u;
-        int32_t v = (int32_t)req->u.adv.p2;
-        v = speed_mode ? prv_speed(p, v) : (v > 1000 ? 1000 : v);
-        if (c & 0x01u) {
-            v = -v;
-        }
-        prv_start(m, speed_mode, v, after);
-        const uint32_t p1 = req->u.adv.p1;
-        m->count_kind = p1_kind;
-        m->start_pos = position;
-        m->remain_ms = p1_kind == 1u ? p1 * 100u : 0u; /* 0.1 s units */
-        m->travel = p1_kind == 2u ? (int32_t)p1 * 10 : (int32_t)p1 * 360; /* 1 deg, 0.1 turn */
-        if (p1_kind != 0u && p1 == 0u) {
-            m->running = false; /* a run of nothing ends at once */
-        }
-        return true;
+    return run->after == KM_AFTER_BRAKE ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE;
+}
+
+void km_motor_mode_run(km_motor_mode_t *m, const km_motor_run_t *run, const km_control_params_t *p,
+                       int32_t position)
+{
+    const km_bridge_mode_t after = prv_after(run, p);
+    if (run->mode == KM_RUN_STOP) {
+        m->active = true;
+        km_motor_mode_stop(m, after);
+        return;
     }
-    default:
-        return false;
+    const bool speed_mode = run->mode == KM_RUN_SPEED;
+    const int32_t mag = (int32_t)run->value;
+    const int32_t v = speed_mode ? prv_speed(p, run->reverse ? -mag : mag)
+                                 : (run->reverse ? -1 : 1) * (mag > 1000 ? 1000 : mag);
+    prv_start(m, speed_mode, v, after);
+    const uint32_t amount = run->amount;
+    m->count_kind = run->until;
+    m->start_pos = position;
+    m->remain_ms = run->until == KM_UNTIL_TIME ? amount * 100u : 0u; /* 0.1 s units */
+    m->travel = run->until == KM_UNTIL_ANGLE ? (int32_t)amount * 10 : (int32_t)amount * 360; /* 1 deg, 0.1 turn */
+    if (run->until != KM_UNTIL_NONE && amount == 0u) {
+        m->running = false; /* a run of nothing ends at once */
     }
 }
 
@@ -107,12 +96,12 @@ int32_t km_motor_mode_step(km_motor_mode_t *m, const km_control_params_t *p, int
     const uint32_t ms = km_udiv1000(m->rotation_rem_us);
     m->rotation_rem_us -= ms * 1000u;
     m->rotation_ms += ms;
-    if (m->count_kind == 1u) {
+    if (m->count_kind == KM_UNTIL_TIME) {
         m->remain_ms = m->remain_ms > ms ? m->remain_ms - ms : 0u;
         if (m->remain_ms == 0u) {
             km_motor_mode_stop(m, m->stop_bridge);
         }
-    } else if (m->count_kind >= 2u) {
+    } else if (m->count_kind >= KM_UNTIL_ANGLE) {
         /* modular distance: defined across the int32 wrap of a long run */
         uint32_t moved = (uint32_t)position - (uint32_t)m->start_pos;
         moved = moved > 0x80000000u ? 0u - moved : moved;

@@ -8,12 +8,12 @@
  *        (feedforward) + friction + kd x speed error + an integrator
  *        (KM_MOTOR_KI_Q8, bounded by i_max); the speed is cut to 0x5D
  *        (0x15 when 0x5D is 0), the PWM to 0x5B.
- *  0x70  advanced: bit 7 stops now (bit 1 says free or brake); p1 kind 0
- *        runs on, 1 for p1 x 0.1 s, 2 for p1 deg, 3 for p1 x 0.1 turn of
- *        travel from where the command found the shaft; p2 kind 0 = PWM
- *        0..1000, 1 = speed deg/s; bit 0 reverses; after a counted run
- *        ends, bit 1 = 1 brakes, 0 frees. A run of 0 (time/angle/turns 0)
- *        ends at once.
+ *  0x70  advanced: stop now (with the output free or braked), or a run at
+ *        a PWM or a speed, on and on or until a time, an angle or a number
+ *        of turns of travel from where the request found the shaft, either
+ *        direction, then the output free or braked. A run of 0 (time,
+ *        angle or turns 0) ends at once.
+ * All three arrive decoded as one km_motor_run_t (include/km/km_request.h).
  * A stop by 0x6E/0x6F = 0 leaves the idle output of 0x11 bit 1.
  *
  * Which variant may do what (0x6F, 0x70 angle/turns/speed: encoder only)
@@ -54,7 +54,7 @@ typedef struct {
     bool speed_mode;        /* speed loop, else constant PWM */
     int32_t pwm;            /* constant PWM, master's frame */
     int32_t speed_dps;      /* speed set-point, master's frame */
-    uint8_t count_kind;     /* 0 none, 1 time, 2/3 travel */
+    uint8_t count_kind;     /* km_run_until_t of the run */
     uint32_t remain_ms;     /* time left (kind 1), ms */
     int32_t start_pos;      /* 0.1 deg, kinds 2/3 */
     int32_t travel;         /* 0.1 deg to go, kinds 2/3 */
@@ -66,10 +66,9 @@ typedef struct {
 
 void km_motor_mode_init(km_motor_mode_t *m);
 
-/* A motor request (0x6E, 0x6F, 0x70) at measured `position`; false when it
- * is not one. */
-bool km_motor_mode_request(km_motor_mode_t *m, const km_request_t *req, const km_control_params_t *p,
-                           int32_t position);
+/* A motor run (0x6E, 0x6F, 0x70) at measured `position`: takes the bridge. */
+void km_motor_mode_run(km_motor_mode_t *m, const km_motor_run_t *run, const km_control_params_t *p,
+                       int32_t position);
 
 /* Ends motor mode (the other mode takes the bridge). */
 void km_motor_mode_release(km_motor_mode_t *m);

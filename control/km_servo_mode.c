@@ -6,8 +6,6 @@
 
 #include "km_fixdiv.h"
 
-enum { TS_FREE = 0, TS_BRAKE = 1, TS_ON = 2, TS_ARMED = 3, TS_PROTECTING = 5 };
-
 void km_servo_mode_init(km_servo_mode_t *m, const km_control_params_t *p)
 {
     memset(m, 0, sizeof *m);
@@ -57,7 +55,7 @@ static void prv_on_at(km_servo_mode_t *m, int32_t position)
 {
     km_profile_reset(&m->profile, position);
     m->target = position;
-    m->ts = TS_ON;
+    m->ts = KM_TORQUE_ON;
     m->pwm_cap = 1000;
     m->reset_loop = true;
     m->touched = true;
@@ -74,83 +72,67 @@ static int32_t prv_speed(const km_control_params_t *p, uint32_t dps)
     return v < lim ? v : lim;
 }
 
-bool km_servo_mode_request(km_servo_mode_t *m, const km_request_t *req, const km_control_params_t *p,
-                           int32_t position)
+bool km_servo_mode_torque(km_servo_mode_t *m, km_torque_t torque, int32_t position)
 {
-    if (req->kind == KM_REQ_TORQUE_SWITCH) {
-        const uint8_t v = req->u.u8;
-        if (m->ts == TS_PROTECTING && v == TS_ON) {
+    switch (torque) {
+    case KM_TORQUE_ON:
+        if (m->ts == KM_TORQUE_PROTECTED) {
             return false; /* a protection holds the output until released */
         }
-        if (v == TS_ON) {
-            if (m->ts != TS_ON) {
-                prv_on_at(m, position); /* hold the current position */
-            }
-            return true;
+        if (m->ts != KM_TORQUE_ON) {
+            prv_on_at(m, position); /* hold the current position */
         }
-        if (v == TS_FREE || v == TS_BRAKE || v == TS_ARMED) {
-            prv_stop(m, v);
-            return true;
-        }
+        return true;
+    case KM_TORQUE_FREE:
+    case KM_TORQUE_BRAKE:
+    case KM_TORQUE_ARMED:
+        prv_stop(m, (uint8_t)torque);
+        return true;
+    default:
         return false;
     }
-    if (req->kind != KM_REQ_MOVE_TIME && req->kind != KM_REQ_MOVE_SPEED &&
-        req->kind != KM_REQ_SERVO_ADVANCED && req->kind != KM_REQ_INTERPOLATE) {
-        return false;
-    }
-    if (m->ts != TS_ON && m->ts != TS_ARMED) {
-        return false; /* torque off or protecting */
-    }
-    const bool was_on = m->ts == TS_ON;
-    if (!was_on) {
-        prv_on_at(m, position); /* §5.4 0x64 = 3: on at the next rotation command */
-    }
+}
+
+/* Starts the profile toward `target` (clamped) the way the move asks. */
+static void prv_plan(km_servo_mode_t *m, const km_move_t *mv, const km_control_params_t *p, int32_t target,
+                     bool was_on)
+{
     const int32_t vlim = prv_vlimit(p);
-    const int32_t accel = prv_accel(p);
-    m->pwm_cap = 1000;
-    int32_t target;
-    switch (req->kind) {
-    case KM_REQ_MOVE_TIME:
-        target = km_servo_mode_clamp(p, req->u.move.target);
-        if (req->u.move.param == 0u) {
-            km_profile_move(&m->profile, target, vlim, accel);
+    switch (mv->kind) {
+    case KM_MOVE_TIME:
+        if (mv->time_or_speed == 0u) {
+            km_profile_move(&m->profile, target, vlim, prv_accel(p));
         } else {
-            km_profile_move_time(&m->profile, target, req->u.move.param, vlim);
+            km_profile_move_time(&m->profile, target, mv->time_or_speed, vlim);
         }
-        break;
-    case KM_REQ_MOVE_SPEED:
-        target = km_servo_mode_clamp(p, req->u.move.target);
-        km_profile_move(&m->profile, target, prv_speed(p, req->u.move.param), accel);
-        break;
-    case KM_REQ_SERVO_ADVANCED: {
-        const uint8_t hi = (uint8_t)(req->u.adv.control >> 4), lo = (uint8_t)(req->u.adv.control & 0x0Fu);
-        const int32_t p1 = (int16_t)req->u.adv.p1;
-        /* relative: from the target in force (or the position if just on) */
-        target = km_servo_mode_clamp(p, hi == 1u ? m->target + p1 : p1);
-        if (lo == 0u && req->u.adv.p2 != 0u) {
-            km_profile_move_time(&m->profile, target, req->u.adv.p2, vlim);
-        } else if (lo == 1u) {
-            km_profile_move(&m->profile, target, prv_speed(p, req->u.adv.p2), accel);
-        } else {
-            if (lo == 2u) {
-                m->pwm_cap = req->u.adv.p2 > 1000u ? 1000 : (int32_t)req->u.adv.p2;
-            }
-            km_profile_move(&m->profile, target, vlim, accel);
-        }
-        break;
-    }
-    default: { /* KM_REQ_INTERPOLATE */
-        target = km_servo_mode_clamp(p, req->u.move.target);
-        const bool in_stream = was_on && m->streaming && m->stream_us <= KM_STREAM_GAP_US;
-        if (in_stream) {
+        return;
+    case KM_MOVE_SPEED:
+        km_profile_move(&m->profile, target, prv_speed(p, mv->time_or_speed), prv_accel(p));
+        return;
+    default: /* KM_MOVE_STREAM */
+        if (was_on && m->streaming && m->stream_us <= KM_STREAM_GAP_US) {
             km_profile_stream(&m->profile, target, m->stream_us, vlim);
         } else {
-            km_profile_move(&m->profile, target, vlim, accel); /* no rate to pace by yet: fastest */
+            km_profile_move(&m->profile, target, vlim, prv_accel(p)); /* no rate to pace by yet: fastest */
         }
-        break;
+        return;
     }
+}
+
+bool km_servo_mode_move(km_servo_mode_t *m, const km_move_t *mv, const km_control_params_t *p, int32_t position)
+{
+    if (m->ts != KM_TORQUE_ON && m->ts != KM_TORQUE_ARMED) {
+        return false; /* torque off or protecting */
     }
-    m->streaming = req->kind == KM_REQ_INTERPOLATE;
+    const bool was_on = m->ts == KM_TORQUE_ON;
+    if (!was_on) {
+        prv_on_at(m, position); /* armed: on at the next move */
+    }
+    /* relative: from the target in force (or the position if just on) */
+    const int32_t target = km_servo_mode_clamp(p, mv->relative ? m->target + mv->target : mv->target);
+    prv_plan(m, mv, p, target, was_on);
+    m->pwm_cap = mv->pwm_cap > 1000u ? 1000 : (int32_t)mv->pwm_cap;
+    m->streaming = mv->kind == KM_MOVE_STREAM;
     m->stream_us = 0;
     m->target = target;
     m->running = true;
@@ -171,12 +153,12 @@ void km_servo_mode_rebase(km_servo_mode_t *m, int32_t position)
 
 void km_servo_mode_protect(km_servo_mode_t *m)
 {
-    prv_stop(m, TS_PROTECTING);
+    prv_stop(m, KM_TORQUE_PROTECTED);
 }
 
 int32_t km_servo_mode_deviation(const km_servo_mode_t *m, int32_t position)
 {
-    return m->ts == TS_ON ? position - m->target : 0;
+    return m->ts == KM_TORQUE_ON ? position - m->target : 0;
 }
 
 void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_t position, int32_t speed_ddps,
@@ -192,7 +174,7 @@ void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_
         m->stream_us += dt_us;
     }
     switch (m->ts) {
-    case TS_ON: {
+    case KM_TORQUE_ON: {
         const bool done = km_profile_step(&m->profile, dt_us);
         out->bridge = KM_BRIDGE_PWM;
         out->setpoint_u = m->profile.pos;
@@ -218,14 +200,14 @@ void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_
         }
         return;
     }
-    case TS_BRAKE:
+    case KM_TORQUE_BRAKE:
         out->bridge = KM_BRIDGE_BRAKE;
         return;
-    case TS_ARMED:
+    case KM_TORQUE_ARMED:
         /* off now: the idle output, or the power-on output before any command */
         out->bridge = (m->touched ? p->idle_brake : p->power_on_brake) ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE;
         return;
-    default: /* TS_FREE, TS_PROTECTING */
+    default: /* KM_TORQUE_FREE, KM_TORQUE_PROTECTED */
         out->bridge = KM_BRIDGE_FREE;
         return;
     }

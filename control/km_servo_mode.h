@@ -13,16 +13,18 @@
  *
  * Targets (0.1 deg, the master's frame) are clamped to the product travel
  * and to the angle limits 0x19/0x1A when they are set (0 = no limit). A
- * relative move (0x67 high nibble 1) adds to the target in force (the last
- * one commanded, or the held position), or to the measured position when
- * the torque was off, and the sum is clamped the same way: relative moves
- * never accumulate the tracking error and never pass a limit.
+ * relative move (km_move_t.relative, 0x67) adds to the target in force (the
+ * last one commanded, or the held position), or to the measured position
+ * when the torque was off, and the sum is clamped the same way: relative
+ * moves never accumulate the tracking error and never pass a limit.
  *
  * Speeds: "fastest" (omitted or 0 parameter) = the speed limit 0x5D (or the
  * product's fastest_dps when 0x5D is 0), at the product acceleration; a
  * requested speed above 0x5D is cut to it; a move in time whose speed would
- * exceed 0x5D takes longer. A stream of 0x68 targets: the first one (or
- * one more than KM_STREAM_GAP_US after the previous) is a fastest move;
+ * exceed 0x5D takes longer; a move's own PWM cap (0x67) bounds the output
+ * until the next move. A stream of targets (KM_MOVE_STREAM, 0x68): the
+ * first one (or one more than KM_STREAM_GAP_US after the previous) is a
+ * fastest move;
  * each later one is reached at constant speed over 5/4 of the time since
  * the previous one (km_profile.h), so the shaft runs about an interval
  * behind the master without stopping at each target.
@@ -47,17 +49,17 @@
 #define KM_STREAM_GAP_US 200000u   /* a 0x68 later than this after the previous one starts a new stream */
 
 typedef struct {
-    uint8_t ts;             /* 0x64 as control runs it: 0, 1, 2, 3, 5 */
+    uint8_t ts;             /* km_torque_t as control runs it */
     bool touched;           /* a torque command has come since power-on */
     km_profile_t profile;
     int32_t target;         /* 0.1 deg, the target in force */
-    int32_t pwm_cap;        /* this move's own PWM bound (0x67 nibble 2), else 1000 */
+    int32_t pwm_cap;        /* this move's own PWM bound, else 1000 */
     bool running;           /* status bit 7 */
     uint32_t rotation_ms;   /* 0x4D */
     uint32_t rotation_rem_us;
     uint32_t settle_us;     /* since the profile reached the target */
-    bool streaming;         /* the last rotation command was 0x68 */
-    uint32_t stream_us;     /* since the last 0x68 */
+    bool streaming;         /* the last move was a stream target */
+    uint32_t stream_us;     /* since the last stream target */
     bool reset_loop;        /* the loop starts afresh at the next tick */
 } km_servo_mode_t;
 
@@ -72,11 +74,14 @@ typedef struct {
 
 void km_servo_mode_init(km_servo_mode_t *m, const km_control_params_t *p);
 
-/* A torque switch or rotation request at measured `position` (0.1 deg).
- * Returns false when refused (torque off or protecting, or not a servo
- * mode request). */
-bool km_servo_mode_request(km_servo_mode_t *m, const km_request_t *req, const km_control_params_t *p,
-                           int32_t position);
+/* The torque switch set to `torque` (FREE, BRAKE, ON, ARMED) at measured
+ * `position` (0.1 deg). False when refused: ON while protecting, or
+ * PROTECTED (only km_servo_mode_protect() sets it). */
+bool km_servo_mode_torque(km_servo_mode_t *m, km_torque_t torque, int32_t position);
+
+/* A move at measured `position`. False when refused: torque off or
+ * protecting. */
+bool km_servo_mode_move(km_servo_mode_t *m, const km_move_t *mv, const km_control_params_t *p, int32_t position);
 
 /* A move has arrived (status bit 7 clears) once the profile is done and
  * the shaft is inside the product's arrive band and slower than this: a

@@ -333,7 +333,7 @@ void km_servo_set_userdata_source(km_servo_t *s, uint8_t source)
 {
     s->userdata_source = source;
     if (source == KM_USERDATA_UNAVAILABLE) {
-        s->hw_latched |= 0x02u; /* §5.2 0x35 bit 1: the store cannot be used */
+        s->hw_latched |= KM_HW_MEMORY; /* §5.2 0x35 bit 1: the store cannot be used */
     }
 }
 
@@ -536,14 +536,15 @@ static void prv_userdata_reset(km_servo_t *s, uint8_t level)
 static bool prv_servo_motion_allowed(km_servo_t *s)
 {
     const uint32_t ts = prv_reg(s, KM_REG_TORQUE_SWITCH);
-    return !s->hw_latched && prv_reg(s, KM_REG_CONTROL_MODE) != 2u && (ts == 2u || ts == 3u);
+    return !s->hw_latched && prv_reg(s, KM_REG_CONTROL_MODE) != KM_MODE_MOTOR_ONLY &&
+           (ts == KM_TORQUE_ON || ts == KM_TORQUE_ARMED);
 }
 
 /* Motor mode (0x6E..0x70): "Motion preconditions"; a request for less
  * motion is taken with a fault latched ("Protections"). */
 static bool prv_motor_motion_allowed(km_servo_t *s, const km_request_t *req)
 {
-    return (!s->hw_latched || km_request_less_motion(req)) && prv_reg(s, KM_REG_CONTROL_MODE) != 1u;
+    return (!s->hw_latched || km_request_less_motion(req)) && prv_reg(s, KM_REG_CONTROL_MODE) != KM_MODE_SERVO_ONLY;
 }
 
 static bool prv_is_encoder(const km_servo_t *s)
@@ -551,47 +552,54 @@ static bool prv_is_encoder(const km_servo_t *s)
     return s->product->variant == KM_VARIANT_ENCODER;
 }
 
-static void prv_servo_motion(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t len)
+/* The move a servo-mode rotation register asks for (0x65..0x68), decoded
+ * from its bytes; false for bytes it does not take. */
+static bool prv_decode_move(km_reg_index_t r, const uint8_t *d, uint8_t len, km_move_t *mv)
 {
-    km_request_t req = {0};
+    mv->relative = false;
+    mv->time_or_speed = 0u; /* omitted = fastest */
+    mv->pwm_cap = 1000u;
     switch (r) {
     case KM_REG_MOVE_TIME:
     case KM_REG_MOVE_SPEED:
         if (len != 2 && len != 4) {
-            prv_fail(s);
-            return;
+            return false;
         }
-        req.kind = r == KM_REG_MOVE_TIME ? KM_REQ_MOVE_TIME : KM_REQ_MOVE_SPEED;
-        req.u.move.target = (int16_t)km_get_le(d, 2);
-        req.u.move.param = len == 4 ? (uint16_t)km_get_le(d + 2, 2) : 0u; /* omitted = fastest */
-        break;
+        mv->kind = r == KM_REG_MOVE_TIME ? KM_MOVE_TIME : KM_MOVE_SPEED;
+        mv->target = (int16_t)km_get_le(d, 2);
+        if (len == 4) {
+            mv->time_or_speed = (uint16_t)km_get_le(d + 2, 2);
+        }
+        return true;
     case KM_REG_INTERPOLATE:
         if (len != 2) {
-            prv_fail(s);
-            return;
+            return false;
         }
-        req.kind = KM_REQ_INTERPOLATE;
-        req.u.move.target = (int16_t)km_get_le(d, 2);
-        break;
-    default: { /* KM_REG_SERVO_ADVANCED */
+        mv->kind = KM_MOVE_STREAM;
+        mv->target = (int16_t)km_get_le(d, 2);
+        return true;
+    default: { /* KM_REG_SERVO_ADVANCED: control byte, p1, p2 */
         if (len != 5) {
-            prv_fail(s);
-            return;
+            return false;
         }
         const uint8_t hi = (uint8_t)(d[0] >> 4), lo = (uint8_t)(d[0] & 0x0Fu);
-        const int16_t p2 = (int16_t)km_get_le(d + 3, 2);
-        if (hi > 1u || lo > 2u || (lo == 2u && (p2 < 0 || p2 > 1000))) {
-            prv_fail(s);
-            return;
-        }
-        req.kind = KM_REQ_SERVO_ADVANCED;
-        req.u.adv.control = d[0];
-        req.u.adv.p1 = (uint16_t)km_get_le(d + 1, 2);
-        req.u.adv.p2 = (uint16_t)p2;
-        break;
+        const uint16_t p2 = (uint16_t)km_get_le(d + 3, 2);
+        mv->relative = hi == 1u;
+        mv->target = (int16_t)km_get_le(d + 1, 2);
+        /* low nibble: 0 p2 = time ms, 1 p2 = speed deg/s, 2 p2 = PWM cap at the fastest speed */
+        mv->kind = lo == 0u ? KM_MOVE_TIME : KM_MOVE_SPEED;
+        mv->time_or_speed = lo == 2u ? 0u : p2;
+        mv->pwm_cap = lo == 2u ? p2 : 1000u;
+        return hi <= 1u && lo <= 2u && mv->pwm_cap <= 1000u;
     }
     }
-    if (!prv_servo_motion_allowed(s)) {
+}
+
+static void prv_servo_motion(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t len)
+{
+    km_request_t req;
+    req.kind = KM_REQ_MOVE;
+    if (!prv_decode_move(r, d, len, &req.u.move) || !prv_servo_motion_allowed(s)) {
         prv_fail(s);
         return;
     }
@@ -599,43 +607,57 @@ static void prv_servo_motion(km_servo_t *s, km_reg_index_t r, const uint8_t *d, 
         prv_fail(s); /* control refused it: nothing moves, 0x64 stays */
         return;
     }
-    if (prv_reg(s, KM_REG_TORQUE_SWITCH) == 3u) {
-        prv_set(s, KM_REG_TORQUE_SWITCH, 2u); /* §5.4 0x64 = 3: on at the next rotation */
+    if (prv_reg(s, KM_REG_TORQUE_SWITCH) == KM_TORQUE_ARMED) {
+        prv_set(s, KM_REG_TORQUE_SWITCH, KM_TORQUE_ON); /* §5.4 0x64 = 3: on at the next rotation */
     }
+}
+
+/* 0x70's control byte and parameters as a run; false for bytes it does
+ * not take (bit 6 set, a p2 kind above 1, a PWM above 1000, or what only
+ * an encoder product can do on another). */
+static bool prv_decode_motor_advanced(const km_servo_t *s, const uint8_t *d, uint8_t len, km_motor_run_t *run)
+{
+    if (len != 5) {
+        return false;
+    }
+    const uint8_t c = d[0];
+    const uint8_t p1_kind = (uint8_t)((c >> 4) & 3u), p2_kind = (uint8_t)((c >> 2) & 3u);
+    run->mode = (c & 0x80u) ? KM_RUN_STOP : (p2_kind == 1u ? KM_RUN_SPEED : KM_RUN_PWM);
+    run->reverse = (c & 0x01u) != 0u;
+    run->value = (uint16_t)km_get_le(d + 3, 2);
+    run->until = p1_kind; /* 0 none, 1 time, 2 angle, 3 turns */
+    run->amount = (uint16_t)km_get_le(d + 1, 2);
+    run->after = (c & 0x02u) ? KM_AFTER_BRAKE : KM_AFTER_FREE;
+    const bool encoder_only = p1_kind >= 2u || p2_kind == 1u;
+    return !(c & 0x40u) && p2_kind <= 1u && !(p2_kind == 0u && run->value > 1000u) &&
+           !(encoder_only && !prv_is_encoder(s));
+}
+
+/* 0x6E (PWM) or 0x6F (speed, encoder products): a signed value, run on. */
+static bool prv_decode_motor(const km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t len,
+                             km_motor_run_t *run)
+{
+    uint32_t packed;
+    if (!km_reg_validate(r, s->product, d, len, &packed) || (r == KM_REG_MOTOR_SPEED && !prv_is_encoder(s))) {
+        return false;
+    }
+    const int16_t v = (int16_t)packed;
+    run->mode = r == KM_REG_MOTOR_TORQUE ? KM_RUN_PWM : KM_RUN_SPEED;
+    run->reverse = v < 0;
+    run->value = (uint16_t)(v < 0 ? -(int32_t)v : (int32_t)v);
+    run->until = KM_UNTIL_NONE;
+    run->amount = 0u;
+    run->after = KM_AFTER_IDLE; /* a stop by 0 leaves the idle output */
+    return true;
 }
 
 static void prv_motor_motion(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t len)
 {
-    km_request_t req = {0};
-    if (r == KM_REG_MOTOR_ADVANCED) {
-        if (len != 5) {
-            prv_fail(s);
-            return;
-        }
-        const uint8_t c = d[0];
-        const uint8_t p1_kind = (uint8_t)((c >> 4) & 3u), p2_kind = (uint8_t)((c >> 2) & 3u);
-        const uint16_t p2 = (uint16_t)km_get_le(d + 3, 2);
-        const bool encoder_only = p1_kind >= 2u || p2_kind == 1u;
-        if ((c & 0x40u) || p2_kind > 1u || (p2_kind == 0u && p2 > 1000u) ||
-            (encoder_only && !prv_is_encoder(s))) {
-            prv_fail(s);
-            return;
-        }
-        req.kind = KM_REQ_MOTOR_ADVANCED;
-        req.u.adv.control = c;
-        req.u.adv.p1 = (uint16_t)km_get_le(d + 1, 2);
-        req.u.adv.p2 = p2;
-    } else {
-        uint32_t packed;
-        if (!km_reg_validate(r, s->product, d, len, &packed) ||
-            (r == KM_REG_MOTOR_SPEED && !prv_is_encoder(s))) {
-            prv_fail(s);
-            return;
-        }
-        req.kind = r == KM_REG_MOTOR_TORQUE ? KM_REQ_MOTOR_TORQUE : KM_REQ_MOTOR_SPEED;
-        req.u.i16 = (int16_t)packed;
-    }
-    if (!prv_motor_motion_allowed(s, &req) || !prv_request(s, &req)) {
+    km_request_t req;
+    req.kind = KM_REQ_MOTOR;
+    const bool ok = r == KM_REG_MOTOR_ADVANCED ? prv_decode_motor_advanced(s, d, len, &req.u.run)
+                                               : prv_decode_motor(s, r, d, len, &req.u.run);
+    if (!ok || !prv_motor_motion_allowed(s, &req) || !prv_request(s, &req)) {
         prv_fail(s);
         return;
     }
@@ -741,7 +763,7 @@ static bool prv_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t len
             return true;
         }
         req.kind = KM_REQ_PROTECTION_CLEAR;
-        req.u.u8 = (uint8_t)v;
+        req.u.clear = (uint8_t)v;
         if (!prv_request(s, &req)) {
             prv_fail(s); /* §5.2 0x36: a protection whose cause still holds stays */
         } else {
@@ -753,8 +775,8 @@ static bool prv_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t len
             prv_fail(s); /* 4, 5 and up are not writable; no holding with a fault */
             return true;
         }
-        req.kind = KM_REQ_TORQUE_SWITCH;
-        req.u.u8 = (uint8_t)v;
+        req.kind = KM_REQ_TORQUE;
+        req.u.torque = (uint8_t)v;
         if (!prv_request(s, &req)) {
             prv_fail(s); /* control refused (e.g. a protection latched): 0x64 stays */
             return true;

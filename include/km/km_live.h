@@ -19,7 +19,7 @@ typedef struct {
     uint32_t rotation_ms;  /* 0x4D */
     bool running;          /* status bit 7 */
     bool protecting;       /* a protection acts on the output: 0x64 reads 5 */
-    uint8_t torque_switch; /* 0x64 as control runs it; after a release, what 0x64 returns to */
+    uint8_t torque_switch; /* km_torque_t as control runs it (0x64); after a release, what it returns to */
     uint8_t protections;   /* active protections, 0x36 bits / status bits 0..3 */
     uint8_t hw_faults;     /* 0x35 bits found by the self-test (latched) */
     uint32_t time_ms;      /* ms since control started: the fault log's clock */

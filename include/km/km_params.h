@@ -8,6 +8,15 @@
 #include <stdint.h>
 
 #include "km_product.h"
+#include "km_request.h"
+
+/* Which mode rotation commands may use (0x5A). Numbered as the register
+ * holds it. */
+typedef enum {
+    KM_MODE_AUTO = 0,       /* the mode follows the command */
+    KM_MODE_SERVO_ONLY = 1, /* motor commands refused; a running motor stops */
+    KM_MODE_MOTOR_ONLY = 2, /* servo-mode commands refused */
+} km_control_mode_t;
 
 /* Control registers in engineering units. Angles are 0.1 deg in the frame
  * the master sees (zero offsets and direction applied), like 0x46. */
@@ -38,11 +47,11 @@ typedef struct {
     uint8_t current_time_100ms;
     uint16_t stall_pwm;          /* 0x3F */
     uint8_t stall_time_100ms;
-    uint8_t control_mode;        /* 0x5A: 0 auto, 1 servo only, 2 motor only */
+    uint8_t control_mode;        /* km_control_mode_t (0x5A) */
     uint16_t torque_limit;       /* 0x5B, PWM 0..1000 (<= 0x13) */
     uint16_t current_limit_ma;   /* 0x5C (<= 0x14) */
     uint16_t speed_limit_dps;    /* 0x5D (<= 0x15) */
-    uint8_t torque_switch;       /* 0x64 */
+    uint8_t torque_switch;       /* km_torque_t (0x64) */
     km_control_gains_t gains;    /* the product's loop gains (km_product.h) */
 } km_control_params_t;
 

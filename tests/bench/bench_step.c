@@ -66,7 +66,7 @@ typedef struct {
     bool encoder;
     int32_t from;              /* 0.1 deg */
     int32_t step;              /* 0.1 deg */
-    km_request_kind_t kind;
+    km_move_kind_t kind;
     uint16_t param;            /* ms for 0x65, deg/s for 0x66 (0 = fastest) */
     prv_cond_t cond;
     char name[40];
@@ -275,7 +275,7 @@ static unsigned prv_scenarios(prv_scenario_t *out, unsigned max)
                     /* pot: from -45 deg; encoder: from 360 deg, a second turn */
                     sc->from = enc ? 3600 : -450;
                     sc->step = k_steps[s];
-                    sc->kind = k == 0 ? KM_REQ_MOVE_TIME : KM_REQ_MOVE_SPEED;
+                    sc->kind = k == 0 ? KM_MOVE_TIME : KM_MOVE_SPEED;
                     sc->param = k == 0 ? 500u : 0u;
                     sc->cond = (prv_cond_t)c;
                     (void)snprintf(sc->name, sizeof sc->name, "%s-%ddeg-%s-%s", enc ? "enc" : "pot",

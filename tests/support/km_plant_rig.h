@@ -108,8 +108,8 @@ static inline bool kr_torque(kr_rig_t *r, uint8_t v)
 {
     km_request_t q;
     memset(&q, 0, sizeof q);
-    q.kind = KM_REQ_TORQUE_SWITCH;
-    q.u.u8 = v;
+    q.kind = KM_REQ_TORQUE;
+    q.u.torque = v;
     if (!kr_request(r, &q)) {
         return false;
     }
@@ -117,25 +117,61 @@ static inline bool kr_torque(kr_rig_t *r, uint8_t v)
     return true;
 }
 
-static inline bool kr_move(kr_rig_t *r, km_request_kind_t kind, int16_t target, uint16_t param)
+/* A move as the dispatcher's hooks decode one: `kind` KM_MOVE_*, `param`
+ * the time (ms) or speed (deg/s), 0 = fastest; no PWM cap. */
+static inline bool kr_move_full(kr_rig_t *r, km_move_kind_t kind, bool relative, int16_t target, uint16_t param,
+                                uint16_t pwm_cap)
 {
     km_request_t q;
     memset(&q, 0, sizeof q);
-    q.kind = kind;
+    q.kind = KM_REQ_MOVE;
+    q.u.move.kind = (uint8_t)kind;
+    q.u.move.relative = relative;
     q.u.move.target = target;
-    q.u.move.param = param;
+    q.u.move.time_or_speed = param;
+    q.u.move.pwm_cap = pwm_cap;
     return kr_request(r, &q);
 }
 
-static inline bool kr_advanced(kr_rig_t *r, uint8_t control, int16_t p1, uint16_t p2)
+/* An absolute move (0x65 time, 0x66 speed, 0x68 stream). */
+static inline bool kr_move(kr_rig_t *r, km_move_kind_t kind, int16_t target, uint16_t param)
+{
+    return kr_move_full(r, kind, false, target, param, 1000u);
+}
+
+/* A relative move (0x67 high nibble 1): `delta` from the target in force. */
+static inline bool kr_move_rel(kr_rig_t *r, km_move_kind_t kind, int16_t delta, uint16_t param)
+{
+    return kr_move_full(r, kind, true, delta, param, 1000u);
+}
+
+/* A fastest move under a PWM cap (0x67 low nibble 2). */
+static inline bool kr_move_capped(kr_rig_t *r, int16_t target, uint16_t pwm_cap)
+{
+    return kr_move_full(r, KM_MOVE_SPEED, false, target, 0u, pwm_cap);
+}
+
+/* A motor run as the dispatcher's hooks decode 0x6E..0x70. */
+static inline bool kr_run_motor(kr_rig_t *r, km_run_mode_t mode, bool reverse, uint16_t value, km_run_until_t until,
+                                uint16_t amount, km_run_after_t after)
 {
     km_request_t q;
     memset(&q, 0, sizeof q);
-    q.kind = KM_REQ_SERVO_ADVANCED;
-    q.u.adv.control = control;
-    q.u.adv.p1 = (uint16_t)p1;
-    q.u.adv.p2 = p2;
+    q.kind = KM_REQ_MOTOR;
+    q.u.run.mode = (uint8_t)mode;
+    q.u.run.reverse = reverse;
+    q.u.run.value = value;
+    q.u.run.until = (uint8_t)until;
+    q.u.run.amount = amount;
+    q.u.run.after = (uint8_t)after;
     return kr_request(r, &q);
+}
+
+/* 0x6E (PWM) or 0x6F (speed): a signed value, run on, idle output at 0. */
+static inline bool kr_motor_signed(kr_rig_t *r, km_run_mode_t mode, int16_t v)
+{
+    const uint16_t mag = (uint16_t)(v < 0 ? -(int32_t)v : (int32_t)v);
+    return kr_run_motor(r, mode, v < 0, mag, KM_UNTIL_NONE, 0u, KM_AFTER_IDLE);
 }
 
 /* Reported position (0x46), 0.1 deg. */

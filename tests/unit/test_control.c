@@ -66,8 +66,8 @@ static void torque_switch(uint8_t v, const km_control_params_t *cfg)
 {
     km_request_t req;
     memset(&req, 0, sizeof req);
-    req.kind = KM_REQ_TORQUE_SWITCH;
-    req.u.u8 = v;
+    req.kind = KM_REQ_TORQUE;
+    req.u.torque = v;
     assert_true(km_control_request(&c, &req, cfg));
 }
 
@@ -152,8 +152,8 @@ static void test_s5_4_torque_switch_bridge_mode(void **state)
             assert_false(live.running);
         }
         assert_int_equal(c.requests, sizeof order);
-        assert_int_equal(c.last_request.kind, KM_REQ_TORQUE_SWITCH);
-        assert_int_equal(c.last_request.u.u8, 3);
+        assert_int_equal(c.last_request.kind, KM_REQ_TORQUE);
+        assert_int_equal(c.last_request.u.torque, 3);
     }
 }
 
@@ -169,19 +169,25 @@ static void test_motion_refused_torque_off_motor_counted(void **state)
     torque_switch(1, &cfg);
     km_request_t req;
     memset(&req, 0, sizeof req);
-    req.kind = KM_REQ_MOVE_TIME;
+    req.kind = KM_REQ_MOVE;
+    req.u.move.kind = KM_MOVE_TIME;
     req.u.move.target = 900;
-    req.u.move.param = 1000;
+    req.u.move.time_or_speed = 1000;
+    req.u.move.pwm_cap = 1000;
     assert_false(km_control_request(&c, &req, &cfg));
     assert_int_equal(c.requests, 2);
-    assert_int_equal(c.last_request.kind, KM_REQ_MOVE_TIME);
+    assert_int_equal(c.last_request.kind, KM_REQ_MOVE);
     assert_int_equal(c.last_request.u.move.target, 900);
-    assert_int_equal(c.last_request.u.move.param, 1000);
+    assert_int_equal(c.last_request.u.move.time_or_speed, 1000);
     const km_sensors_t in = sensors_at(0);
     assert_false(step(&in, &cfg, 1000).running);
     assert_int_equal(c.bridge.mode, KM_BRIDGE_BRAKE);
-    req.kind = KM_REQ_MOTOR_TORQUE;
-    req.u.i16 = -500;
+    memset(&req, 0, sizeof req);
+    req.kind = KM_REQ_MOTOR;
+    req.u.run.mode = KM_RUN_PWM;
+    req.u.run.reverse = true;
+    req.u.run.value = 500;
+    req.u.run.after = KM_AFTER_IDLE;
     assert_true(km_control_request(&c, &req, &cfg));
     assert_int_equal(c.requests, 3);
     (void)step(&in, &cfg, 1000);

@@ -54,24 +54,17 @@ static void rig_encoder(void)
     r.params.angle_max = 0;
 }
 
-static bool motor_i16(km_request_kind_t kind, int16_t v)
+/* 0x6E (KM_RUN_PWM) or 0x6F (KM_RUN_SPEED) as the dispatcher decodes it. */
+static bool motor_signed(km_run_mode_t mode, int16_t v)
 {
-    km_request_t q;
-    memset(&q, 0, sizeof q);
-    q.kind = kind;
-    q.u.i16 = v;
-    return kr_request(&r, &q);
+    return kr_motor_signed(&r, mode, v);
 }
 
-static bool motor_adv(uint8_t control, uint16_t p1, uint16_t p2)
+/* A 0x70 run as the dispatcher decodes it. */
+static bool motor_run(km_run_mode_t mode, bool reverse, uint16_t value, km_run_until_t until, uint16_t amount,
+                      km_run_after_t after)
 {
-    km_request_t q;
-    memset(&q, 0, sizeof q);
-    q.kind = KM_REQ_MOTOR_ADVANCED;
-    q.u.adv.control = control;
-    q.u.adv.p1 = p1;
-    q.u.adv.p2 = p2;
-    return kr_request(&r, &q);
+    return kr_run_motor(&r, mode, reverse, value, until, amount, after);
 }
 
 /* Mean speed over `ms` ticks from the turn count, deg/s x 10 (master's
@@ -93,7 +86,7 @@ static void test_s5_4_0x6E_steady_speed_and_sign(void **state)
 {
     (void)state;
     rig_encoder();
-    assert_true(motor_i16(KM_REQ_MOTOR_TORQUE, 500));
+    assert_true(motor_signed(KM_RUN_PWM, 500));
     kr_run(&r, 300);
     assert_true(r.live.running);
     assert_int_equal(r.bridge.mode, KM_BRIDGE_PWM);
@@ -105,7 +98,7 @@ static void test_s5_4_0x6E_steady_speed_and_sign(void **state)
     assert_true(v1 > 500); /* > 50 deg/s forward */
     assert_true(iabs(v2 - v1) * 50 <= v1 && iabs(v3 - v1) * 50 <= v1);
 
-    assert_true(motor_i16(KM_REQ_MOTOR_TORQUE, -500));
+    assert_true(motor_signed(KM_RUN_PWM, -500));
     kr_run(&r, 400);
     const int32_t vn = mean_ddps(100);
     assert_true(vn < 0);
@@ -117,10 +110,10 @@ static void test_s5_4_0x6E_zero_stops(void **state)
 {
     (void)state;
     rig_encoder();
-    assert_true(motor_i16(KM_REQ_MOTOR_TORQUE, 800));
+    assert_true(motor_signed(KM_RUN_PWM, 800));
     kr_run(&r, 400);
     assert_true(km_plant_speed_mdps(&r.plant) > 50000);
-    assert_true(motor_i16(KM_REQ_MOTOR_TORQUE, 0));
+    assert_true(motor_signed(KM_RUN_PWM, 0));
     kr_run(&r, 1);
     assert_false(r.live.running);
     assert_int_equal(r.bridge.mode, KM_BRIDGE_BRAKE);
@@ -135,14 +128,14 @@ static void test_s5_4_0x5B_limits_motor_pwm(void **state)
     (void)state;
     rig_encoder();
     r.params.torque_limit = 300;
-    assert_true(motor_i16(KM_REQ_MOTOR_TORQUE, 1000));
+    assert_true(motor_signed(KM_RUN_PWM, 1000));
     for (int i = 0; i < 500; i++) {
         kr_tick(&r);
         assert_true(iabs(r.bridge.pwm) <= 300);
     }
     assert_int_equal(r.live.pwm, 300);
     /* and the speed loop is bounded the same way */
-    assert_true(motor_i16(KM_REQ_MOTOR_SPEED, 300));
+    assert_true(motor_signed(KM_RUN_SPEED, 300));
     for (int i = 0; i < 500; i++) {
         kr_tick(&r);
         assert_true(iabs(r.bridge.pwm) <= 300);
@@ -156,8 +149,8 @@ static void run_for_time(bool brake)
     kr_init(&r); /* potentiometer product: time + PWM is allowed */
     km_plant_set_position_ddeg(&r.plant, -1200);
     kr_run(&r, 5);
-    const uint8_t c = (uint8_t)(0x10u | (brake ? 0x02u : 0u)); /* time, PWM */
-    assert_true(motor_adv(c, 5, 600));                          /* 0.5 s */
+    /* 0.5 s at PWM 600, then braked or free */
+    assert_true(motor_run(KM_RUN_PWM, false, 600, KM_UNTIL_TIME, 5, brake ? KM_AFTER_BRAKE : KM_AFTER_FREE));
     int32_t end = -1;
     for (int32_t i = 1; i <= 700; i++) {
         kr_tick(&r);
@@ -191,10 +184,10 @@ static void test_s5_4_0x70_stop_now(void **state)
 {
     (void)state;
     rig_encoder();
-    assert_true(motor_adv(0x00, 0, 700)); /* run on, PWM 700 */
+    assert_true(motor_run(KM_RUN_PWM, false, 700, KM_UNTIL_NONE, 0, KM_AFTER_FREE)); /* run on, PWM 700 */
     kr_run(&r, 200);
     assert_true(r.live.running);
-    assert_true(motor_adv(0x82, 0, 0)); /* stop, brake */
+    assert_true(motor_run(KM_RUN_STOP, false, 0, KM_UNTIL_NONE, 0, KM_AFTER_BRAKE)); /* stop, brake */
     kr_run(&r, 1);
     assert_false(r.live.running);
     assert_int_equal(r.bridge.mode, KM_BRIDGE_BRAKE);
@@ -206,7 +199,7 @@ static void test_s5_4_0x6F_holds_speed(void **state)
 {
     (void)state;
     rig_encoder();
-    assert_true(motor_i16(KM_REQ_MOTOR_SPEED, 180));
+    assert_true(motor_signed(KM_RUN_SPEED, 180));
     kr_run(&r, 400);
     int32_t lo = INT32_MAX, hi = INT32_MIN;
     for (int i = 0; i < 16; i++) {
@@ -218,18 +211,18 @@ static void test_s5_4_0x6F_holds_speed(void **state)
     assert_true(lo >= 1800 - 54 && hi <= 1800 + 54);
     assert_true(r.live.running);
 
-    assert_true(motor_i16(KM_REQ_MOTOR_SPEED, -90));
+    assert_true(motor_signed(KM_RUN_SPEED, -90));
     kr_run(&r, 500);
     const int32_t vn = mean_ddps(200);
     assert_true(vn <= -900 + 27 && vn >= -900 - 27);
 
     r.params.speed_limit_dps = 60; /* 0x5D */
-    assert_true(motor_i16(KM_REQ_MOTOR_SPEED, 300));
+    assert_true(motor_signed(KM_RUN_SPEED, 300));
     kr_run(&r, 500);
     const int32_t vl = mean_ddps(200);
     assert_true(vl >= 600 - 18 && vl <= 600 + 18);
 
-    assert_true(motor_i16(KM_REQ_MOTOR_SPEED, 0));
+    assert_true(motor_signed(KM_RUN_SPEED, 0));
     kr_run(&r, 200);
     assert_false(r.live.running);
     assert_true(iabs(km_plant_speed_mdps(&r.plant)) < 1000);
@@ -241,7 +234,7 @@ static void test_s5_4_0x70_angle_and_turns(void **state)
 {
     (void)state;
     rig_encoder();
-    assert_true(motor_adv(0x20 | 0x04 | 0x02, 90, 180)); /* 90 deg at 180 deg/s, brake */
+    assert_true(motor_run(KM_RUN_SPEED, false, 180, KM_UNTIL_ANGLE, 90, KM_AFTER_BRAKE)); /* 90 deg at 180 deg/s, brake */
     kr_run(&r, 1500);
     int32_t pos = km_plant_turns_ddeg(&r.plant);
     print_message("0x70 90 deg: stopped at %d x0.1 deg\n", (int)pos);
@@ -249,7 +242,7 @@ static void test_s5_4_0x70_angle_and_turns(void **state)
     assert_true(pos >= 900 && pos <= 900 + 60);
 
     rig_encoder();
-    assert_true(motor_adv(0x30 | 0x02 | 0x01, 25, 800)); /* 2.5 turns reverse at PWM 800, brake */
+    assert_true(motor_run(KM_RUN_PWM, true, 800, KM_UNTIL_TURNS, 25, KM_AFTER_BRAKE)); /* 2.5 turns reverse at PWM 800, brake */
     kr_run(&r, 6000);
     pos = km_plant_turns_ddeg(&r.plant);
     print_message("0x70 -2.5 turns: stopped at %d x0.1 deg\n", (int)pos);
@@ -265,7 +258,7 @@ static void test_s5_4_motor_direction_bit(void **state)
     rig_encoder();
     r.params.reverse = true;
     const int32_t p0 = kr_pos(&r);
-    assert_true(motor_i16(KM_REQ_MOTOR_TORQUE, 400));
+    assert_true(motor_signed(KM_RUN_PWM, 400));
     kr_run(&r, 300);
     assert_int_equal(r.bridge.pwm, -400);
     assert_true(kr_pos(&r) > p0 + 100);
@@ -282,14 +275,14 @@ static void test_s5_4_0x5A_auto_hand_over(void **state)
     assert_true(kr_torque(&r, 2));
     kr_run(&r, 100);
     assert_int_equal(r.bridge.mode, KM_BRIDGE_PWM);
-    assert_true(motor_i16(KM_REQ_MOTOR_TORQUE, 400));
+    assert_true(motor_signed(KM_RUN_PWM, 400));
     kr_run(&r, 300);
     assert_true(r.live.running);
     assert_int_equal(r.bridge.pwm, 400);
     assert_int_equal(r.live.deviation, 0);
     /* servo command: relative +10 deg from where the shaft is */
     const int32_t here = kr_pos(&r);
-    assert_true(kr_advanced(&r, 0x10, 100, 0));
+    assert_true(kr_move_rel(&r, KM_MOVE_TIME, 100, 0));
     kr_run(&r, 1500);
     print_message("servo after motor: from %d to %d (want %d)\n", (int)here, (int)kr_pos(&r),
                   (int)(here + 100));
@@ -299,7 +292,7 @@ static void test_s5_4_0x5A_auto_hand_over(void **state)
     assert_true(iabs(kr_pos(&r) - (here + 100)) <= 5);
 
     /* torque switch 0 ends the motor: free */
-    assert_true(motor_i16(KM_REQ_MOTOR_TORQUE, 300));
+    assert_true(motor_signed(KM_RUN_PWM, 300));
     kr_run(&r, 50);
     assert_true(kr_torque(&r, 0));
     kr_run(&r, 1);
@@ -307,7 +300,7 @@ static void test_s5_4_0x5A_auto_hand_over(void **state)
     assert_int_equal(r.bridge.mode, KM_BRIDGE_FREE);
 
     /* 0x5A = 1 written while the motor runs stops it (idle output) */
-    assert_true(motor_i16(KM_REQ_MOTOR_TORQUE, 300));
+    assert_true(motor_signed(KM_RUN_PWM, 300));
     kr_run(&r, 50);
     r.params.control_mode = 1;
     kr_run(&r, 1);
@@ -358,13 +351,17 @@ static void test_s6_pot_refuses_encoder_motor_commands(void **state)
     kt_write(&fx, 1, 0x70, timed, 5);
     kt_ping_is(&fx, 1, 0x00);
     assert_int_equal(fx.fake.n_requests, n + 1);
-    assert_int_equal(fx.fake.requests[n].kind, KM_REQ_MOTOR_ADVANCED);
+    assert_int_equal(fx.fake.requests[n].kind, KM_REQ_MOTOR);
+    assert_int_equal(fx.fake.requests[n].u.run.mode, KM_RUN_PWM);
+    assert_int_equal(fx.fake.requests[n].u.run.until, KM_UNTIL_TIME);
+    assert_int_equal(fx.fake.requests[n].u.run.amount, 5);
+    assert_int_equal(fx.fake.requests[n].u.run.value, 100);
 }
 
 /* Control stays defined for any value that reaches it (the dispatcher
- * validates first; checked under UBSan too): every 0x70 control byte with
- * extreme p1/p2, extreme 0x6E/0x6F values, extreme gains; the bridge PWM
- * stays within +-1000. */
+ * validates first; checked under UBSan too): every decoded run (mode,
+ * direction, bound, output after) with extreme amounts and values, extreme
+ * 0x6E/0x6F values, extreme gains; the bridge PWM stays within +-1000. */
 static void test_s5_4_motor_any_value_defined(void **state)
 {
     (void)state;
@@ -376,18 +373,23 @@ static void test_s5_4_motor_any_value_defined(void **state)
     r.params.speed_limit_dps = UINT16_MAX;
     const int16_t v16[] = {INT16_MIN, -1001, -1, 0, 1, 1000, INT16_MAX};
     for (unsigned i = 0; i < sizeof v16 / sizeof v16[0]; i++) {
-        assert_true(motor_i16(KM_REQ_MOTOR_TORQUE, v16[i]));
+        assert_true(motor_signed(KM_RUN_PWM, v16[i]));
         kr_run(&r, 3);
         assert_true(iabs(r.bridge.pwm) <= 1000);
-        assert_true(motor_i16(KM_REQ_MOTOR_SPEED, v16[i]));
+        assert_true(motor_signed(KM_RUN_SPEED, v16[i]));
         kr_run(&r, 3);
         assert_true(iabs(r.bridge.pwm) <= 1000);
     }
+    /* every run the decoded 0x70 can ask for, at the extreme values */
     const uint16_t p[] = {0, 1, UINT16_MAX};
-    for (unsigned c = 0; c < 256u; c++) {
+    for (unsigned c = 0; c < 3u * 2u * 4u * 3u; c++) {
+        const km_run_mode_t mode = (km_run_mode_t)(c % 3u);
+        const bool reverse = (c / 3u) % 2u != 0u;
+        const km_run_until_t until = (km_run_until_t)((c / 6u) % 4u);
+        const km_run_after_t after = (km_run_after_t)(c / 24u);
         for (unsigned a = 0; a < 3u; a++) {
             for (unsigned b = 0; b < 3u; b++) {
-                assert_true(motor_adv((uint8_t)c, p[a], p[b]));
+                assert_true(motor_run(mode, reverse, p[b], until, p[a], after));
                 kr_run(&r, 2);
                 assert_true(iabs(r.bridge.pwm) <= 1000);
             }

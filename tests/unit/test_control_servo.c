@@ -78,7 +78,7 @@ static void test_s5_4_move_time_45deg_500ms(void **state)
 {
     (void)state;
     on_at(0);
-    assert_true(kr_move(&r, KM_REQ_MOVE_TIME, 450, 500));
+    assert_true(kr_move(&r, KM_MOVE_TIME, 450, 500));
     kr_tick(&r);
     assert_true(r.live.running);
     assert_true(r.live.deviation < 0); /* position - target: behind */
@@ -101,11 +101,11 @@ static void test_s5_4_move_time_45deg_500ms(void **state)
 static void test_s5_4_move_table_overshoot_bound(void **state)
 {
     (void)state;
-    static const struct { km_request_kind_t kind; int32_t from, to; uint16_t param; } t[] = {
-        {KM_REQ_MOVE_TIME, 0, 450, 500},    {KM_REQ_MOVE_TIME, 0, -900, 1000}, {KM_REQ_MOVE_TIME, 0, 20, 100},
-        {KM_REQ_MOVE_TIME, -600, 600, 2000},{KM_REQ_MOVE_TIME, 100, 102, 50},  {KM_REQ_MOVE_TIME, 0, 1200, 0},
-        {KM_REQ_MOVE_SPEED, 0, 900, 90},    {KM_REQ_MOVE_SPEED, 0, -450, 300}, {KM_REQ_MOVE_SPEED, 300, -900, 0},
-        {KM_REQ_MOVE_SPEED, 0, 5, 10},      {KM_REQ_MOVE_SPEED, 0, 1200, 0},
+    static const struct { km_move_kind_t kind; int32_t from, to; uint16_t param; } t[] = {
+        {KM_MOVE_TIME, 0, 450, 500},    {KM_MOVE_TIME, 0, -900, 1000}, {KM_MOVE_TIME, 0, 20, 100},
+        {KM_MOVE_TIME, -600, 600, 2000},{KM_MOVE_TIME, 100, 102, 50},  {KM_MOVE_TIME, 0, 1200, 0},
+        {KM_MOVE_SPEED, 0, 900, 90},    {KM_MOVE_SPEED, 0, -450, 300}, {KM_MOVE_SPEED, 300, -900, 0},
+        {KM_MOVE_SPEED, 0, 5, 10},      {KM_MOVE_SPEED, 0, 1200, 0},
     };
     for (unsigned i = 0; i < sizeof t / sizeof t[0]; i++) {
         on_at(t[i].from);
@@ -118,9 +118,9 @@ static void test_s5_4_move_table_overshoot_bound(void **state)
         }
         near(kr_pos(&r), t[i].to, FINAL_DDEG);
         print_message("move %2u: %s %5d -> %5d (%4u): ended %4d ms, overshoot %d x 0.1 deg, peak PWM %d\n", i,
-                      t[i].kind == KM_REQ_MOVE_TIME ? "0x65" : "0x66", t[i].from, t[i].to, t[i].param, w.end_ms,
+                      t[i].kind == KM_MOVE_TIME ? "0x65" : "0x66", t[i].from, t[i].to, t[i].param, w.end_ms,
                       over > 0 ? over : 0, w.max_abs_pwm);
-        if (t[i].kind == KM_REQ_MOVE_TIME && t[i].param != 0) {
+        if (t[i].kind == KM_MOVE_TIME && t[i].param != 0) {
             if (w.end_ms < t[i].param - 20 || w.end_ms > t[i].param + 40) {
                 fail_msg("move %u: ended at %d ms, asked %u", i, w.end_ms, t[i].param);
             }
@@ -140,14 +140,14 @@ static void test_s5_4_torque_limit_5b(void **state)
     (void)state;
     on_at(0);
     r.params.torque_limit = 300;
-    assert_true(kr_move(&r, KM_REQ_MOVE_SPEED, 900, 0));
+    assert_true(kr_move(&r, KM_MOVE_SPEED, 900, 0));
     const run_t w = run_watch(3000);
     assert_true(w.max_abs_pwm <= 300);
     assert_true(w.max_abs_pwm >= 250); /* it did use it */
     near(kr_pos(&r), 900, FINAL_DDEG);
     /* 0x67 low nibble 2: a move's own PWM cap below 0x5B */
     r.params.torque_limit = 1000;
-    assert_true(kr_advanced(&r, 0x02, 0, 200));
+    assert_true(kr_move_capped(&r, 0, 200));
     const run_t w2 = run_watch(4000);
     assert_true(w2.max_abs_pwm <= 200);
     near(kr_pos(&r), 0, FINAL_DDEG);
@@ -158,7 +158,7 @@ static void test_s5_4_torque_limit_5b(void **state)
  * goes faster than 0x5D; the shaft's reported speed (0x47, 20 ms window)
  * stays within +5 % of it, its instantaneous speed within +15 % (the
  * loop catching up the start-up lag). */
-static void speed_limited_move(km_request_kind_t kind, int16_t target, uint16_t param)
+static void speed_limited_move(km_move_kind_t kind, int16_t target, uint16_t param)
 {
     assert_true(kr_move(&r, kind, target, param));
     int32_t max_sp = 0, max_47 = 0, max_plant = 0;
@@ -185,10 +185,10 @@ static void test_s5_4_speed_limit_5d(void **state)
     (void)state;
     on_at(0);
     r.params.speed_limit_dps = 90;
-    speed_limited_move(KM_REQ_MOVE_SPEED, 900, 0);   /* fastest = 0x5D */
-    speed_limited_move(KM_REQ_MOVE_SPEED, 0, 300);   /* cut to 0x5D */
-    speed_limited_move(KM_REQ_INTERPOLATE, 900, 0);  /* a far 0x68 too */
-    assert_true(kr_move(&r, KM_REQ_MOVE_TIME, 0, 200)); /* would need 600 deg/s */
+    speed_limited_move(KM_MOVE_SPEED, 900, 0);   /* fastest = 0x5D */
+    speed_limited_move(KM_MOVE_SPEED, 0, 300);   /* cut to 0x5D */
+    speed_limited_move(KM_MOVE_STREAM, 900, 0);  /* a far 0x68 too */
+    assert_true(kr_move(&r, KM_MOVE_TIME, 0, 200)); /* would need 600 deg/s */
     const run_t w = run_watch(3000);
     assert_true(w.end_ms >= 1000); /* 90 deg at 90 deg/s */
     assert_true(w.max_abs_speed <= 103500);
@@ -203,15 +203,15 @@ static void test_s5_1_angle_limits_clamp_targets(void **state)
     on_at(0);
     r.params.angle_min = -300;
     r.params.angle_max = 600;
-    assert_true(kr_move(&r, KM_REQ_MOVE_SPEED, 900, 0));
+    assert_true(kr_move(&r, KM_MOVE_SPEED, 900, 0));
     run_watch(1500);
     near(kr_pos(&r), 600, FINAL_DDEG);
-    assert_true(kr_move(&r, KM_REQ_INTERPOLATE, -32768, 0));
+    assert_true(kr_move(&r, KM_MOVE_STREAM, -32768, 0));
     run_watch(2000);
     near(kr_pos(&r), -300, FINAL_DDEG);
     r.params.angle_min = 0;
     r.params.angle_max = 0;
-    assert_true(kr_move(&r, KM_REQ_MOVE_SPEED, 32767, 0));
+    assert_true(kr_move(&r, KM_MOVE_SPEED, 32767, 0));
     run_watch(2000);
     near(kr_pos(&r), 1350, FINAL_DDEG); /* travel */
 }
@@ -223,17 +223,17 @@ static void test_s5_4_advanced_relative_and_absolute(void **state)
     (void)state;
     on_at(0);
     r.params.angle_max = 600;
-    assert_true(kr_advanced(&r, 0x10, 250, 300)); /* relative, 300 ms */
-    assert_true(kr_advanced(&r, 0x10, 250, 300)); /* at once: from the target 250, not from ~0 */
+    assert_true(kr_move_rel(&r, KM_MOVE_TIME, 250, 300)); /* relative, 300 ms */
+    assert_true(kr_move_rel(&r, KM_MOVE_TIME, 250, 300)); /* at once: from the target 250, not from ~0 */
     run_watch(1000);
     near(kr_pos(&r), 500, FINAL_DDEG);
-    assert_true(kr_advanced(&r, 0x11, 250, 100)); /* relative, 100 deg/s: 750 clamped to 600 */
+    assert_true(kr_move_rel(&r, KM_MOVE_SPEED, 250, 100)); /* relative, 100 deg/s: 750 clamped to 600 */
     run_watch(1500);
     near(kr_pos(&r), 600, FINAL_DDEG);
-    assert_true(kr_advanced(&r, 0x11, -1000, 0)); /* relative, fastest */
+    assert_true(kr_move_rel(&r, KM_MOVE_SPEED, -1000, 0)); /* relative, fastest */
     run_watch(1500);
     near(kr_pos(&r), -400, FINAL_DDEG);
-    assert_true(kr_advanced(&r, 0x00, 100, 400)); /* absolute, 400 ms */
+    assert_true(kr_move(&r, KM_MOVE_TIME, 100, 400)); /* absolute, 400 ms */
     const run_t w = run_watch(1500);
     assert_true(w.end_ms >= 380 && w.end_ms <= 440);
     near(kr_pos(&r), 100, FINAL_DDEG);
@@ -241,7 +241,7 @@ static void test_s5_4_advanced_relative_and_absolute(void **state)
     assert_true(kr_torque(&r, 3));
     kr_run(&r, 50);
     const int32_t here = kr_pos(&r);
-    assert_true(kr_advanced(&r, 0x10, -200, 300));
+    assert_true(kr_move_rel(&r, KM_MOVE_TIME, -200, 300));
     run_watch(1000);
     near(kr_pos(&r), here - 200, FINAL_DDEG);
 }
@@ -253,7 +253,7 @@ static void test_s5_1_direction_bit_moves_mirrored(void **state)
     (void)state;
     on_at(0);
     r.params.reverse = true;
-    assert_true(kr_move(&r, KM_REQ_MOVE_TIME, 450, 500));
+    assert_true(kr_move(&r, KM_MOVE_TIME, 450, 500));
     run_watch(1500);
     near(kr_pos(&r), 450, FINAL_DDEG);
     near(km_plant_position_ddeg(&r.plant), -450, FINAL_DDEG);
@@ -268,13 +268,13 @@ static void test_s5_1_zero_offsets_apply_to_targets(void **state)
     r.params.zero_offset1 = 37;
     r.params.zero_offset2 = 100;
     kr_run(&r, 5); /* position jumped by 13.7 deg: the hold follows 0x46's frame */
-    assert_true(kr_move(&r, KM_REQ_MOVE_TIME, 450, 500));
+    assert_true(kr_move(&r, KM_MOVE_TIME, 450, 500));
     run_watch(1500);
     near(kr_pos(&r), 450, FINAL_DDEG);
     near(km_plant_position_ddeg(&r.plant), 450 - 137, FINAL_DDEG);
     /* both with the direction bit: reported = -(sensor + offsets) */
     r.params.reverse = true;
-    assert_true(kr_move(&r, KM_REQ_MOVE_TIME, 200, 500));
+    assert_true(kr_move(&r, KM_MOVE_TIME, 200, 500));
     run_watch(1500);
     near(kr_pos(&r), 200, FINAL_DDEG);
     near(km_plant_position_ddeg(&r.plant), -200 - 137, FINAL_DDEG);
@@ -289,7 +289,7 @@ static void test_s5_4_armed_turns_on_at_rotation(void **state)
     kr_run(&r, 20);
     assert_int_equal(r.bridge.mode, KM_BRIDGE_FREE); /* power-on output: 0x11 bit 0 = 0 */
     assert_int_equal(r.ctl.servo.ts, 3);
-    assert_true(kr_move(&r, KM_REQ_MOVE_TIME, 400, 300));
+    assert_true(kr_move(&r, KM_MOVE_TIME, 400, 300));
     assert_int_equal(r.ctl.servo.ts, 2);
     kr_tick(&r);
     assert_int_equal(r.bridge.mode, KM_BRIDGE_PWM);
@@ -304,7 +304,7 @@ static void test_s5_4_stop_free_and_brake(void **state)
 {
     (void)state;
     on_at(0);
-    assert_true(kr_move(&r, KM_REQ_MOVE_SPEED, 1200, 0));
+    assert_true(kr_move(&r, KM_MOVE_SPEED, 1200, 0));
     kr_run(&r, 200);
     assert_true(r.live.running);
     assert_true(kr_torque(&r, 0));
@@ -316,11 +316,11 @@ static void test_s5_4_stop_free_and_brake(void **state)
     kr_run(&r, 300);
     assert_int_equal(r.live.rotation_ms, rot);
     const int32_t coasted = kr_pos(&r) - at_free;
-    assert_false(kr_move(&r, KM_REQ_MOVE_TIME, 0, 500));
+    assert_false(kr_move(&r, KM_MOVE_TIME, 0, 500));
 
     /* the same stop with brake damping: it stops in a shorter distance */
     on_at(0);
-    assert_true(kr_move(&r, KM_REQ_MOVE_SPEED, 1200, 0));
+    assert_true(kr_move(&r, KM_MOVE_SPEED, 1200, 0));
     kr_run(&r, 200);
     assert_true(kr_torque(&r, 1));
     kr_tick(&r);
@@ -329,7 +329,7 @@ static void test_s5_4_stop_free_and_brake(void **state)
     kr_run(&r, 300);
     const int32_t braked = kr_pos(&r) - at_brake;
     assert_true(coasted > 0 && braked >= 0 && braked < coasted);
-    assert_false(kr_move(&r, KM_REQ_MOVE_SPEED, 0, 0));
+    assert_false(kr_move(&r, KM_MOVE_SPEED, 0, 0));
     assert_false(r.live.running);
 
     /* 2: on, holding the position it has now */
@@ -348,7 +348,7 @@ static void test_s5_3_deviation_and_offset_jump(void **state)
 {
     (void)state;
     on_at(0);
-    assert_true(kr_move(&r, KM_REQ_MOVE_TIME, -600, 800));
+    assert_true(kr_move(&r, KM_MOVE_TIME, -600, 800));
     kr_run(&r, 300);
     assert_int_equal(r.live.deviation, kr_pos(&r) - (-600));
     assert_true(r.live.deviation > 100);
@@ -395,7 +395,7 @@ static void stream(uint32_t period_ms, int32_t step_ddeg, uint32_t n)
     uint32_t t = 0;
     for (uint32_t k = 0; k < n; k++) {
         tgt += step_ddeg;
-        assert_true(kr_move(&r, KM_REQ_INTERPOLATE, (int16_t)tgt, 0));
+        assert_true(kr_move(&r, KM_MOVE_STREAM, (int16_t)tgt, 0));
         for (uint32_t i = 0; i < period_ms; i++, t++) {
             kr_tick(&r);
             assert_true(r.live.running);

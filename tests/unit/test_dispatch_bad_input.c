@@ -342,8 +342,8 @@ static void test_s3_sync_write_other_id_keeps_ours(void **state)
     assert_int_equal(fx.fake.n_requests, 0);
     kt_send_hex(&fx, "F9 FF FE 02 84 7B");
     assert_int_equal(fx.fake.n_requests, 1);
-    assert_int_equal(fx.fake.requests[0].kind, KM_REQ_TORQUE_SWITCH);
-    assert_int_equal(fx.fake.requests[0].u.u8, 2);
+    assert_int_equal(fx.fake.requests[0].kind, KM_REQ_TORQUE);
+    assert_int_equal(fx.fake.requests[0].u.torque, 2);
 }
 
 /* §3: a second 0x04 overwrites the buffer. */
@@ -357,7 +357,7 @@ static void test_s3_sync_write_second_overwrites(void **state)
     kt_send(&fx, ID, 0x04, second, 2);
     kt_send_hex(&fx, "F9 FF FE 02 84 7B");
     assert_int_equal(fx.fake.n_requests, 1);
-    assert_int_equal(fx.fake.requests[0].u.u8, 1);
+    assert_int_equal(fx.fake.requests[0].u.torque, 1);
 }
 
 /* Sync write 0x04 of an unknown or read-only address: bit 5 at once, nothing buffered. */

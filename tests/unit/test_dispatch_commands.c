@@ -369,8 +369,8 @@ static void test_s5_4_0x64_torque_switch(void **state)
     for (uint8_t v = 0; v <= 1; v++) {
         kt_write_u8(&fx, ID, 0x64, v);
         const unsigned n = fx.fake.n_requests;
-        assert_int_equal(fx.fake.requests[n - 1].kind, KM_REQ_TORQUE_SWITCH);
-        assert_int_equal(fx.fake.requests[n - 1].u.u8, v);
+        assert_int_equal(fx.fake.requests[n - 1].kind, KM_REQ_TORQUE);
+        assert_int_equal(fx.fake.requests[n - 1].u.torque, v);
         kt_ping_is(&fx, ID, 0); /* the write of v was good */
         move_time(ID);
         assert_int_equal(fx.fake.n_requests, n);
@@ -391,7 +391,8 @@ static void test_s5_4_0x64_torque_switch(void **state)
     move_time(ID);
     kt_ping_is(&fx, ID, 0);
     assert_int_equal(fx.fake.n_requests, n + 2);
-    assert_int_equal(fx.fake.requests[n + 1].kind, KM_REQ_MOVE_TIME);
+    assert_int_equal(fx.fake.requests[n + 1].kind, KM_REQ_MOVE);
+    assert_int_equal(fx.fake.requests[n + 1].u.move.kind, KM_MOVE_TIME);
     assert_int_equal(reg_by_addr(0x64), 2);
 }
 
@@ -418,8 +419,12 @@ static void test_s5_4_0x5A_control_mode(void **state)
     kt_ping_is(&fx, ID, KM_ST_FAILED);
     motor_torque(ID, -300);
     assert_int_equal(fx.fake.n_requests, 2);
-    assert_int_equal(fx.fake.requests[1].kind, KM_REQ_MOTOR_TORQUE);
-    assert_int_equal(fx.fake.requests[1].u.i16, -300);
+    assert_int_equal(fx.fake.requests[1].kind, KM_REQ_MOTOR);
+    assert_int_equal(fx.fake.requests[1].u.run.mode, KM_RUN_PWM);
+    assert_true(fx.fake.requests[1].u.run.reverse);
+    assert_int_equal(fx.fake.requests[1].u.run.value, 300);
+    assert_int_equal(fx.fake.requests[1].u.run.until, KM_UNTIL_NONE);
+    assert_int_equal(fx.fake.requests[1].u.run.after, KM_AFTER_IDLE);
     kt_ping_is(&fx, ID, 0);
     kt_write_u8(&fx, ID, 0x5A, 0);
     km_live_t live = {0};
@@ -491,15 +496,15 @@ static void test_s5_2_0x36_write_one_to_clear(void **state)
     kt_write_u8(&fx, ID, 0x36, 0x09);
     assert_int_equal(fx.fake.n_requests, 1);
     assert_int_equal(fx.fake.requests[0].kind, KM_REQ_PROTECTION_CLEAR);
-    assert_int_equal(fx.fake.requests[0].u.u8, 0x09);
+    assert_int_equal(fx.fake.requests[0].u.clear, 0x09);
     assert_int_equal(fx.fake.n_commits, 0);
     kt_write_u8(&fx, ID, 0x36, 0x10);
     assert_int_equal(fx.fake.n_requests, 2);
     assert_int_equal(fx.fake.requests[1].kind, KM_REQ_PROTECTION_CLEAR);
-    assert_int_equal(fx.fake.requests[1].u.u8, 0x00);
+    assert_int_equal(fx.fake.requests[1].u.clear, 0x00);
     kt_write_u8(&fx, ID, 0x36, 0xF9);
     assert_int_equal(fx.fake.n_requests, 3);
-    assert_int_equal(fx.fake.requests[2].u.u8, 0x09);
+    assert_int_equal(fx.fake.requests[2].u.clear, 0x09);
     assert_int_equal(fx.fake.n_commits, 0);
     kt_ping_is(&fx, ID, 0);
     kt_read(&fx, ID, 0x36);
@@ -591,10 +596,13 @@ static void test_s6_encoder_only_commands_refused_on_pot(void **state)
     const uint8_t ok[] = {0x10, 0x14, 0x00, 0xF4, 0x01};
     kt_write(&fx, ID, 0x70, ok, 5);
     assert_int_equal(fx.fake.n_requests, 1);
-    assert_int_equal(fx.fake.requests[0].kind, KM_REQ_MOTOR_ADVANCED);
-    assert_int_equal(fx.fake.requests[0].u.adv.control, 0x10);
-    assert_int_equal(fx.fake.requests[0].u.adv.p1, 20);
-    assert_int_equal(fx.fake.requests[0].u.adv.p2, 500);
+    assert_int_equal(fx.fake.requests[0].kind, KM_REQ_MOTOR);
+    assert_int_equal(fx.fake.requests[0].u.run.mode, KM_RUN_PWM); /* p2 kind 0 */
+    assert_false(fx.fake.requests[0].u.run.reverse);               /* bit 0 */
+    assert_int_equal(fx.fake.requests[0].u.run.value, 500);
+    assert_int_equal(fx.fake.requests[0].u.run.until, KM_UNTIL_TIME); /* p1 kind 1 */
+    assert_int_equal(fx.fake.requests[0].u.run.amount, 20);
+    assert_int_equal(fx.fake.requests[0].u.run.after, KM_AFTER_FREE); /* bit 1 */
 }
 
 /* §5.3 0x46 write on an encoder: any value zeroes the position. */
@@ -623,15 +631,22 @@ static void test_s5_4_servo_commands_requests(void **state)
     const uint8_t adv[] = {0x12, 0x64, 0x00, 0xF4, 0x01}; /* relative, max PWM 500 */
     kt_write(&fx, ID, 0x67, adv, 5);
     assert_int_equal(fx.fake.n_requests, 3);
-    assert_int_equal(fx.fake.requests[0].kind, KM_REQ_MOVE_SPEED);
+    assert_int_equal(fx.fake.requests[0].kind, KM_REQ_MOVE);
+    assert_int_equal(fx.fake.requests[0].u.move.kind, KM_MOVE_SPEED);
+    assert_false(fx.fake.requests[0].u.move.relative);
     assert_int_equal(fx.fake.requests[0].u.move.target, -900);
-    assert_int_equal(fx.fake.requests[0].u.move.param, 300);
-    assert_int_equal(fx.fake.requests[1].kind, KM_REQ_INTERPOLATE);
+    assert_int_equal(fx.fake.requests[0].u.move.time_or_speed, 300);
+    assert_int_equal(fx.fake.requests[0].u.move.pwm_cap, 1000);
+    assert_int_equal(fx.fake.requests[1].kind, KM_REQ_MOVE);
+    assert_int_equal(fx.fake.requests[1].u.move.kind, KM_MOVE_STREAM);
     assert_int_equal(fx.fake.requests[1].u.move.target, 10);
-    assert_int_equal(fx.fake.requests[2].kind, KM_REQ_SERVO_ADVANCED);
-    assert_int_equal(fx.fake.requests[2].u.adv.control, 0x12);
-    assert_int_equal(fx.fake.requests[2].u.adv.p1, 100);
-    assert_int_equal(fx.fake.requests[2].u.adv.p2, 500);
+    /* 0x67 0x12: high nibble 1 relative, low nibble 2 a PWM cap at the fastest speed */
+    assert_int_equal(fx.fake.requests[2].kind, KM_REQ_MOVE);
+    assert_int_equal(fx.fake.requests[2].u.move.kind, KM_MOVE_SPEED);
+    assert_true(fx.fake.requests[2].u.move.relative);
+    assert_int_equal(fx.fake.requests[2].u.move.target, 100);
+    assert_int_equal(fx.fake.requests[2].u.move.time_or_speed, 0);
+    assert_int_equal(fx.fake.requests[2].u.move.pwm_cap, 500);
     const uint8_t bad[] = {0x12, 0x64, 0x00, 0xE9, 0x03}; /* max PWM 1001 */
     kt_write(&fx, ID, 0x67, bad, 5);
     assert_int_equal(fx.fake.n_requests, 3);

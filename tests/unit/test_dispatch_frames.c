@@ -69,9 +69,10 @@ static void test_s2_write_move_time_worked_frame(void **state)
     kt_send_hex(&fx, "F9 FF 01 07 03 65 84 03 E8 03 1D");
     kt_no_reply(&fx); /* response level 0 (0x11 default 0x02) */
     assert_int_equal(fx.fake.n_requests, 1);
-    assert_int_equal(fx.fake.requests[0].kind, KM_REQ_MOVE_TIME);
+    assert_int_equal(fx.fake.requests[0].kind, KM_REQ_MOVE);
+    assert_int_equal(fx.fake.requests[0].u.move.kind, KM_MOVE_TIME);
     assert_int_equal(fx.fake.requests[0].u.move.target, 900);
-    assert_int_equal(fx.fake.requests[0].u.move.param, 1000);
+    assert_int_equal(fx.fake.requests[0].u.move.time_or_speed, 1000);
     assert_int_equal(km_servo_status(&fx.s), 0);
 }
 
@@ -115,8 +116,8 @@ static void test_s2_multi_id_torque_worked_frame(void **state)
     for (uint8_t i = 0; i < NSERVO; i++) {
         if (i >= 1 && i <= 3) {
             assert_int_equal(bus[i].fake.n_requests, 1);
-            assert_int_equal(bus[i].fake.requests[0].kind, KM_REQ_TORQUE_SWITCH);
-            assert_int_equal(bus[i].fake.requests[0].u.u8, 2);
+            assert_int_equal(bus[i].fake.requests[0].kind, KM_REQ_TORQUE);
+            assert_int_equal(bus[i].fake.requests[0].u.torque, 2);
             assert_int_equal(km_servo_reg(&bus[i].s, KM_REG_TORQUE_SWITCH), 2);
         } else {
             assert_int_equal(bus[i].fake.n_requests, 0);
@@ -141,9 +142,10 @@ static void check_moves_579(uint16_t param)
             continue;
         }
         assert_int_equal(bus[i].fake.n_requests, 1);
-        assert_int_equal(bus[i].fake.requests[0].kind, KM_REQ_MOVE_TIME);
+        assert_int_equal(bus[i].fake.requests[0].kind, KM_REQ_MOVE);
+        assert_int_equal(bus[i].fake.requests[0].u.move.kind, KM_MOVE_TIME);
         assert_int_equal(bus[i].fake.requests[0].u.move.target, target);
-        assert_int_equal(bus[i].fake.requests[0].u.move.param, param);
+        assert_int_equal(bus[i].fake.requests[0].u.move.time_or_speed, param);
     }
 }
 
@@ -183,8 +185,8 @@ static void test_s2_sync_write_torque_worked_frames(void **state)
     for (uint8_t i = 0; i < NSERVO; i++) {
         if (i >= 1 && i <= 3) {
             assert_int_equal(bus[i].fake.n_requests, 1);
-            assert_int_equal(bus[i].fake.requests[0].kind, KM_REQ_TORQUE_SWITCH);
-            assert_int_equal(bus[i].fake.requests[0].u.u8, 2);
+            assert_int_equal(bus[i].fake.requests[0].kind, KM_REQ_TORQUE);
+            assert_int_equal(bus[i].fake.requests[0].u.torque, 2);
             assert_int_equal(km_servo_reg(&bus[i].s, KM_REG_TORQUE_SWITCH), 2);
         } else {
             assert_int_equal(bus[i].fake.n_requests, 0);

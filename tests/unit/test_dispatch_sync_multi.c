@@ -132,9 +132,9 @@ static void test_s3_multi_id_status_bits_and_addresses(void **state)
         kt_ping_is(&bus[i], i, want);
         kt_ping_is(&bus[i], i, 0);
     }
-    static const struct { uint8_t addr; km_request_kind_t kind; } allowed[] = {
-        {0x66, KM_REQ_MOVE_SPEED}, {0x68, KM_REQ_INTERPOLATE},
-        {0x6E, KM_REQ_MOTOR_TORQUE}, {0x6F, KM_REQ_MOTOR_SPEED},
+    static const struct { uint8_t addr; km_request_kind_t kind; uint8_t how; } allowed[] = {
+        {0x66, KM_REQ_MOVE, KM_MOVE_SPEED}, {0x68, KM_REQ_MOVE, KM_MOVE_STREAM},
+        {0x6E, KM_REQ_MOTOR, KM_RUN_PWM}, {0x6F, KM_REQ_MOTOR, KM_RUN_SPEED},
     };
     for (unsigned a = 0; a < 4; a++) {
         kt_init(&bus[3], kt_product_enc(), 3);
@@ -142,9 +142,12 @@ static void test_s3_multi_id_status_bits_and_addresses(void **state)
         kt_send(&bus[3], KM_ID_BROADCAST, 0x83, b, sizeof b);
         assert_int_equal(bus[3].fake.n_requests, 1);
         assert_int_equal(bus[3].fake.requests[0].kind, allowed[a].kind);
-        if (allowed[a].kind == KM_REQ_MOTOR_TORQUE || allowed[a].kind == KM_REQ_MOTOR_SPEED) {
-            assert_int_equal(bus[3].fake.requests[0].u.i16, 100);
+        if (allowed[a].kind == KM_REQ_MOTOR) {
+            assert_int_equal(bus[3].fake.requests[0].u.run.mode, allowed[a].how);
+            assert_false(bus[3].fake.requests[0].u.run.reverse);
+            assert_int_equal(bus[3].fake.requests[0].u.run.value, 100);
         } else {
+            assert_int_equal(bus[3].fake.requests[0].u.move.kind, allowed[a].how);
             assert_int_equal(bus[3].fake.requests[0].u.move.target, 100);
         }
     }
@@ -177,7 +180,7 @@ static void test_s3_multi_id_first_entry_and_non_broadcast(void **state)
     const uint8_t twice[] = {0x64, 0x01, ID, 0x01, ID, 0x02};
     kt_send(&fx, KM_ID_BROADCAST, 0x83, twice, sizeof twice);
     assert_int_equal(fx.fake.n_requests, 1);
-    assert_int_equal(fx.fake.requests[0].u.u8, 1);
+    assert_int_equal(fx.fake.requests[0].u.torque, 1);
     kt_write_u8(&fx, ID, 0x64, 9); /* bit 6 pending */
     const uint8_t m[] = {0x64, 0x01, ID, 0x02};
     kt_snap_t sn;

@@ -24,20 +24,28 @@ typedef struct {
     km_request_t req;
 } less_t;
 
-#define REQ_TS(v) {.kind = KM_REQ_TORQUE_SWITCH, .u = {.u8 = (v)}}
-#define REQ_MOTOR(k, v) {.kind = (k), .u = {.i16 = (v)}}
-#define REQ_ADV(c, a, b) {.kind = KM_REQ_MOTOR_ADVANCED, .u = {.adv = {.control = (c), .p1 = (a), .p2 = (b)}}}
+/* The requests as the dispatcher's hooks decode the frames named. */
+#define REQ_TS(v) {.kind = KM_REQ_TORQUE, .u = {.torque = (v)}}
+#define REQ_RUN(m_, rev_, v_, until_, amount_, after_)                                                      \
+    {.kind = KM_REQ_MOTOR,                                                                                  \
+     .u = {.run = {.mode = (m_), .reverse = (rev_), .value = (v_), .until = (until_), .amount = (amount_),     \
+                   .after = (after_)}}}
+/* 0x6E (PWM) or 0x6F (speed) = v: run on, the idle output at 0. */
+#define REQ_MOTOR(m, v) REQ_RUN((m), (v) < 0, (uint16_t)((v) < 0 ? -(v) : (v)), KM_UNTIL_NONE, 0, KM_AFTER_IDLE)
+#define REQ_MOVE(k_, rel_, t_, ts_)                                                                     \
+    {.kind = KM_REQ_MOVE,                                                                                   \
+     .u = {.move = {.kind = (k_), .relative = (rel_), .target = (t_), .time_or_speed = (ts_), .pwm_cap = 1000}}}
 
 static const less_t k_less[] = {
     {"0x64 = 0", REQ_TS(0)},
     {"0x64 = 1", REQ_TS(1)},
-    {"0x6E = 0", REQ_MOTOR(KM_REQ_MOTOR_TORQUE, 0)},
-    {"0x6F = 0", REQ_MOTOR(KM_REQ_MOTOR_SPEED, 0)},
-    {"0x70 stop, free after", REQ_ADV(0x80, 0, 0)},
-    {"0x70 stop, brake after", REQ_ADV(0x82, 0, 0)},
-    {"0x70 stop with a run in its fields", REQ_ADV(0x93, 50, 800)},
-    {"0x70 run on at PWM 0", REQ_ADV(0x00, 0, 0)},
-    {"0x70 run for 0 s at PWM 500", REQ_ADV(0x10, 0, 500)},
+    {"0x6E = 0", REQ_MOTOR(KM_RUN_PWM, 0)},
+    {"0x6F = 0", REQ_MOTOR(KM_RUN_SPEED, 0)},
+    {"0x70 stop, free after", REQ_RUN(KM_RUN_STOP, false, 0, KM_UNTIL_NONE, 0, KM_AFTER_FREE)},
+    {"0x70 stop, brake after", REQ_RUN(KM_RUN_STOP, false, 0, KM_UNTIL_NONE, 0, KM_AFTER_BRAKE)},
+    {"0x70 stop with a run in its fields", REQ_RUN(KM_RUN_STOP, true, 800, KM_UNTIL_TIME, 50, KM_AFTER_BRAKE)},
+    {"0x70 run on at PWM 0", REQ_RUN(KM_RUN_PWM, false, 0, KM_UNTIL_NONE, 0, KM_AFTER_FREE)},
+    {"0x70 run for 0 s at PWM 500", REQ_RUN(KM_RUN_PWM, false, 500, KM_UNTIL_TIME, 0, KM_AFTER_FREE)},
 };
 #define N_LESS (sizeof k_less / sizeof k_less[0])
 
@@ -47,15 +55,15 @@ static void more_motion_refused(kr_rig_t *r)
     static const km_request_t more[] = {
         REQ_TS(2),
         REQ_TS(3),
-        REQ_MOTOR(KM_REQ_MOTOR_TORQUE, 500),
-        REQ_MOTOR(KM_REQ_MOTOR_TORQUE, -1),
-        REQ_MOTOR(KM_REQ_MOTOR_SPEED, 30),
-        REQ_ADV(0x10, 5, 500),
-        REQ_ADV(0x04, 0, 90),
-        {.kind = KM_REQ_MOVE_TIME, .u = {.move = {.target = 300, .param = 500}}},
-        {.kind = KM_REQ_MOVE_SPEED, .u = {.move = {.target = -300, .param = 0}}},
-        {.kind = KM_REQ_INTERPOLATE, .u = {.move = {.target = 100, .param = 0}}},
-        {.kind = KM_REQ_SERVO_ADVANCED, .u = {.adv = {.control = 0x10, .p1 = 100, .p2 = 500}}},
+        REQ_MOTOR(KM_RUN_PWM, 500),
+        REQ_MOTOR(KM_RUN_PWM, -1),
+        REQ_MOTOR(KM_RUN_SPEED, 30),
+        REQ_RUN(KM_RUN_PWM, false, 500, KM_UNTIL_TIME, 5, KM_AFTER_FREE), /* 0x70 0x10, 0.5 s at 500 */
+        REQ_RUN(KM_RUN_SPEED, false, 90, KM_UNTIL_NONE, 0, KM_AFTER_FREE), /* 0x70 0x04, 90 deg/s */
+        REQ_MOVE(KM_MOVE_TIME, false, 300, 500),
+        REQ_MOVE(KM_MOVE_SPEED, false, -300, 0),
+        REQ_MOVE(KM_MOVE_STREAM, false, 100, 0),
+        REQ_MOVE(KM_MOVE_TIME, true, 100, 500), /* 0x67 0x10 */
     };
     for (size_t i = 0; i < sizeof more / sizeof more[0]; i++) {
         assert_false(kr_request(r, &more[i]));
@@ -95,7 +103,7 @@ static void boot_motor_then_sag(kr_rig_t *r)
     kr_init(r);
     protections_on(r);
     kr_run(r, 50);
-    const km_request_t run = REQ_MOTOR(KM_REQ_MOTOR_TORQUE, 400);
+    const km_request_t run = REQ_MOTOR(KM_RUN_PWM, 400);
     assert_true(kr_request(r, &run));
     kr_run(r, 200);
     assert_true(r->live.running);
@@ -138,7 +146,7 @@ static void test_s5_2_less_motion_accepted_while_protecting(void **state)
 static void test_s5_2_less_motion_ends_a_protection_hold(void **state)
 {
     (void)state;
-    const km_request_t stops[] = {REQ_TS(0), REQ_MOTOR(KM_REQ_MOTOR_TORQUE, 0)};
+    const km_request_t stops[] = {REQ_TS(0), REQ_MOTOR(KM_RUN_PWM, 0)};
     const km_bridge_mode_t after[] = {KM_BRIDGE_FREE, KM_BRIDGE_BRAKE};
     for (size_t k = 0; k < 2; k++) {
         kr_rig_t r;

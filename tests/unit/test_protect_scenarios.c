@@ -703,11 +703,7 @@ static void prv_boot(kr_rig_t *r, const row_t *w, bool with_faults)
 
 static bool prv_motor(kr_rig_t *r, int16_t pwm)
 {
-    km_request_t q;
-    memset(&q, 0, sizeof q);
-    q.kind = KM_REQ_MOTOR_TORQUE;
-    q.u.i16 = pwm;
-    return kr_request(r, &q);
+    return kr_motor_signed(r, KM_RUN_PWM, pwm);
 }
 
 static bool prv_clear(kr_rig_t *r, uint8_t mask)
@@ -715,7 +711,7 @@ static bool prv_clear(kr_rig_t *r, uint8_t mask)
     km_request_t q;
     memset(&q, 0, sizeof q);
     q.kind = KM_REQ_PROTECTION_CLEAR;
-    q.u.u8 = mask;
+    q.u.clear = mask;
     return kr_request(r, &q);
 }
 
@@ -760,8 +756,8 @@ static act_t prv_bridge_act(const kr_rig_t *r)
 static void prv_motion_refused(kr_rig_t *r)
 {
     const uint8_t ts = r->params.torque_switch;
-    assert_false(kr_move(r, KM_REQ_MOVE_SPEED, (int16_t)(kr_pos(r) + 300), 100));
-    assert_false(kr_move(r, KM_REQ_MOVE_TIME, (int16_t)(kr_pos(r) - 300), 500));
+    assert_false(kr_move(r, KM_MOVE_SPEED, (int16_t)(kr_pos(r) + 300), 100));
+    assert_false(kr_move(r, KM_MOVE_TIME, (int16_t)(kr_pos(r) - 300), 500));
     assert_false(kr_torque(r, 2));
     assert_false(kr_torque(r, 3));
     assert_false(prv_motor(r, 500));
@@ -785,7 +781,7 @@ static void prv_run_selftest(const row_t *w)
         for (uint32_t t = 0; t < w->run_ms; t++) {
             prv_apply(&r, &w->stim[0], t);
             if (t == 0u) {
-                assert_true(kr_move(&r, KM_REQ_MOVE_SPEED, 900, 0));
+                assert_true(kr_move(&r, KM_MOVE_SPEED, 900, 0));
             }
             kr_tick(&r);
             if (seen == NO_TRIP && r.live.hw_faults != 0u) {
@@ -825,7 +821,7 @@ static void prv_run_selftest(const row_t *w)
     prv_boot(&r2, w, false);
     kr_run(&r2, 50);
     assert_int_equal(r2.live.hw_faults, 0);
-    assert_true(kr_move(&r2, KM_REQ_MOVE_SPEED, 300, 0));
+    assert_true(kr_move(&r2, KM_MOVE_SPEED, 300, 0));
     kr_run(&r2, 1000);
     assert_in_range(kr_pos(&r2), 280, 320);
     printf("  %-66s trip %6d ms  action %-5s  0x35=0x%02X  restart: moves to %d\n", w->name, seen,
@@ -906,7 +902,7 @@ static void prv_run_row(const row_t *w)
             prv_apply(&r, &w->stim[1], t); /* on the same input: only within its window */
         }
         if (t == 0u && w->move_target != 0) {
-            assert_true(kr_move(&r, KM_REQ_MOVE_SPEED, w->move_target, w->move_speed));
+            assert_true(kr_move(&r, KM_MOVE_SPEED, w->move_target, w->move_speed));
         }
         if (w->en_at != 0u && w->en_at == t) {
             r.params.prot_enable = w->en_val; /* as the dispatcher decodes a 0x32 write */
@@ -1065,7 +1061,7 @@ static void prv_run_row(const row_t *w)
         /* a shaft left on its end stop (past the travel) goes to the
          * travel's end: targets are clamped to it (km_servo_mode.h) */
         const int32_t at = km_servo_mode_clamp(&r.params, to);
-        assert_true(kr_move(&r, KM_REQ_MOVE_SPEED, to, 0));
+        assert_true(kr_move(&r, KM_MOVE_SPEED, to, 0));
         kr_run(&r, 1000);
         assert_true(kr_pos(&r) >= at - 10 && kr_pos(&r) <= at + 10);
     }

@@ -371,7 +371,7 @@ static void test_s5_2_0x36_reserved_bits_masked_request(void **state)
         }
         assert_int_equal(fx.fake.n_requests, 1);
         assert_int_equal(fx.fake.requests[0].kind, KM_REQ_PROTECTION_CLEAR);
-        assert_int_equal(fx.fake.requests[0].u.u8, v & 0x0Fu);
+        assert_int_equal(fx.fake.requests[0].u.clear, v & 0x0Fu);
         assert_int_equal(fx.fake.n_commits, 0);
         kt_read(&fx, ID, 0x36);
         const uint8_t p = 0x06;

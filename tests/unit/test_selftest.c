@@ -120,7 +120,7 @@ static void test_s5_2_boot_on_end_stop_moves_back(void **state)
     assert_true(kr_torque(&r, 2));
     kr_run(&r, 100);
     assert_int_equal(r.live.torque_switch, 2);
-    assert_true(kr_move(&r, KM_REQ_MOVE_TIME, 0, 1000));
+    assert_true(kr_move(&r, KM_MOVE_TIME, 0, 1000));
     kr_run(&r, 2000);
     assert_true(kr_pos(&r) >= -10 && kr_pos(&r) <= 10);
     assert_int_equal(r.live.hw_faults, 0);
