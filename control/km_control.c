@@ -78,12 +78,24 @@ static bool prv_request_motor(km_control_t *c, const km_request_t *req, const km
     return true;
 }
 
+/* A clear request (0x36): refused while the excursion holds; what it
+ * released is reported with the next tick's events. */
+static bool prv_clear(km_control_t *c, uint8_t mask)
+{
+    const uint8_t was = km_protect_active(&c->prot);
+    if (!km_protect_clear(&c->prot, mask)) {
+        return false;
+    }
+    c->cleared |= (uint8_t)(was & (uint8_t)~km_protect_active(&c->prot));
+    return true;
+}
+
 bool km_control_request(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
 {
     c->requests++;
     c->last_request = *req;
     if (req->kind == KM_REQ_PROTECTION_CLEAR) {
-        return km_protect_clear(&c->prot, req->u.clear); /* refused while its excursion holds */
+        return prv_clear(c, req->u.clear);
     }
     if (req->kind == KM_REQ_ZERO_POSITION) {
         return true; /* the dispatcher moves the offsets; nothing moves here */
@@ -187,6 +199,7 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     /* 2. self-test and protection, on what the bridge drives now */
     const int32_t drive = c->bridge.mode == KM_BRIDGE_PWM ? c->bridge.pwm : 0;
     const uint8_t hw = km_selftest_step(&c->selftest, in, p, drive, c->bridge.mode == KM_BRIDGE_FREE, dt_us);
+    const uint8_t hw_found = (uint8_t)(hw & (uint8_t)~c->hw);
     if (hw != c->hw) {
         c->hw = hw;
         prv_hw_fault(c);
@@ -199,8 +212,8 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
         .drive_pwm = drive,
         .servo_mode = !c->motor.active,
     };
-    km_protect_events_t ev;
-    prv_protect_transition(c, km_protect_step(&c->prot, &pin, p, dt_us, &ev));
+    const bool was_acting = c->action != KM_PROT_ACT_NONE;
+    prv_protect_transition(c, km_protect_step(&c->prot, &pin, p, dt_us, &live->events));
 
     int32_t limit = p->torque_limit < p->max_torque ? p->torque_limit : p->max_torque;
     const uint32_t ilimit = p->current_limit_ma < p->max_current_ma ? p->current_limit_ma : p->max_current_ma;
@@ -266,9 +279,14 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     live->rotation_ms = c->motor.active ? c->motor.rotation_ms : c->servo.rotation_ms;
     live->running = c->motor.active ? c->motor.running : c->servo.running;
     live->protecting = c->action != KM_PROT_ACT_NONE;
+    /* the torque switch moved by itself: protecting, just released, or stopped by a fault */
+    live->torque_forced = live->protecting || was_acting || hw_found != 0u;
     live->torque_switch = live->protecting ? (uint8_t)KM_TORQUE_PROTECTED : c->servo.ts;
     live->protections = km_protect_active(&c->prot);
     live->hw_faults = c->hw;
+    live->events.cleared = c->cleared;
+    live->events.hw_found = hw_found;
+    c->cleared = 0u;
     live->time_ms = c->time_ms;
     bridge->mode = c->bridge.mode; /* by field: a struct copy is a memcpy call here */
     bridge->pwm = c->bridge.pwm;

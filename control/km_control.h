@@ -69,6 +69,7 @@ typedef struct {
     uint8_t action;              /* km_prot_action_t in force */
     uint8_t ts_after;            /* 0x64 once the protections are released */
     uint8_t hw;                  /* 0x35 bits found */
+    uint8_t cleared;             /* protections a clear request released since the last tick */
     uint32_t time_ms;            /* since init (the fault log's clock) */
     uint32_t time_rem_us;
     uint32_t requests;           /* typed requests received (diagnostics) */

@@ -44,6 +44,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "km_live.h"
 #include "km_params.h"
 #include "km_status.h"
 
@@ -82,16 +83,12 @@ typedef struct {
     uint8_t timing;          /* timers not at 0 (the step's fast path when none) */
 } km_protect_t;
 
-/* Changes at one step, for the fault log. */
-typedef struct {
-    uint8_t tripped;         /* bits that tripped at this step */
-    uint8_t released;        /* bits released at this step (automatic or disabled) */
-} km_protect_events_t;
-
 void km_protect_init(km_protect_t *s);
 
 /* One tick: updates every enabled protection and returns the action the
- * output stage must take (NONE when nothing is active). */
+ * output stage must take (NONE when nothing is active). Sets ev->tripped
+ * and ev->released to what tripped and released at this step (the fault
+ * log's events, km_live.h); leaves the other fields alone. */
 km_prot_action_t km_protect_step(km_protect_t *s, const km_protect_in_t *in, const km_control_params_t *p,
                                  uint32_t dt_us, km_protect_events_t *ev);
 

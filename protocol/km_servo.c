@@ -229,55 +229,13 @@ void km_servo_note_checksum_error(km_servo_t *s)
     s->unreported |= KM_ST_EXCEPTION;
 }
 
-/* One fault-log entry with the live state it happened in. */
-static void prv_log(km_servo_t *s, const km_live_t *live, km_fault_kind_t kind, uint8_t bits)
-{
-    if (s->log == NULL || bits == 0u) {
-        return;
-    }
-    km_fault_entry_t e;
-    e.t_ms = live->time_ms;
-    e.position = live->position;
-    e.voltage_mv = (uint16_t)(live->voltage < 0 ? 0 : live->voltage > 65535 ? 65535 : live->voltage);
-    e.current_ma = (int16_t)(live->current < -32768 ? -32768 : live->current > 32767 ? 32767 : live->current);
-    e.temp_c10 = (int16_t)(live->temperature * 10);
-    e.kind = (uint8_t)kind;
-    e.bits = bits;
-    e.boots_ago = 0;
-    e.reserved = 0;
-    km_fault_log_add(s->log, &e);
-}
-
 void km_servo_set_live(km_servo_t *s, const km_live_t *live)
 {
-    const uint8_t was = s->live.protections;
-    const bool was_protecting = s->live.protecting;
-    const uint8_t new_hw = (uint8_t)(live->hw_faults & (uint8_t)~s->hw_latched);
     s->live = *live;
     s->hw_latched |= live->hw_faults; /* §5.2 0x35: latched until restart */
-    if (live->protecting) {
-        if (prv_reg(s, KM_REG_TORQUE_SWITCH) != 5u) {
-            prv_set(s, KM_REG_TORQUE_SWITCH, 5u); /* §5.4 0x64 = 5: set by the servo */
-        }
-    } else if ((was_protecting || new_hw != 0u) && prv_reg(s, KM_REG_TORQUE_SWITCH) != live->torque_switch) {
-        prv_set(s, KM_REG_TORQUE_SWITCH, live->torque_switch); /* released, or stopped by a fault */
+    if (live->torque_forced && prv_reg(s, KM_REG_TORQUE_SWITCH) != live->torque_switch) {
+        prv_set(s, KM_REG_TORQUE_SWITCH, live->torque_switch); /* §5.4 0x64 = 5: set by the servo */
     }
-    const uint8_t released = (uint8_t)(was & (uint8_t)~live->protections);
-    prv_log(s, live, KM_FAULT_EV_TRIP, (uint8_t)(live->protections & (uint8_t)~was));
-    prv_log(s, live, KM_FAULT_EV_CLEAR, (uint8_t)(released & s->clear_asked));
-    prv_log(s, live, KM_FAULT_EV_RELEASE, (uint8_t)(released & (uint8_t)~s->clear_asked));
-    prv_log(s, live, KM_FAULT_EV_HW, new_hw);
-    s->clear_asked = 0;
-}
-
-void km_servo_set_fault_log(km_servo_t *s, km_fault_log_t *log)
-{
-    s->log = log;
-}
-
-void km_servo_set_torque_switch(km_servo_t *s, uint8_t value)
-{
-    prv_set(s, KM_REG_TORQUE_SWITCH, value);
 }
 
 uint32_t km_servo_params_gen(const km_servo_t *s)
@@ -767,7 +725,6 @@ static bool prv_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t len
         if (!prv_request(s, &req)) {
             prv_fail(s); /* §5.2 0x36: a protection whose cause still holds stays */
         } else {
-            s->clear_asked |= (uint8_t)(v & s->live.protections); /* logged as cleared, not released */
         }
         return true;
     case KM_REG_TORQUE_SWITCH:
@@ -919,9 +876,11 @@ static prv_report_t prv_multi_read(km_servo_t *s, const km_frame_view_t *f, km_r
 
 /* ---- extension command 0x7F --------------------------------------------- */
 
-/* "Extension command 0x7F": a read in this firmware's own address space.
- * Returns false for an address it does not have (bit 5, like a read). */
-static bool prv_ext_value(const km_servo_t *s, uint8_t addr, uint8_t *out, uint8_t *n)
+/* "Extension command 0x7F": a read in this firmware's own address space;
+ * what the dispatcher does not keep (the fault log) the firmware answers
+ * (ops->ext_read). Returns false for an address nobody has (bit 5, like a
+ * read). */
+static bool prv_ext_value(km_servo_t *s, uint8_t addr, uint8_t *out, uint8_t *n)
 {
     switch (addr) {
     case KM_EXT_USERDATA_SOURCE:
@@ -935,47 +894,22 @@ static bool prv_ext_value(const km_servo_t *s, uint8_t addr, uint8_t *out, uint8
     case KM_EXT_ACTIVE_BAUD:
         *n = km_put_le(out, s->active_baud / 100u, 2);
         return true;
-    case KM_EXT_FAULT_SUMMARY:
-        if (s->log == NULL) {
-            return false;
-        }
-        *n = (uint8_t)km_fault_log_summary(s->log, out);
-        return true;
-    default: {
-        /* 0x11 + n: fault-log entry n (0 = newest); one the log does not
-         * hold reads as 18 zero bytes (kind 0: no event) */
-        const uint8_t idx = (uint8_t)(addr - KM_EXT_FAULT_ENTRY);
-        if (s->log == NULL || addr < KM_EXT_FAULT_ENTRY || idx >= KM_FAULT_LOG_LEN) {
-            return false;
-        }
-        km_fault_entry_t e;
-        if (!km_fault_log_get(s->log, idx, &e)) {
-            memset(&e, 0, sizeof e);
-        }
-        *n = (uint8_t)km_fault_log_entry_bytes(&e, out);
-        return true;
-    }
+    default:
+        return s->ops != NULL && s->ops->ext_read != NULL && s->ops->ext_read(s->ops->ctx, addr, out, n) &&
+               *n <= KM_EXT_VALUE_MAX;
     }
 }
 
-#define EXT_VALUE_MAX KM_FAULT_ENTRY_SIZE /* the longest extension value */
-
-/* The value size an address always answers with: what the super-ID slots
- * are cut for, the same on every servo of the bus. */
-static uint16_t prv_ext_size(uint8_t addr)
+/* The value size an address always answers with (at least 2): what the
+ * super-ID slots are cut for, the same on every servo of the bus. */
+static uint16_t prv_ext_size(uint8_t n)
 {
-    if (addr == KM_EXT_FAULT_SUMMARY) {
-        return KM_FAULT_SUMMARY_SIZE;
-    }
-    if (addr >= KM_EXT_FAULT_ENTRY && addr < KM_EXT_FAULT_ENTRY + KM_FAULT_LOG_LEN) {
-        return KM_FAULT_ENTRY_SIZE;
-    }
-    return 2u;
+    return n > 2u ? n : 2u;
 }
 
 static void prv_ext_read(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply)
 {
-    uint8_t body[1 + EXT_VALUE_MAX];
+    uint8_t body[1 + KM_EXT_VALUE_MAX];
     uint8_t n = 0;
     if (f->body_len != 1 || !prv_ext_value(s, f->body[0], &body[1], &n)) {
         prv_exception(s);
@@ -984,7 +918,7 @@ static void prv_ext_read(km_servo_t *s, const km_frame_view_t *f, km_reply_t *re
     }
     body[0] = f->body[0];
     reply->len = km_encode_response(reply->bytes, km_servo_id(s), KM_CMD_EXT, body, (uint8_t)(1u + n));
-    reply->delay_us = prv_delay_us(s, f->id, (uint16_t)(7u + prv_ext_size(f->body[0])));
+    reply->delay_us = prv_delay_us(s, f->id, (uint16_t)(7u + prv_ext_size(n)));
 }
 
 /* ---- firmware update 0x78 (docs/update.md) ---------------------------- */

@@ -9,7 +9,6 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "km_fault_log.h"
 #include "km_frame.h"
 #include "km_product.h"
 #include "km_registers.h"
@@ -35,6 +34,11 @@ typedef struct {
      * answer's body, *answer_len its length (0: none). False: not served
      * here (status bit 5). NULL: 0x78 is not supported at all. */
     bool (*update)(void *ctx, const uint8_t *body, uint8_t n, uint8_t *answer, uint8_t *answer_len);
+    /* 0x7F of an extension register the firmware keeps (the fault log,
+     * KM_EXT_FAULT_*): its value into `out` (KM_EXT_VALUE_MAX bytes), *n
+     * its length, always the same for an address. False: no such register
+     * (bit 5). NULL: none. */
+    bool (*ext_read)(void *ctx, uint8_t addr, uint8_t *out, uint8_t *n);
     void *ctx;
 } km_servo_ops_t;
 
@@ -61,8 +65,6 @@ typedef struct {
     uint8_t userdata_source;      /* KM_USERDATA_*, extension register 0x01 */
     uint8_t reset_cause;          /* km_reset_cause_t of this boot, extension 0x02 */
     uint32_t params_gen;          /* bumped on every applied register change */
-    km_fault_log_t *log;          /* the fault log (km_servo_set_fault_log), or NULL */
-    uint8_t clear_asked;          /* 0x36 bits a clear request released, not yet seen in live */
     struct {
         bool full;
         uint8_t addr;
@@ -87,18 +89,11 @@ void km_servo_handle_view(km_servo_t *s, const km_frame_view_t *frame, km_reply_
  * answer reports it ("Status bits 5 and 6"). */
 void km_servo_note_checksum_error(km_servo_t *s);
 
-/* Control's live state, every tick. live->protecting makes 0x64 read 5
- * (set by the servo after a protection, not writable, §5.4); once released,
- * or when a hardware fault stopped it, 0x64 takes live->torque_switch.
- * New protections, releases and hardware faults go to the fault log. */
+/* Control's live state, every tick: the live registers, status bits 7
+ * and 0..3, 0x35's latch (until restart); 0x64 shows live->torque_switch
+ * whenever control set it by itself (live->torque_forced: 5 while a
+ * protection acts, §5.4, and what it returned to after). */
 void km_servo_set_live(km_servo_t *s, const km_live_t *live);
-
-/* The fault log the servo records into and 0x7F reads (km_fault_log.h);
- * the app keeps it in RAM that survives a reset. */
-void km_servo_set_fault_log(km_servo_t *s, km_fault_log_t *log);
-
-/* Control sets 0x64 to 5 after a protection (not writable from the bus). */
-void km_servo_set_torque_switch(km_servo_t *s, uint8_t value);
 
 /* The control registers decoded into engineering units (km_params.h). */
 void km_servo_control_params(const km_servo_t *s, km_control_params_t *out);
@@ -119,7 +114,9 @@ uint32_t km_servo_params_gen(const km_servo_t *s);
 #define KM_EXT_RESET_CAUSE 0x02u     /* u8 km_reset_cause_t (hal/km_hal_system.h) */
 #define KM_EXT_ACTIVE_BAUD 0x03u     /* u16 baud / 100 in force (0x10 may differ) */
 #define KM_EXT_FAULT_SUMMARY 0x10u   /* 7 B: u32 events ever, u8 held, u8 kept from before the reset, u8 16 */
-#define KM_EXT_FAULT_ENTRY 0x11u     /* 0x11 + n, n = 0 (newest) .. 15: 18 B, km_fault_log.h */
+#define KM_EXT_FAULT_ENTRY 0x11u     /* 0x11 + n, n = 0 (newest) .. 15: 18 B, firmware/app/km_fault_log.h */
+#define KM_EXT_FAULT_ENTRIES 16u
+#define KM_EXT_VALUE_MAX 18u         /* the longest extension value */
 
 /* Extension 0x01: where the user data in force came from at boot. The
  * values follow the store's mount results. */

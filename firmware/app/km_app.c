@@ -267,6 +267,7 @@ static void prv_control_tick(uint32_t now)
     km_hal_sensors_read(&sensors);
     km_control_step(&s_control, &sensors, prv_params(), dt_ticks / s_ticks_per_us, &live, &bridge);
     km_servo_set_live(&s_servo, &live);
+    km_fault_log_record(&s_fault_log, &live);
     prv_apply_bridge(&bridge);
 }
 
@@ -333,6 +334,32 @@ static bool prv_ops_update(void *ctx, const uint8_t *body, uint8_t n, uint8_t *a
     return true;
 }
 
+/* 0x7F of the fault log's extension registers (km_servo.h KM_EXT_FAULT_*):
+ * the summary, or entry n (0 = newest; one the log does not hold reads as
+ * 18 zero bytes, kind 0: no event). */
+static bool prv_ops_ext_read(void *ctx, uint8_t addr, uint8_t *out, uint8_t *n)
+{
+    (void)ctx;
+    if (addr == KM_EXT_FAULT_SUMMARY) {
+        *n = (uint8_t)km_fault_log_summary(&s_fault_log, out);
+        return true;
+    }
+    const uint8_t idx = (uint8_t)(addr - KM_EXT_FAULT_ENTRY);
+    if (addr < KM_EXT_FAULT_ENTRY || idx >= KM_EXT_FAULT_ENTRIES) {
+        return false;
+    }
+    km_fault_entry_t e;
+    if (!km_fault_log_get(&s_fault_log, idx, &e)) {
+        memset(&e, 0, sizeof e);
+    }
+    *n = (uint8_t)km_fault_log_entry_bytes(&e, out);
+    return true;
+}
+
+_Static_assert(KM_FAULT_ENTRY_SIZE <= KM_EXT_VALUE_MAX && KM_FAULT_SUMMARY_SIZE <= KM_EXT_VALUE_MAX,
+               "a fault-log value must fit the extension answer");
+_Static_assert(KM_EXT_FAULT_ENTRIES == KM_FAULT_LOG_LEN, "one extension register per fault-log entry");
+
 /* No bootloader unless the board says so (a board with one defines it). */
 __attribute__((weak)) bool km_board_boot_request(void)
 {
@@ -359,6 +386,7 @@ static const km_servo_ops_t s_ops = {
     .restart = prv_ops_restart,
     .request = prv_ops_request,
     .update = prv_ops_update,
+    .ext_read = prv_ops_ext_read,
     .ctx = NULL,
 };
 
@@ -402,7 +430,6 @@ void km_app_init(void)
     km_servo_set_userdata_source(&s_servo, (uint8_t)mount);
     km_servo_set_reset_cause(&s_servo, (uint8_t)km_hal_reset_cause());
     (void)km_fault_log_boot(&s_fault_log);
-    km_servo_set_fault_log(&s_servo, &s_fault_log);
     km_servo_control_params(&s_servo, &s_params);
     s_params_gen = km_servo_params_gen(&s_servo);
     km_control_init(&s_control, &s_params);

@@ -4,6 +4,7 @@
 #ifndef KM_APP_H
 #define KM_APP_H
 
+#include "km_fault_log.h"
 #include "km_hal_flash.h"
 #include "km_product.h"
 #include "km_servo.h"

@@ -7,6 +7,16 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+/* What changed at one control tick: the fault log's input (the app writes
+ * it, firmware/app/km_fault_log.h). Control is the one source: its
+ * supervisor and self-test report what they did, nothing re-derives it. */
+typedef struct {
+    uint8_t tripped;  /* protections that tripped (KM_PROT_* bits) */
+    uint8_t released; /* protections released by themselves (automatic release, or disabled by 0x32) */
+    uint8_t cleared;  /* protections released by a clear request (0x36 write) since the last tick */
+    uint8_t hw_found; /* hardware faults found (KM_HW_* bits) */
+} km_protect_events_t;
+
 /* Live state from control, copied in every control tick. */
 typedef struct {
     int32_t position;      /* 0.1 deg, zero offsets applied */
@@ -18,11 +28,15 @@ typedef struct {
     int32_t deviation;     /* 0.1 deg */
     uint32_t rotation_ms;  /* 0x4D */
     bool running;          /* status bit 7 */
-    bool protecting;       /* a protection acts on the output: 0x64 reads 5 */
-    uint8_t torque_switch; /* km_torque_t as control runs it (0x64); after a release, what it returns to */
+    bool protecting;       /* a protection acts on the output (torque_switch is PROTECTED) */
+    bool torque_forced;    /* control set the torque switch by itself at this tick (a protection
+                            * acts or just ended, a hardware fault stopped the output): 0x64
+                            * shows torque_switch; otherwise 0x64 keeps what the master wrote */
+    uint8_t torque_switch; /* km_torque_t as control runs it */
     uint8_t protections;   /* active protections, 0x36 bits / status bits 0..3 */
     uint8_t hw_faults;     /* 0x35 bits found by the self-test (latched) */
     uint32_t time_ms;      /* ms since control started: the fault log's clock */
+    km_protect_events_t events; /* what changed at this tick */
 } km_live_t;
 
 #endif

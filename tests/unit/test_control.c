@@ -288,6 +288,95 @@ static void test_s5_3_live_fields_from_sensors(void **state)
     }
 }
 
+/* Runs ticks of 1 ms until `done` holds for the live state or `max` ticks
+ * passed; returns the ticks run. */
+static unsigned run_until(const km_sensors_t *in, const km_control_params_t *cfg, km_live_t *live,
+                          bool (*done)(const km_live_t *), unsigned max)
+{
+    for (unsigned t = 1; t <= max; t++) {
+        *live = step(in, cfg, 1000);
+        if (done(live)) {
+            return t;
+        }
+    }
+    return max + 1u;
+}
+
+static bool has_event(const km_live_t *l)
+{
+    return (l->events.tripped | l->events.released | l->events.cleared | l->events.hw_found) != 0u;
+}
+
+/* The fault log's one source (issue 19): control reports each protection
+ * event once, at the tick it happens: a trip (§5.2 0x3C, 3 s detection),
+ * the release a clear request made (0x36 write: "cleared", at the next
+ * tick, never "released"), an automatic release ("released"), a hardware
+ * fault found (0x35). While a protection acts and at the tick it ends, and
+ * when a fault stops the output, it says it set the torque switch itself
+ * (torque_forced: 5 while acting, what it returns to after), and only then. */
+static void test_protection_events_reported_once(void **state)
+{
+    (void)state;
+    km_control_params_t cfg = cfg_of(0, 0, 0x02, 3);
+    cfg.prot_enable = KM_PROT_VOLTAGE;
+    cfg.prot_release = KM_PROT_VOLTAGE; /* only by command */
+    cfg.voltage_high_v = 14;
+    cfg.voltage_low_v = 6;
+    km_control_init(&c, &cfg);
+    km_sensors_t in = sensors_at(0);
+    in.voltage_mv = 7400;
+    in.temperature_c10 = 250;
+    km_live_t live;
+    assert_int_equal(run_until(&in, &cfg, &live, has_event, 100), 101u); /* a healthy boot: nothing */
+    assert_false(live.torque_forced);
+    in.voltage_mv = 5000;
+    const unsigned t = run_until(&in, &cfg, &live, has_event, 4000);
+    assert_true(t >= 3000u && t <= 3001u);
+    assert_int_equal(live.events.tripped, KM_PROT_VOLTAGE);
+    assert_int_equal(live.events.released | live.events.cleared | live.events.hw_found, 0);
+    assert_true(live.protecting && live.torque_forced);
+    assert_int_equal(live.torque_switch, KM_TORQUE_PROTECTED);
+    in.voltage_mv = 7400;
+    assert_int_equal(run_until(&in, &cfg, &live, has_event, 5000), 5001u); /* held: released only by command */
+    assert_true(live.protecting && live.torque_forced);
+    km_request_t clear;
+    memset(&clear, 0, sizeof clear);
+    clear.kind = KM_REQ_PROTECTION_CLEAR;
+    clear.u.clear = KM_PROT_VOLTAGE;
+    assert_true(km_control_request(&c, &clear, &cfg));
+    live = step(&in, &cfg, 1000);
+    assert_int_equal(live.events.cleared, KM_PROT_VOLTAGE);
+    assert_int_equal(live.events.tripped | live.events.released | live.events.hw_found, 0);
+    assert_false(live.protecting);
+    assert_true(live.torque_forced); /* the release tick: back to armed */
+    assert_int_equal(live.torque_switch, KM_TORQUE_ARMED);
+    live = step(&in, &cfg, 1000);
+    assert_false(has_event(&live));
+    assert_false(live.torque_forced);
+    /* automatic release: absent for 3 s */
+    cfg.prot_release = 0;
+    in.voltage_mv = 5000;
+    assert_true(run_until(&in, &cfg, &live, has_event, 4000) <= 4000u);
+    assert_int_equal(live.events.tripped, KM_PROT_VOLTAGE);
+    in.voltage_mv = 7400;
+    assert_true(run_until(&in, &cfg, &live, has_event, 4000) <= 4000u);
+    assert_int_equal(live.events.released, KM_PROT_VOLTAGE);
+    assert_int_equal(live.events.tripped | live.events.cleared | live.events.hw_found, 0);
+    assert_true(live.torque_forced);
+    /* a hardware fault the sensors flag: found once, the output stopped */
+    assert_true(run_until(&in, &cfg, &live, has_event, 10) == 11u);
+    assert_false(live.torque_forced);
+    in.faults = KM_HW_POSITION;
+    live = step(&in, &cfg, 1000);
+    assert_int_equal(live.events.hw_found, KM_HW_POSITION);
+    assert_true(live.torque_forced);
+    assert_int_equal(live.torque_switch, KM_TORQUE_FREE);
+    live = step(&in, &cfg, 1000);
+    assert_false(has_event(&live));
+    assert_false(live.torque_forced);
+    assert_int_equal(live.hw_faults, KM_HW_POSITION);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -299,6 +388,7 @@ int main(void)
         cmocka_unit_test(test_s5_3_speed_over_20ms_window),
         cmocka_unit_test(test_s5_3_speed_follows_direction),
         cmocka_unit_test(test_s5_3_live_fields_from_sensors),
+        cmocka_unit_test(test_protection_events_reported_once),
     };
     return cmocka_run_group_tests_name("control", tests, NULL, NULL);
 }

@@ -1,5 +1,5 @@
-/* The dispatcher's side of the servo <-> control seam (protocol/
- * km_servo_io.h, ../shared/DESIGN.md "The servo <-> control seam"):
+/* The dispatcher's side of the servo <-> control seam (include/km/,
+ * docs/architecture.md "Seams"):
  *  - km_servo_control_params() decodes the control registers into
  *    engineering units (0x11 bits, offsets, limits, 0x3C..0x3F fields,
  *    0x5A..0x5D, 0x64, the variant, the product's gains);
@@ -7,7 +7,9 @@
  *    only then;
  *  - a request control refuses is status bit 6 and changes nothing (0x64
  *    stays 3 when the rotation command that would turn it on is refused);
- *  - live.protecting makes 0x64 read 5 (the protection supervisor's hook). */
+ *  - 0x64 shows control's torque switch when control set it by itself
+ *    (live.torque_forced: 5 while a protection acts, what it returns to
+ *    after), and keeps the master's value otherwise. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -151,21 +153,31 @@ static void test_refused_request_is_bit6_and_changes_nothing(void **state)
     kt_ping_is(&fx, 1, 0x00);
 }
 
-/* live.protecting (set by the protection supervisor, a later issue) makes
- * 0x64 read 5; a write of 0..3 afterwards is a torque request as usual. */
+/* A protection acting (control forces its torque switch, 5) makes 0x64
+ * read 5; at the release control forces what 0x64 returns to; a tick that
+ * forces nothing leaves the master's value; a write of 0..3 afterwards is a
+ * torque request as usual. */
 static void test_protecting_reads_5(void **state)
 {
     (void)state;
     kt_init(&fx, kt_product_pot(), 1);
     km_live_t live = {0};
     live.protecting = true;
+    live.torque_forced = true;
+    live.torque_switch = KM_TORQUE_PROTECTED;
     km_servo_set_live(&fx.s, &live);
     const uint8_t five[1] = {5};
     kt_read(&fx, 1, 0x64);
     kt_reply_is_read(&fx, 1, 0x64, five, 1);
-    live.protecting = false;
+    live.protecting = false; /* the release: back to armed */
+    live.torque_switch = KM_TORQUE_ARMED;
     km_servo_set_live(&fx.s, &live);
+    assert_int_equal(km_servo_reg(&fx.s, KM_REG_TORQUE_SWITCH), 3);
     kt_write_u8(&fx, 1, 0x64, 0);
+    assert_int_equal(km_servo_reg(&fx.s, KM_REG_TORQUE_SWITCH), 0);
+    live.torque_forced = false; /* an ordinary tick: 0x64 is the master's */
+    live.torque_switch = KM_TORQUE_ON;
+    km_servo_set_live(&fx.s, &live);
     assert_int_equal(km_servo_reg(&fx.s, KM_REG_TORQUE_SWITCH), 0);
 }
 

@@ -380,7 +380,11 @@ static void test_s5_4_0x64_torque_switch(void **state)
     kt_write_u8(&fx, ID, 0x64, 5);
     kt_ping_is(&fx, ID, KM_ST_FAILED);
     assert_int_equal(reg_by_addr(0x64), 1);
-    km_servo_set_torque_switch(&fx.s, 5); /* control, after a protection */
+    km_live_t prot = {0}; /* control, after a protection: 0x64 = 5, set by the servo */
+    prot.protecting = true;
+    prot.torque_forced = true;
+    prot.torque_switch = KM_TORQUE_PROTECTED;
+    km_servo_set_live(&fx.s, &prot);
     kt_read(&fx, ID, 0x64);
     assert_int_equal(kt_read_le(&fx, 0x64), 5);
     const unsigned n = fx.fake.n_requests;

@@ -1,6 +1,7 @@
-/* protocol/km_fault_log.c: the ring of the last 16 protection and self-test
- * events, kept across a reset (RAM that the reset leaves), never across
- * damage: power-up garbage and a log torn mid-update start empty. */
+/* firmware/app/km_fault_log.c: the ring of the last 16 protection and
+ * self-test events, kept across a reset (RAM that the reset leaves), never
+ * across damage: power-up garbage and a log torn mid-update start empty;
+ * written from the events control reports with its live values. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -134,6 +135,52 @@ static void test_wire_forms(void **state)
     assert_memory_equal(b, want, sizeof want);
 }
 
+/* One control tick's events become entries in a fixed order (trips,
+ * clears, releases, hardware faults), each with that tick's live state
+ * (voltage and current clamped to their 16-bit fields, temperature in
+ * 0.1 degC); a tick without events adds nothing. */
+static void test_record_from_control_events(void **state)
+{
+    (void)state;
+    km_fault_log_t log;
+    memset(&log, 0, sizeof log);
+    (void)km_fault_log_boot(&log);
+    km_live_t live;
+    memset(&live, 0, sizeof live);
+    live.time_ms = 1234;
+    live.position = -40000;
+    live.voltage = 70000;
+    live.current = -40000;
+    live.temperature = 61;
+    km_fault_log_record(&log, &live);
+    assert_int_equal(log.total, 0);
+    live.events.tripped = 0x04;
+    live.events.cleared = 0x01;
+    live.events.released = 0x08;
+    live.events.hw_found = 0x20;
+    km_fault_log_record(&log, &live);
+    assert_int_equal(log.total, 4);
+    static const struct { uint8_t kind, bits; } want[4] = {
+        {KM_FAULT_EV_HW, 0x20}, {KM_FAULT_EV_RELEASE, 0x08}, {KM_FAULT_EV_CLEAR, 0x01}, {KM_FAULT_EV_TRIP, 0x04}};
+    for (uint8_t n = 0; n < 4; n++) { /* newest first */
+        km_fault_entry_t e;
+        assert_true(km_fault_log_get(&log, n, &e));
+        assert_int_equal(e.kind, want[n].kind);
+        assert_int_equal(e.bits, want[n].bits);
+        assert_int_equal(e.t_ms, 1234);
+        assert_int_equal(e.position, -40000);
+        assert_int_equal(e.voltage_mv, 65535);
+        assert_int_equal(e.current_ma, -32768);
+        assert_int_equal(e.temp_c10, 610);
+    }
+    live.events.tripped = 0;
+    live.events.cleared = 0;
+    live.events.released = 0x02;
+    live.events.hw_found = 0;
+    km_fault_log_record(&log, &live);
+    assert_int_equal(log.total, 5);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -142,6 +189,7 @@ int main(void)
         cmocka_unit_test(test_kept_across_reset),
         cmocka_unit_test(test_torn_update_is_not_kept),
         cmocka_unit_test(test_wire_forms),
+        cmocka_unit_test(test_record_from_control_events),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

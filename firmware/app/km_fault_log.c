@@ -61,6 +61,37 @@ void km_fault_log_add(km_fault_log_t *log, const km_fault_entry_t *e)
     log->check = prv_check(log);
 }
 
+/* One entry of `kind` with the live state it happened in. */
+static void prv_add_event(km_fault_log_t *log, const km_live_t *live, km_fault_kind_t kind, uint8_t bits)
+{
+    if (bits == 0u) {
+        return;
+    }
+    km_fault_entry_t e;
+    e.t_ms = live->time_ms;
+    e.position = live->position;
+    e.voltage_mv = (uint16_t)(live->voltage < 0 ? 0 : live->voltage > 65535 ? 65535 : live->voltage);
+    e.current_ma = (int16_t)(live->current < -32768 ? -32768 : live->current > 32767 ? 32767 : live->current);
+    e.temp_c10 = (int16_t)(live->temperature * 10);
+    e.kind = (uint8_t)kind;
+    e.bits = bits;
+    e.boots_ago = 0;
+    e.reserved = 0;
+    km_fault_log_add(log, &e);
+}
+
+void km_fault_log_record(km_fault_log_t *log, const km_live_t *live)
+{
+    const km_protect_events_t *ev = &live->events;
+    if ((ev->tripped | ev->cleared | ev->released | ev->hw_found) == 0u) {
+        return; /* the usual tick */
+    }
+    prv_add_event(log, live, KM_FAULT_EV_TRIP, ev->tripped);
+    prv_add_event(log, live, KM_FAULT_EV_CLEAR, ev->cleared);
+    prv_add_event(log, live, KM_FAULT_EV_RELEASE, ev->released);
+    prv_add_event(log, live, KM_FAULT_EV_HW, ev->hw_found);
+}
+
 bool km_fault_log_get(const km_fault_log_t *log, uint8_t n, km_fault_entry_t *out)
 {
     if (n >= log->held) {

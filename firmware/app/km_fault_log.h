@@ -2,8 +2,11 @@
  * why): the last KM_FAULT_LOG_LEN protection and self-test events, each with
  * when (ms since its boot, and which boot), what (trip, release, clear,
  * hardware fault, which bits) and the live state at that moment (supply,
- * current, temperature, position). Pure; read over the bus through the
- * extension command 0x7F (docs/protocol-decisions.md "Fault log").
+ * current, temperature, position). Pure. Written from the events control
+ * reports with its live values (km_fault_log_record: control is the one
+ * source of what tripped, released, was cleared or found), read over the
+ * bus through the extension command 0x7F, which the app serves from here
+ * (docs/protocol-decisions.md "Fault log").
  *
  * Kept across restarts, not across power loss: the log is plain RAM that
  * the board places where a reset does not clear it (.noinit on the MCU
@@ -17,6 +20,8 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+
+#include "km_live.h"
 
 #define KM_FAULT_LOG_LEN 16u
 #define KM_FAULT_ENTRY_SIZE 18u /* bytes of one entry on the wire */
@@ -57,6 +62,11 @@ bool km_fault_log_boot(km_fault_log_t *log);
 
 /* Adds an event (the oldest is dropped when full). */
 void km_fault_log_add(km_fault_log_t *log, const km_fault_entry_t *e);
+
+/* The events of one control tick (live->events), each kind that happened
+ * as one entry with the live state of that tick: trips, clears, releases,
+ * hardware faults, in that order. Nothing for a tick without events. */
+void km_fault_log_record(km_fault_log_t *log, const km_live_t *live);
 
 /* Entry `n`, 0 = the newest; false if there are not that many. */
 bool km_fault_log_get(const km_fault_log_t *log, uint8_t n, km_fault_entry_t *out);
