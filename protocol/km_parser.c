@@ -512,6 +512,70 @@ static bool prv_whole(km_parser_t *p, const uint8_t *f, uint32_t total, uint32_t
     return true;
 }
 
+/* What the idle step (window empty) did with the bytes from i. */
+typedef enum {
+    PRV_IDLE_NEXT,      /* an F9 went into the ring the byte way */
+    PRV_IDLE_WHOLE,     /* a whole frame judged where it lies (maybe handed out) */
+    PRV_IDLE_CANDIDATE, /* a whole header inside the gap: the run takes it */
+} prv_idle_t;
+
+/* Idle, from the F9 at bytes[i]: a whole header already here has its
+ * length known before a byte is stored (what the byte way knows after its
+ * fourth byte). A whole frame inside the gap is judged where it lies;
+ * otherwise the run takes the header into the ring, or the F9 goes the
+ * byte way. Returns the next i. Inlined into the batch loop, its only
+ * caller. */
+static inline __attribute__((always_inline)) uint32_t prv_idle(km_parser_t *p, const uint8_t *bytes,
+                                                                const uint32_t *ticks, uint32_t n, uint32_t i,
+                                                                unsigned *events, km_parser_out_t *out,
+                                                                prv_idle_t *what)
+{
+    const uint32_t avail = n - i;
+    const uint32_t total = avail >= 4u ? prv_header_total(&bytes[i]) : 0u;
+    if (total != 0u && total <= avail && prv_gapless(&ticks[i], total, ticks[i], p->gap_ticks) == total &&
+        prv_whole(p, &bytes[i], total, ticks[i + total - 1u], events, out)) {
+        *what = PRV_IDLE_WHOLE;
+        return i + total;
+    }
+    if (total != 0u && (uint32_t)(ticks[i + 3u] - ticks[i]) <= p->gap_ticks) {
+        p->need = (uint16_t)total;
+        p->last_tick = ticks[i];
+        *what = PRV_IDLE_CANDIDATE;
+        return i;
+    }
+    prv_push(p, KM_HDR0, ticks[i]);
+    *what = PRV_IDLE_NEXT;
+    return i + 1u;
+}
+
+/* Inside a candidate of known length: the bytes of a run toward its end,
+ * as long as no gap cuts it (prv_gapless), and never shorter than the
+ * rest of a header checked whole by prv_idle; 0 leaves byte i to the byte
+ * way (a gap right before it is a cut). *whole: the run completed the
+ * candidate (judged, maybe handed out). Inlined into the batch loop. */
+static inline __attribute__((always_inline)) uint32_t prv_run(km_parser_t *p, const uint8_t *bytes,
+                                                               const uint32_t *ticks, uint32_t n, uint32_t i,
+                                                               unsigned *events, km_parser_out_t *out,
+                                                               bool *whole)
+{
+    const uint16_t fill = p->fill;
+    if (p->need > fill && !p->pending && p->stale == 0u) {
+        const uint32_t k_need = (uint32_t)p->need - fill;
+        const uint32_t k_min = fill < 4u ? 4u - fill : 1u;
+        const uint32_t k = prv_gapless(&ticks[i], k_need < n - i ? k_need : n - i, p->last_tick, p->gap_ticks);
+        if (k >= k_min) {
+            prv_append(p, &bytes[i], k);
+            p->last_tick = ticks[i + k - 1u];
+            *whole = k == k_need;
+            if (*whole) {
+                *events |= prv_complete(p, out);
+            }
+            return k;
+        }
+    }
+    return 0u;
+}
+
 unsigned km_parser_feed_bytes(km_parser_t *p, const uint8_t *bytes, const uint32_t *ticks,
                               uint32_t n, uint32_t *used, km_parser_out_t *out)
 {
@@ -526,52 +590,26 @@ unsigned km_parser_feed_bytes(km_parser_t *p, const uint8_t *bytes, const uint32
                     return events;
                 }
             }
-            /* A whole header already here: its length is known before a
-             * byte is stored (what the byte way knows after its fourth
-             * byte). A whole frame inside the gap is judged where it lies;
-             * otherwise the run below takes the header into the ring. */
-            const uint32_t avail = n - i;
-            const uint32_t total = avail >= 4u ? prv_header_total(&bytes[i]) : 0u;
-            if (total != 0u && total <= avail &&
-                prv_gapless(&ticks[i], total, ticks[i], p->gap_ticks) == total &&
-                prv_whole(p, &bytes[i], total, ticks[i + total - 1u], &events, out)) {
-                i += total;
+            prv_idle_t what;
+            i = prv_idle(p, bytes, ticks, n, i, &events, out, &what);
+            if (what == PRV_IDLE_NEXT) {
+                continue;
+            }
+            if (what == PRV_IDLE_WHOLE) {
                 if (events & KM_PARSE_FRAME) {
                     break;
                 }
                 continue;
             }
-            if (total != 0u && (uint32_t)(ticks[i + 3u] - ticks[i]) <= p->gap_ticks) {
-                p->need = (uint16_t)total;
-                p->last_tick = ticks[i];
-            } else {
-                prv_push(p, KM_HDR0, ticks[i]);
-                i++;
-                continue;
-            }
         }
-        const uint16_t fill = p->fill;
-        if (p->need > fill && !p->pending && p->stale == 0u) {
-            /* Inside a candidate of known length: a run toward its end,
-             * as long as no gap cuts it (prv_gapless), and never shorter
-             * than the rest of a header checked whole above. A gap right
-             * before byte i goes the byte way (a cut). */
-            const uint32_t k_need = (uint32_t)p->need - fill;
-            const uint32_t k_min = fill < 4u ? 4u - fill : 1u;
-            const uint32_t k = prv_gapless(&ticks[i], k_need < n - i ? k_need : n - i,
-                                           p->last_tick, p->gap_ticks);
-            if (k >= k_min) {
-                prv_append(p, &bytes[i], k);
-                p->last_tick = ticks[i + k - 1u];
-                i += k;
-                if (k == k_need) {
-                    events |= prv_complete(p, out);
-                    if (events & KM_PARSE_FRAME) {
-                        break;
-                    }
-                }
-                continue;
+        bool whole = false;
+        const uint32_t k = prv_run(p, bytes, ticks, n, i, &events, out, &whole);
+        if (k != 0u) {
+            i += k;
+            if (whole && (events & KM_PARSE_FRAME)) {
+                break;
             }
+            continue;
         }
         events |= prv_feed_one(p, bytes[i], ticks[i], out);
         i++;
