@@ -5,37 +5,28 @@
 #include "km_registers_range.h"
 
 const km_reg_t km_reg_table[KM_REG_COUNT] = {
-#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi) \
-    {addr, access, persisted, layout, #ident},
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) \
+    {addr, access, persisted, layout, (uint8_t)(multi)},
 #include "km_registers.def"
 #undef KM_REG
 };
 
-int km_reg_find(uint8_t addr)
-{
-    /* The table is sorted by address: a binary search keeps the cost at
-     * six probes for 47 registers. */
-    int lo = 0;
-    int hi = (int)KM_REG_COUNT - 1;
-    while (lo <= hi) {
-        const int mid = (lo + hi) / 2;
-        if (km_reg_table[mid].addr == addr) {
-            return mid;
-        }
-        if (km_reg_table[mid].addr < addr) {
-            lo = mid + 1;
-        } else {
-            hi = mid - 1;
-        }
-    }
-    return -1;
-}
+const uint8_t km_reg_by_addr[KM_REG_ADDR_SPAN] = {
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) [addr] = KM_REG_##ident + 1,
+#include "km_registers.def"
+#undef KM_REG
+};
+
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) \
+    _Static_assert((addr) < KM_REG_ADDR_SPAN, "register address beyond km_reg_by_addr");
+#include "km_registers.def"
+#undef KM_REG
 
 static uint32_t prv_default_raw(km_reg_index_t reg, const km_product_t *p)
 {
     (void)p;
     switch (reg) {
-#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi) \
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) \
     case KM_REG_##ident:                                            \
         return (uint32_t)(def);
 #include "km_registers.def"
@@ -104,51 +95,61 @@ static bool prv_cross_check(km_reg_index_t reg, uint32_t packed)
     }
 }
 
+/* Bytes a write of `layout` takes: its fixed size, 2 or 4 (`len`) for a
+ * move; 0 for a layout no checked write has (computed or action values,
+ * checked by their hooks). */
+static uint8_t prv_write_size(km_layout_t layout, uint8_t len)
+{
+    switch (layout) {
+    case KM_L_U8:
+    case KM_L_BITS8:
+    case KM_L_I8:
+    case KM_L_U16:
+    case KM_L_I16:
+    case KM_L_U8U8:
+    case KM_L_U16U8:
+        return km_reg_fixed_size_const(layout);
+    case KM_L_MOVE:
+        return len == 4u ? 4u : 2u;
+    default:
+        return 0u;
+    }
+}
+
+/* The first field of a write's bytes, as the number it means. */
+static int32_t prv_first_field(km_layout_t layout, const uint8_t *data)
+{
+    switch (layout) {
+    case KM_L_I8:
+        return (int8_t)data[0];
+    case KM_L_I16:
+    case KM_L_MOVE:
+        return (int16_t)km_get_le(data, 2);
+    case KM_L_U16:
+    case KM_L_U16U8:
+        return (int32_t)km_get_le(data, 2);
+    default: /* KM_L_U8, KM_L_U8U8 */
+        return data[0];
+    }
+}
+
 bool km_reg_validate(km_reg_index_t reg, const km_product_t *p, const uint8_t *data,
                      uint8_t len, uint32_t *packed)
 {
     const km_layout_t layout = (km_layout_t)km_reg_table[reg].layout;
     int32_t lo, hi;
     km_reg_range(reg, p, &lo, &hi);
-    int32_t first;
-    switch (layout) {
-    case KM_L_U8:
-        if (len != 1) return false;
-        first = data[0];
-        break;
-    case KM_L_BITS8:
-        /* "Reserved bits": the vendor's tables mark them "retain", and
-         * masters write whole bytes: accepted, kept at 0. */
-        if (len != 1) return false;
-        *packed = (uint32_t)data[0] & (uint32_t)hi;
-        return true;
-    case KM_L_I8:
-        if (len != 1) return false;
-        first = (int8_t)data[0];
-        break;
-    case KM_L_U16:
-    case KM_L_U16U8:
-        if (len != km_reg_fixed_size(layout)) return false;
-        first = (int32_t)km_get_le(data, 2);
-        break;
-    case KM_L_I16:
-        if (len != 2) return false;
-        first = (int16_t)km_get_le(data, 2);
-        break;
-    case KM_L_U8U8:
-        if (len != 2) return false;
-        if (!prv_in(data[1], lo, hi)) return false;
-        first = data[0];
-        break;
-    case KM_L_MOVE:
-        if (len != 2 && len != 4) return false;
-        first = (int16_t)km_get_le(data, 2);
-        break;
-    default:
-        /* Computed or action layouts are checked by the dispatcher. */
+    const uint8_t size = prv_write_size(layout, len);
+    if (size == 0u || len != size) {
         return false;
     }
-    if (!prv_in(first, lo, hi)) {
+    if (layout == KM_L_BITS8) {
+        /* "Reserved bits": the vendor's tables mark them "retain", and
+         * masters write whole bytes: accepted, kept at 0. */
+        *packed = (uint32_t)data[0] & (uint32_t)hi;
+        return true;
+    }
+    if ((layout == KM_L_U8U8 && !prv_in(data[1], lo, hi)) || !prv_in(prv_first_field(layout, data), lo, hi)) {
         return false;
     }
     *packed = km_get_le(data, len);

@@ -30,7 +30,7 @@ typedef enum {
 } km_layout_t;
 
 typedef enum {
-#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi) KM_REG_##ident,
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) KM_REG_##ident,
 #include "km_registers.def"
 #undef KM_REG
     KM_REG_COUNT
@@ -39,23 +39,41 @@ typedef enum {
 /* How many registers are user data (P), at compile time, to size arrays. */
 enum {
     KM_REG_PERSISTED_COUNT = 0
-#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi) +(persisted) // NOLINT(bugprone-macro-parentheses)
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) +(persisted) // NOLINT(bugprone-macro-parentheses)
 #include "km_registers.def"
 #undef KM_REG
 };
+
+/* 0x83 multi-ID write: the parameter sizes a register takes, one bit each
+ * (the .def's `multi` column; 0 = not multi-writable). */
+#define KM_K(n) (1u << (n))
 
 typedef struct {
     uint8_t addr;
     uint8_t access;    /* km_access_t */
     uint8_t persisted; /* 1 = user data */
     uint8_t layout;    /* km_layout_t */
-    const char *name;
+    uint8_t multi;     /* KM_K() bits: sizes an 0x83 entry may have, 0 = none */
 } km_reg_t;
 
 extern const km_reg_t km_reg_table[KM_REG_COUNT];
 
-/* Table index of an address, or -1 for a reserved/unknown address. */
-int km_reg_find(uint8_t addr);
+/* The register's name as the .def spells it (tools and tests; the
+ * firmware does not link it). */
+extern const char *const km_reg_names[KM_REG_COUNT];
+
+/* Register index + 1 by address, 0 where there is none (generated from
+ * the .def; a repeated address would be a repeated initializer, which
+ * -Woverride-init refuses). Every register address is below the span. */
+#define KM_REG_ADDR_SPAN 128u
+extern const uint8_t km_reg_by_addr[KM_REG_ADDR_SPAN];
+
+/* Table index of an address, or -1 for a reserved/unknown address: one
+ * load (every read and write looks one up). */
+static inline int km_reg_find(uint8_t addr)
+{
+    return addr < KM_REG_ADDR_SPAN ? (int)km_reg_by_addr[addr] - 1 : -1;
+}
 
 uint32_t km_reg_default(km_reg_index_t reg, const km_product_t *p);
 

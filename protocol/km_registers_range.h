@@ -15,7 +15,7 @@ static inline void km_reg_range(km_reg_index_t reg, const km_product_t *p, int32
 {
     (void)p;
     switch (reg) {
-#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi) \
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) \
     case KM_REG_##ident:                                            \
         *lo_out = (int32_t)(lo);                                    \
         *hi_out = (int32_t)(hi);                                    \

@@ -1,19 +1,29 @@
-/* The servo as the bus sees it: the register file, the status byte, the
- * sync-write buffer, and the dispatcher that turns a validated frame into
- * changes, typed requests to the rest of the firmware, and an answer
- * (PROTOCOL.md §3, §4, §5). Pure logic: no hardware, no heap. Decisions
- * where the spec is open are in docs/protocol-decisions.md. */
+/* The servo as the bus sees it (PROTOCOL.md §3, §4, §5): a validated frame
+ * in, register changes, typed requests to the rest of the firmware and at
+ * most one answer out. Pure logic: no hardware, no heap. Decisions where
+ * the spec is open are in docs/protocol-decisions.md; how the pieces fit,
+ * docs/architecture.md:
+ *   km_servo.c        the command table and the frame's way through it
+ *                     (ID rules, bits 5/6), ping, read, write, sync write;
+ *   km_regfile.[ch]   the register file and status bits;
+ *   km_hook_*.c       one hook per register that is more than a stored
+ *                     value (km_registers.def names them): all wire
+ *                     decoding of actions happens there;
+ *   km_cmd_multi.c    0x82 and 0x83; km_ext.[ch] 0x7F; km_cmd_update.c 0x78;
+ *   km_params.c       the control registers in engineering units. */
 #ifndef KM_SERVO_H
 #define KM_SERVO_H
 
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "km_ext.h"
 #include "km_frame.h"
-#include "km_product.h"
-#include "km_registers.h"
 #include "km_live.h"
 #include "km_params.h"
+#include "km_product.h"
+#include "km_regfile.h"
+#include "km_registers.h"
 #include "km_request.h"
 #include "km_status.h"
 
@@ -50,21 +60,14 @@ typedef struct {
     uint32_t delay_us;
 } km_reply_t;
 
-typedef struct {
-    const km_product_t *product;
+typedef struct km_servo {
+    km_regfile_t reg;             /* values, status bits, control's report */
     const km_servo_ops_t *ops;
-    uint32_t value[KM_REG_COUNT]; /* register file, wire bytes packed LE */
     uint32_t active_baud;         /* bps in force until restart (0x10 applies then) */
-    uint32_t prng;                /* xorshift32 state for the 0x01 random byte */
     uint32_t slot_floor_us;       /* least answer slot (emulated boards; 0 = the rule) */
-    km_live_t live;
-    uint8_t flags;                /* bits 5/6 of the command being handled */
-    uint8_t unreported;           /* bits 5/6 no status answer has carried yet */
     bool restarting;              /* a restart was requested: nothing more runs */
-    uint8_t hw_latched;           /* 0x35, latched until restart */
     uint8_t userdata_source;      /* KM_USERDATA_*, extension register 0x01 */
     uint8_t reset_cause;          /* km_reset_cause_t of this boot, extension 0x02 */
-    uint32_t params_gen;          /* bumped on every applied register change */
     struct {
         bool full;
         uint8_t addr;
@@ -102,30 +105,14 @@ void km_servo_control_params(const km_servo_t *s, km_control_params_t *out);
  * 0x64 turned on by a rotation command): decode the params again only then. */
 uint32_t km_servo_params_gen(const km_servo_t *s);
 
-/* This firmware's extension registers, read with command 0x7F ("customer
- * custom", PROTOCOL.md §7) so they stay out of the vendor's register map:
- * `F9 FF id 03 7F addr cs` answers `F9 F5 id len 7F addr value cs`.
- * docs/protocol-decisions.md "Extension command 0x7F" has the frames. */
-#define KM_CMD_EXT 0x7Fu
-#define KM_CMD_UPDATE_FW 0x78u   /* docs/update.md */
+/* 0x78 firmware update (docs/update.md), the application's side. */
+#define KM_CMD_UPDATE_FW 0x78u
 #define KM_UPDATE_ANSWER_MAX 80u
-#define KM_UPDATE_SUB_ENTER 0x01u  /* accepted by ops->update: the firmware restarts */
-#define KM_EXT_USERDATA_SOURCE 0x01u /* u8 KM_USERDATA_*: where the user data came from */
-#define KM_EXT_RESET_CAUSE 0x02u     /* u8 km_reset_cause_t (hal/km_hal_system.h) */
-#define KM_EXT_ACTIVE_BAUD 0x03u     /* u16 baud / 100 in force (0x10 may differ) */
-#define KM_EXT_FAULT_SUMMARY 0x10u   /* 7 B: u32 events ever, u8 held, u8 kept from before the reset, u8 16 */
-#define KM_EXT_FAULT_ENTRY 0x11u     /* 0x11 + n, n = 0 (newest) .. 15: 18 B, firmware/app/km_fault_log.h */
-#define KM_EXT_FAULT_ENTRIES 16u
-#define KM_EXT_VALUE_MAX 18u         /* the longest extension value */
+#define KM_UPDATE_SUB_ENTER 0x01u /* accepted by ops->update: the firmware restarts */
 
-/* Extension 0x01: where the user data in force came from at boot. The
- * values follow the store's mount results. */
-#define KM_USERDATA_LOADED 0u           /* from flash, as committed */
-#define KM_USERDATA_MIGRATED 1u         /* from flash; registers new to this firmware at defaults */
-#define KM_USERDATA_DEFAULTS_BLANK 2u   /* product defaults: flash erased (first boot) */
-#define KM_USERDATA_DEFAULTS_INVALID 3u /* product defaults: no valid record in flash */
-#define KM_USERDATA_DEFAULTS_SCHEMA 4u  /* product defaults: stored layout from another version */
-#define KM_USERDATA_UNAVAILABLE 5u      /* store unusable: defaults, commits fail (bit 6) */
+/* Extension 0x01: where the user data in force came from at boot
+ * (KM_USERDATA_*, km_ext.h); KM_USERDATA_UNAVAILABLE also latches 0x35
+ * bit 1 (memory). */
 void km_servo_set_userdata_source(km_servo_t *s, uint8_t source);
 
 /* Extension 0x02: why the MCU last reset (the hal's km_reset_cause_t). */
@@ -142,7 +129,12 @@ void km_servo_set_active_baud(km_servo_t *s, uint32_t baud);
 #define KM_SLOT_FLOOR_MAX_US 1000000u
 void km_servo_set_slot_floor_us(km_servo_t *s, uint32_t us);
 
-uint8_t km_servo_id(const km_servo_t *s);
+/* 0x0F, the ID in force (a write applies it at once; its answer uses the old one). */
+static inline uint8_t km_servo_id(const km_servo_t *s)
+{
+    return (uint8_t)km_regfile_get(&s->reg, KM_REG_ID);
+}
+
 uint32_t km_servo_active_baud(const km_servo_t *s);
 uint8_t km_servo_status(const km_servo_t *s);
 

@@ -6,6 +6,7 @@ with their object file, frame size and call edges, taken from the ELF
 Why the disassembly and not the source: what the checks guard (a function
 running from flash, a stack frame, a libgcc helper) only exists after the
 compiler and linker have chosen inlining, clones and placement."""
+import fnmatch
 import re
 import subprocess
 from pathlib import Path
@@ -329,12 +330,16 @@ class Image:
 
     def by_name(self, name):
         """Functions a config name denotes: "fn" or "fn@object.c.obj"; a
-        clone suffix (.isra.0) is matched too."""
+        clone suffix (.isra.0) is matched too. The function part may be a
+        shell pattern ("km_rd_*": every read hook of a table), so a table
+        of callbacks named alike needs no entry per callback."""
         want, _, obj = name.partition("@")
+        pattern = any(ch in want for ch in "*?[")
         out = []
         for f in self.funcs.values():
             for n in f.names:
-                if n == want or re.sub(r"(\.(isra|constprop|part)(\.\d+)?)+$", "", n) == want:
+                base = re.sub(r"(\.(isra|constprop|part)(\.\d+)?)+$", "", n)
+                if n == want or base == want or (pattern and fnmatch.fnmatchcase(base, want)):
                     if not obj or (f.obj and f.obj.rstrip(")").endswith(obj)):
                         out.append(f)
                     break

@@ -114,7 +114,7 @@ int main(int argc, char **argv)
     printf("|---|---|---|---|---|---|---|\n");
     for (unsigned i = 0; i < KM_REG_COUNT; i++) {
         const km_reg_t *r = &km_reg_table[i];
-        printf("| 0x%02X | %s | %s | %s | %s | ", r->addr, r->name, regdoc_access_name(r->access),
+        printf("| 0x%02X | %s | %s | %s | %s | ", r->addr, km_reg_names[i], regdoc_access_name(r->access),
                r->persisted ? "P" : "", layout_name(r->layout));
         if (!regdoc_has_stored_default(r)) {
             printf("—");

@@ -142,7 +142,7 @@ int regdoc_json(void)
     for (unsigned i = 0; i < KM_REG_COUNT; i++) {
         const regdoc_doc_t *d = &regdoc_docs[i];
         if (d->title == NULL || d->description == NULL || d->scale == 0.0) {
-            fprintf(stderr, "km_registers_doc.def: no row for %s\n", km_reg_table[i].name);
+            fprintf(stderr, "km_registers_doc.def: no row for %s\n", km_reg_names[i]);
             return 1;
         }
     }
@@ -159,7 +159,7 @@ int regdoc_json(void)
         const layout_info_t *li = &s_layouts[r->layout];
         char name[32];
         unsigned n = 0;
-        for (const char *c = r->name; *c != '\0' && n + 1u < sizeof name; c++, n++) {
+        for (const char *c = km_reg_names[i]; *c != '\0' && n + 1u < sizeof name; c++, n++) {
             name[n] = (char)(*c >= 'A' && *c <= 'Z' ? *c - 'A' + 'a' : *c);
         }
         name[n] = '\0';

@@ -79,7 +79,7 @@ static void prv_check_registers(void)
         uint8_t bytes[4];
         uint32_t packed;
         km_put_le(bytes, km_servo_reg(s, (km_reg_index_t)i), size);
-        prv_check(km_reg_validate((km_reg_index_t)i, s->product, bytes, size, &packed));
+        prv_check(km_reg_validate((km_reg_index_t)i, s->reg.product, bytes, size, &packed));
     }
 }
 
@@ -157,11 +157,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     /* RAM equals flash: a reset reads back exactly the user data in force. */
     const km_servo_t *s = km_app_servo();
     uint32_t before[KM_REG_COUNT];
-    memcpy(before, s->value, sizeof before);
+    memcpy(before, s->reg.value, sizeof before);
     kf_boot(KM_RESET_PIN);
     for (unsigned i = 0; i < KM_REG_COUNT; i++) {
         if (km_reg_table[i].persisted) {
-            prv_check(s->value[i] == before[i]);
+            prv_check(s->reg.value[i] == before[i]);
         }
     }
 

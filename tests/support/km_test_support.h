@@ -460,14 +460,14 @@ typedef struct {
 static inline void kt_snap(const kt_fx_t *fx, kt_snap_t *sn)
 {
     memset(sn, 0, sizeof *sn);
-    memcpy(sn->value, fx->s.value, sizeof sn->value);
+    memcpy(sn->value, fx->s.reg.value, sizeof sn->value);
     sn->active_baud = fx->s.active_baud;
-    sn->hw_latched = fx->s.hw_latched;
+    sn->hw_latched = fx->s.reg.hw_latched;
     sn->sync_full = fx->s.sync.full;
     sn->sync_addr = fx->s.sync.addr;
     sn->sync_len = fx->s.sync.len;
     memcpy(sn->sync_data, fx->s.sync.data, sizeof sn->sync_data);
-    sn->unreported = fx->s.unreported;
+    sn->unreported = fx->s.reg.unreported;
     sn->restarting = fx->s.restarting;
     sn->userdata_source = fx->s.userdata_source;
     sn->reset_cause = fx->s.reset_cause;

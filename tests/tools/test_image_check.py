@@ -134,6 +134,19 @@ class ImageCheckTest(unittest.TestCase):
         self.assertIn("indirect call in Reset_Handler", out)
         self.assertIn("callback [t.o]: address taken", out)
 
+    def test_indirect_call_described_by_patterns(self):
+        # A shell pattern names a table's callbacks (km_rd_*) and a caller
+        # (its object given); one that names nothing leaves the callback
+        # unclaimed, and that fails as a missing description does.
+        cfg = self.config(describe=False)
+        cfg["indirect"] = {"Reset_*@t.o": ["call*"]}
+        rc, out = self.check(self.build(), cfg)
+        self.assertEqual(rc, 0, out)
+        cfg["indirect"] = {"Reset_Handler": ["cb_*"]}
+        rc, out = self.check(self.build(), cfg)
+        self.assertEqual(rc, 1, out)
+        self.assertIn("callback [t.o]: address taken", out)
+
     def test_stack_over_reserve_fails(self):
         rc, out = self.check(self.build(stack=64), self.config())
         self.assertEqual(rc, 1, out)

@@ -9,6 +9,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include "km_hooks.h"
 #include "km_test_support.h"
 
 #define ID 9
@@ -409,10 +410,48 @@ static void test_s5_persisted_values_checked_at_init(void **state)
     assert_int_equal(km_servo_reg(&fx.s, KM_REG_TORQUE_LIMIT), 1000);
 }
 
+/* km_registers.def's behaviour columns agree with its access column: a
+ * register has a read hook exactly when it is readable and a write hook
+ * exactly when it is writable (`none` otherwise); 0x83 takes exactly the
+ * §3 list (0x64 one byte, 0x65/0x66 two or four, 0x68/0x6E/0x6F two). */
+static void test_s5_behaviour_columns_match_access(void **state)
+{
+    (void)state;
+    for (unsigned i = 0; i < KM_REG_COUNT; i++) {
+        const km_reg_t *r = &km_reg_table[i];
+        if (((r->access & KM_R) != 0) != (km_reg_read[i] != km_rd_none)) {
+            fail_msg("0x%02X %s: read hook and access disagree", r->addr, km_reg_names[i]);
+        }
+        if (((r->access & KM_W) != 0) != (km_reg_write[i] != km_wr_none)) {
+            fail_msg("0x%02X %s: write hook and access disagree", r->addr, km_reg_names[i]);
+        }
+        uint8_t want = 0;
+        switch (r->addr) {
+        case 0x64: want = KM_K(1); break;
+        case 0x65: case 0x66: want = KM_K(2) | KM_K(4); break;
+        case 0x68: case 0x6E: case 0x6F: want = KM_K(2); break;
+        default: break;
+        }
+        assert_int_equal(r->multi, want);
+        assert_true(r->multi == 0u || (r->access & KM_W));
+    }
+    /* the address look-up finds every row, and nothing else */
+    for (unsigned a = 0; a < 256u; a++) {
+        int want = -1;
+        for (unsigned i = 0; i < KM_REG_COUNT; i++) {
+            if (km_reg_table[i].addr == a) {
+                want = (int)i;
+            }
+        }
+        assert_int_equal(km_reg_find((uint8_t)a), want);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_s5_defaults_read_back),
+        cmocka_unit_test(test_s5_behaviour_columns_match_access),
         cmocka_unit_test(test_s5_every_rw_register_covered),
         cmocka_unit_test(test_s5_rw_range_edges),
         cmocka_unit_test(test_s5_persisted_writes_committed),

@@ -1,0 +1,151 @@
+/* Write hooks of the configuration actions: restart (0x02), user-data
+ * reset (0x03), the zero-offset increment (0x18), zeroing by a 0x46 write,
+ * and the protection clear (0x36). */
+#include "km_hooks.h"
+
+#include <string.h>
+
+#include "km_servo.h"
+
+static const uint8_t s_restart_magic[4] = {0xE1, 0xE2, 0xE3, 0xE4};
+
+static bool prv_is_encoder(const km_servo_t *s)
+{
+    return s->reg.product->variant == KM_VARIANT_ENCODER;
+}
+
+/* 0x02: exactly E1 E2 E3 E4 restarts at once ("Restart": nothing after
+ * this frame may run, no answer); anything else is a bad value. */
+void km_wr_restart(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t len)
+{
+    (void)r;
+    if (len != 4 || memcmp(d, s_restart_magic, 4) != 0) {
+        km_regfile_fail(&s->reg);
+        return;
+    }
+    s->restarting = true;
+    if (s->ops && s->ops->restart) {
+        s->ops->restart(s->ops->ctx);
+    }
+}
+
+/* A default packed as km_reg_default() packs it (the wire bytes of a
+ * fixed layout shorter than 4). Always inlined: with a constant layout it
+ * folds to a mask or nothing. */
+static inline __attribute__((always_inline)) uint32_t prv_pack_default(uint32_t v, km_layout_t layout)
+{
+    const uint8_t size = km_reg_fixed_size_const(layout);
+    return size > 0u && size < 4u ? v & ((1u << (8u * size)) - 1u) : v;
+}
+
+/* The registers a user-data reset writes back and their defaults, straight
+ * from the register table at compile time (no loop over the 47 registers,
+ * no look-up, no switch per register): persisted and writable from the bus.
+ * "User-data reset": factory data (persisted, not writable from the bus:
+ * the level-1 zero offset 0x16) is per-unit calibration that no master
+ * could write back, so no level resets it; §5.1 0x03 level 1 keeps ID,
+ * baud and both zero offsets. Returns how many. */
+static uint8_t prv_reset_list(const km_product_t *p, uint8_t level, uint8_t *regs, uint8_t *addrs,
+                              uint32_t *values)
+{
+    uint8_t n = 0;
+    const bool keep_ids = level == 1;
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr)                 \
+    if ((persisted) && ((access) & KM_W) &&                                                     \
+        !(keep_ids && (KM_REG_##ident == KM_REG_ID || KM_REG_##ident == KM_REG_BAUD ||          \
+                       KM_REG_##ident == KM_REG_ZERO_OFFSET2))) {                               \
+        regs[n] = (uint8_t)KM_REG_##ident;                                                      \
+        addrs[n] = (addr);                                                                      \
+        values[n] = prv_pack_default((uint32_t)(def), (layout));                                \
+        n++;                                                                                    \
+    }
+#include "km_registers.def"
+#undef KM_REG
+    return n;
+}
+
+/* 0x03: 1 resets the user data but ID, baud and zero offsets, 2 all of
+ * it; committed all or nothing, then applied. */
+void km_wr_userdata_reset(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t len)
+{
+    uint32_t level;
+    if (!km_reg_validate(r, s->reg.product, d, len, &level)) {
+        km_regfile_fail(&s->reg);
+        return;
+    }
+    /* The register indexes are kept beside the addresses, so applying the
+     * committed values needs no look-up by address. */
+    uint8_t regs[KM_REG_PERSISTED_COUNT];
+    uint8_t addrs[KM_REG_PERSISTED_COUNT];
+    uint32_t values[KM_REG_PERSISTED_COUNT];
+    const uint8_t n = prv_reset_list(s->reg.product, (uint8_t)level, regs, addrs, values);
+    if (!km_hook_commit(s, addrs, values, n)) {
+        km_regfile_fail(&s->reg);
+        return;
+    }
+    for (uint8_t j = 0; j < n; j++) {
+        km_regfile_apply(&s->reg, (km_reg_index_t)regs[j], values[j]);
+    }
+}
+
+/* "Zeroing": 0x46 written and 0x18 = 0 on encoder products both make the
+ * current position zero, and both are refused (bit 6) while a hardware
+ * fault is latched: the position sensor may be the fault, and a zero taken
+ * from it would survive the restart that clears the fault. */
+static void prv_zero_position(km_servo_t *s)
+{
+    const km_request_t req = {.kind = KM_REQ_ZERO_POSITION};
+    if (s->reg.hw_latched || !km_hook_request(s, &req)) {
+        km_regfile_fail(&s->reg);
+    }
+}
+
+/* 0x18: added to 0x17 (committed) within its bound; 0 zeroes an encoder. */
+void km_wr_zero_increment(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t len)
+{
+    uint32_t v;
+    if (!km_reg_validate(r, s->reg.product, d, len, &v)) {
+        km_regfile_fail(&s->reg);
+        return;
+    }
+    const int8_t inc = (int8_t)v;
+    if (inc == 0 && prv_is_encoder(s)) { /* §5.1 0x18: 0 zeroes an encoder */
+        prv_zero_position(s);
+        return;
+    }
+    const int32_t next = (int16_t)km_regfile_get(&s->reg, KM_REG_ZERO_OFFSET2) + inc;
+    const int32_t bound = s->reg.product->zero_offset2_max;
+    if (next < -bound || next > bound) {
+        km_regfile_fail(&s->reg);
+        return;
+    }
+    km_hook_commit_one(s, KM_REG_ZERO_OFFSET2, (uint32_t)(uint16_t)(int16_t)next);
+}
+
+/* §5.3 0x46: any value (i16 or i32) zeroes it, on motor (encoder) products. */
+void km_wr_zero_position(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t len)
+{
+    (void)r;
+    (void)d;
+    if ((len != 2 && len != 4) || !prv_is_encoder(s)) {
+        km_regfile_fail(&s->reg);
+        return;
+    }
+    prv_zero_position(s);
+}
+
+/* §5.2 0x36: write 1 to a bit to clear that protection; a protection
+ * whose cause still holds stays (control refuses: bit 6). Nothing stored:
+ * 0x36 reads the protections acting. */
+void km_wr_prot_clear(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t len)
+{
+    uint32_t v;
+    if (!km_reg_validate(r, s->reg.product, d, len, &v)) {
+        km_regfile_fail(&s->reg);
+        return;
+    }
+    const km_request_t req = {.kind = KM_REQ_PROTECTION_CLEAR, .u.clear = (uint8_t)v};
+    if (!km_hook_request(s, &req)) {
+        km_regfile_fail(&s->reg);
+    }
+}

@@ -1,0 +1,54 @@
+/* Register hooks: what a read or a write of one register does (inside
+ * protocol/ only). km_registers.def names a read hook km_rd_<rd> and a
+ * write hook km_wr_<wr> for every register; the dispatcher calls them
+ * through km_reg_read[] and km_reg_write[], generated from the same list.
+ *
+ *  - A read hook writes the register's value bytes into `out` (at most 16)
+ *    and returns how many. It may not fail: the dispatcher has checked the
+ *    address is readable.
+ *  - A write hook gets the value bytes as sent (`len` of them, not yet
+ *    checked) and does everything the write means: checks them (status bit
+ *    6 on a bad value: km_regfile_fail), decodes them into a typed request
+ *    (include/km/km_request.h) or a value, applies it. All wire decoding of
+ *    an action register happens in its hook, nowhere else.
+ * `stored` is the hook of plain registers (the value as kept; a write
+ * checked for range, consistency, and committed if persisted); `none`
+ * stands where the access has no R or no W. */
+#ifndef KM_HOOKS_H
+#define KM_HOOKS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "km_registers.h"
+#include "km_request.h"
+
+struct km_servo;
+
+typedef uint8_t (*km_read_hook_t)(struct km_servo *s, km_reg_index_t r, uint8_t *out);
+typedef void (*km_write_hook_t)(struct km_servo *s, km_reg_index_t r, const uint8_t *d, uint8_t len);
+
+/* Every hook the .def names, declared (a hook used by several registers
+ * is declared once per register: compatible redeclarations). */
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr)   \
+    uint8_t km_rd_##rd(struct km_servo *s, km_reg_index_t r, uint8_t *out);         \
+    void km_wr_##wr(struct km_servo *s, km_reg_index_t r, const uint8_t *d, uint8_t len);
+#include "km_registers.def"
+#undef KM_REG
+
+/* The hooks by register index (km_hook_stored.c, from the .def). */
+extern const km_read_hook_t km_reg_read[KM_REG_COUNT];
+extern const km_write_hook_t km_reg_write[KM_REG_COUNT];
+
+/* A typed request to control; true when accepted (no control attached:
+ * accepted). */
+bool km_hook_request(struct km_servo *s, const km_request_t *req);
+
+/* Persisted registers all-or-nothing through the store; true once durable. */
+bool km_hook_commit(struct km_servo *s, const uint8_t *addrs, const uint32_t *values, uint8_t n);
+
+/* One persisted register committed, then applied; bit 6 if the store
+ * failed (the old value stays in force). */
+void km_hook_commit_one(struct km_servo *s, km_reg_index_t r, uint32_t v);
+
+#endif
