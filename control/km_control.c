@@ -117,21 +117,12 @@ bool km_control_request(km_control_t *c, const km_request_t *req, const km_contr
     }
 }
 
-/* A protection's action began, changed or ended (km_control.h for 0x64). */
-static void prv_protect_transition(km_control_t *c, km_prot_action_t act)
+/* A protection began acting (`was` none) or changed its action: the
+ * motor stops; a hold in servo mode holds where the shaft is, any other
+ * action lets the output go (0x64 = 5; km_control.h for what it returns
+ * to). */
+static void prv_protect_act(km_control_t *c, km_prot_action_t act, km_prot_action_t was)
 {
-    const km_prot_action_t was = (km_prot_action_t)c->action;
-    if (act == was) {
-        return;
-    }
-    c->action = (uint8_t)act;
-    if (act == KM_PROT_ACT_NONE) {
-        /* released: 0x64 back to what km_control.h says */
-        if (c->ts_after != KM_TORQUE_ON) {
-            (void)km_servo_mode_torque(&c->servo, (km_torque_t)c->ts_after, c->position);
-        }
-        return;
-    }
     if (was == KM_PROT_ACT_NONE) {
         c->ts_after = c->servo.ts <= KM_TORQUE_BRAKE ? c->servo.ts : (uint8_t)KM_TORQUE_ARMED;
     }
@@ -158,6 +149,22 @@ static void prv_protect_transition(km_control_t *c, km_prot_action_t act)
     }
 }
 
+/* A protection's action began, changed or ended (km_control.h for 0x64). */
+static void prv_protect_transition(km_control_t *c, km_prot_action_t act)
+{
+    const km_prot_action_t was = (km_prot_action_t)c->action;
+    if (act == was) {
+        return;
+    }
+    c->action = (uint8_t)act;
+    if (act != KM_PROT_ACT_NONE) {
+        prv_protect_act(c, act, was);
+    } else if (c->ts_after != KM_TORQUE_ON) {
+        /* released: 0x64 back to what km_control.h says */
+        (void)km_servo_mode_torque(&c->servo, (km_torque_t)c->ts_after, c->position);
+    }
+}
+
 /* §5.2 0x35: a hardware fault stops everything, the output free. */
 static void prv_hw_fault(km_control_t *c)
 {
@@ -178,15 +185,15 @@ static int32_t prv_position(const km_sensors_t *in, const km_control_params_t *p
     return p->reverse ? -pos : pos;
 }
 
-void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p,
-                     uint32_t dt_us, km_live_t *live, km_bridge_t *bridge)
+/* 1. sensing: the position `pos` (master's frame), its speeds, the clock.
+ * Returns the fast speed (0.1 deg/s) the loops damp with; *speed_dps the
+ * 20 ms window's (0x47). */
+static int32_t prv_sense(km_control_t *c, int32_t pos, uint32_t dt_us, int32_t *speed_dps)
 {
-    /* 1. sensing */
-    const int32_t pos = prv_position(in, p);
     if (!c->have_position) {
         km_speed_fast_init(&c->fast, pos);
     }
-    const int32_t speed_dps = km_speed_window_step(&c->speed, pos, dt_us);
+    *speed_dps = km_speed_window_step(&c->speed, pos, dt_us);
     const int32_t speed_ddps = c->have_position ? km_speed_fast_step(&c->fast, pos, dt_us) : 0;
     c->position = pos;
     c->have_position = true;
@@ -195,8 +202,14 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
         c->time_rem_us -= 1000u;
         c->time_ms++;
     }
+    return speed_ddps;
+}
 
-    /* 2. self-test and protection, on what the bridge drives now */
+/* 2. self-test and protection, on what the bridge drives now; their
+ * events go into live. Returns the hardware faults found at this tick. */
+static uint8_t prv_supervise(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p, int32_t pos,
+                             uint32_t dt_us, km_live_t *live)
+{
     const int32_t drive = c->bridge.mode == KM_BRIDGE_PWM ? c->bridge.pwm : 0;
     const uint8_t hw = km_selftest_step(&c->selftest, in, p, drive, c->bridge.mode == KM_BRIDGE_FREE, dt_us);
     const uint8_t hw_found = (uint8_t)(hw & (uint8_t)~c->hw);
@@ -212,59 +225,78 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
         .drive_pwm = drive,
         .servo_mode = !c->motor.active,
     };
-    const bool was_acting = c->action != KM_PROT_ACT_NONE;
     prv_protect_transition(c, km_protect_step(&c->prot, &pin, p, dt_us, &live->events));
+    return hw_found;
+}
 
-    int32_t limit = p->torque_limit < p->max_torque ? p->torque_limit : p->max_torque;
+/* The output bound of this tick: min(0x5B, 0x13, the current limit's cap
+ * (km_current_limit, 0x5C/0x14)). */
+static int32_t prv_limit(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p)
+{
+    const int32_t limit = p->torque_limit < p->max_torque ? p->torque_limit : p->max_torque;
     const uint32_t ilimit = p->current_limit_ma < p->max_current_ma ? p->current_limit_ma : p->max_current_ma;
     const int32_t icap = km_current_limit_step(&c->ilim, in->current_ma, ilimit);
-    if (icap < limit) {
-        limit = icap;
+    return icap < limit ? icap : limit;
+}
+
+/* 3. motor mode owns the bridge (servo mode's output is unused); 0x5A = 1
+ * (servo only) stops it. Output limited like every bridge command. */
+static void prv_drive_motor(km_control_t *c, const km_control_params_t *p, int32_t pos, int32_t speed_ddps,
+                            uint32_t dt_us, int32_t limit)
+{
+    if (p->control_mode == KM_MODE_SERVO_ONLY && c->motor.running) {
+        km_motor_mode_stop(&c->motor, p->idle_brake ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE);
     }
-    if (c->motor.active) {
-        /* 2b. motor mode owns the bridge (servo mode's output is unused);
-         * 0x5A = 1 (servo only) stops it. Output limited by 0x5B. */
-        if (p->control_mode == KM_MODE_SERVO_ONLY && c->motor.running) {
-            km_motor_mode_stop(&c->motor, p->idle_brake ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE);
-        }
-        km_bridge_mode_t mode;
-        const int32_t mpwm = km_motor_mode_step(&c->motor, p, pos, speed_ddps, dt_us, &mode);
-        c->bridge = km_output_bridge(mode, mpwm, limit, p->reverse);
-    } else {
-        /* 2. servo mode. Not stepped while the motor owns the bridge: its
-         * output would be unused, and the hand-back (km_control_request)
-         * restarts it from where the shaft is (rebase or torque on). */
-        km_servo_mode_out_t sm;
-        km_servo_mode_step(&c->servo, p, pos, speed_ddps, dt_us, &sm);
-        /* 3. position loop, 4. output */
-        if (sm.pwm_cap < limit) {
-            limit = sm.pwm_cap;
-        }
-        int32_t pwm = 0;
-        if (sm.bridge == KM_BRIDGE_PWM) {
-            if (sm.reset_loop) {
-                km_position_loop_init(&c->loop);
-            }
-            const km_position_loop_in_t li = {
-                .setpoint_u = sm.setpoint_u,
-                .setpoint_ddps = sm.setpoint_ddps,
-                .position = pos,
-                .speed_ddps = speed_ddps,
-                .pwm_max = limit,
-                .integrate = sm.holding,
-            };
-            pwm = km_position_loop_step(&c->loop, &p->gains, &li, dt_us);
-        }
-        c->bridge = km_output_bridge(sm.bridge, pwm, limit, p->reverse);
+    km_bridge_mode_t mode;
+    const int32_t mpwm = km_motor_mode_step(&c->motor, p, pos, speed_ddps, dt_us, &mode);
+    c->bridge = km_output_bridge(mode, mpwm, limit, p->reverse);
+}
+
+/* 3. servo mode, the position loop, 4. output. Not stepped while the motor
+ * owns the bridge: its output would be unused, and the hand-back
+ * (km_control_request) restarts it from where the shaft is. */
+static void prv_drive_servo(km_control_t *c, const km_control_params_t *p, int32_t pos, int32_t speed_ddps,
+                            uint32_t dt_us, int32_t limit)
+{
+    km_servo_mode_out_t sm;
+    km_servo_mode_step(&c->servo, p, pos, speed_ddps, dt_us, &sm);
+    if (sm.pwm_cap < limit) {
+        limit = sm.pwm_cap;
     }
-    /* 4b. the protection's action has the last word on the bridge */
+    int32_t pwm = 0;
+    if (sm.bridge == KM_BRIDGE_PWM) {
+        if (sm.reset_loop) {
+            km_position_loop_init(&c->loop);
+        }
+        const km_position_loop_in_t li = {
+            .setpoint_u = sm.setpoint_u,
+            .setpoint_ddps = sm.setpoint_ddps,
+            .position = pos,
+            .speed_ddps = speed_ddps,
+            .pwm_max = limit,
+            .integrate = sm.holding,
+        };
+        pwm = km_position_loop_step(&c->loop, &p->gains, &li, dt_us);
+    }
+    c->bridge = km_output_bridge(sm.bridge, pwm, limit, p->reverse);
+}
+
+/* 4b. the protection's action has the last word on the bridge. */
+static void prv_protect_output(km_control_t *c)
+{
     if (c->action == KM_PROT_ACT_FREE || c->action == KM_PROT_ACT_BRAKE ||
         (c->action == KM_PROT_ACT_HOLD && c->servo.ts != KM_TORQUE_ON)) {
         c->bridge.mode = c->action == KM_PROT_ACT_BRAKE ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE;
         c->bridge.pwm = 0;
     }
+}
 
-    /* every field assigned (no memset: it is a byte loop on the M0) */
+/* What this tick reports: every field of live assigned (no memset: it is
+ * a byte loop on the M0) but the events the supervisor filled. */
+static void prv_report(km_control_t *c, const km_sensors_t *in, int32_t pos, int32_t speed_dps, bool was_acting,
+                       uint8_t hw_found, km_live_t *live)
+{
+    const bool motor = c->motor.active;
     live->position = pos;
     live->speed = speed_dps;
     live->current = in->current_ma;
@@ -275,9 +307,9 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     }
     live->temperature = c->temp_c;
     live->voltage = in->voltage_mv;
-    live->deviation = c->motor.active ? 0 : km_servo_mode_deviation(&c->servo, pos);
-    live->rotation_ms = c->motor.active ? c->motor.rotation_ms : c->servo.rotation_ms;
-    live->running = c->motor.active ? c->motor.running : c->servo.running;
+    live->deviation = motor ? 0 : km_servo_mode_deviation(&c->servo, pos);
+    live->rotation_ms = motor ? c->motor.rotation_ms : c->servo.rotation_ms;
+    live->running = motor ? c->motor.running : c->servo.running;
     live->protecting = c->action != KM_PROT_ACT_NONE;
     /* the torque switch moved by itself: protecting, just released, or stopped by a fault */
     live->torque_forced = live->protecting || was_acting || hw_found != 0u;
@@ -288,6 +320,24 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     live->events.hw_found = hw_found;
     c->cleared = 0u;
     live->time_ms = c->time_ms;
+}
+
+void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p,
+                     uint32_t dt_us, km_live_t *live, km_bridge_t *bridge)
+{
+    const int32_t pos = prv_position(in, p);
+    int32_t speed_dps;
+    const int32_t speed_ddps = prv_sense(c, pos, dt_us, &speed_dps);
+    const bool was_acting = c->action != KM_PROT_ACT_NONE;
+    const uint8_t hw_found = prv_supervise(c, in, p, pos, dt_us, live);
+    const int32_t limit = prv_limit(c, in, p);
+    if (c->motor.active) {
+        prv_drive_motor(c, p, pos, speed_ddps, dt_us, limit);
+    } else {
+        prv_drive_servo(c, p, pos, speed_ddps, dt_us, limit);
+    }
+    prv_protect_output(c);
+    prv_report(c, in, pos, speed_dps, was_acting, hw_found, live);
     bridge->mode = c->bridge.mode; /* by field: a struct copy is a memcpy call here */
     bridge->pwm = c->bridge.pwm;
 }

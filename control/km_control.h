@@ -53,25 +53,27 @@
 #define KM_CONTROL_TICK_US 1000u /* 1 kHz: sensing, position loop and output */
 
 typedef struct {
+    /* The tick's own scalars first: on the M0 a byte load or store reaches
+     * 32 bytes into a struct, a word one 128. */
+    uint8_t action;              /* km_prot_action_t in force */
+    uint8_t ts_after;            /* 0x64 once the protections are released */
+    uint8_t hw;                  /* 0x35 bits found */
+    uint8_t cleared;             /* protections a clear request released since the last tick */
+    bool have_position;
+    km_bridge_t bridge;          /* the last command */
+    int32_t position;            /* 0.1 deg, master's frame, last tick */
+    int32_t temp_c10;            /* the last temperature read, 0.1 degC, */
+    int32_t temp_c;              /* and it in degC: divided again only when it changes */
+    uint32_t time_ms;            /* since init (the fault log's clock) */
+    uint32_t time_rem_us;
     km_servo_mode_t servo;
     km_motor_mode_t motor;
     km_position_loop_t loop;
     km_speed_window_t speed;     /* 0x47 */
     km_speed_fast_t fast;        /* the loop's damping input */
-    km_bridge_t bridge;          /* the last command */
-    int32_t position;            /* 0.1 deg, master's frame, last tick */
-    bool have_position;
-    int32_t temp_c10;            /* the last temperature read, 0.1 degC, */
-    int32_t temp_c;              /* and it in degC: divided again only when it changes */
     km_current_limit_t ilim;     /* 0x5C / 0x14 */
     km_protect_t prot;           /* the protection supervisor */
     km_selftest_t selftest;      /* 0x35 */
-    uint8_t action;              /* km_prot_action_t in force */
-    uint8_t ts_after;            /* 0x64 once the protections are released */
-    uint8_t hw;                  /* 0x35 bits found */
-    uint8_t cleared;             /* protections a clear request released since the last tick */
-    uint32_t time_ms;            /* since init (the fault log's clock) */
-    uint32_t time_rem_us;
     uint32_t requests;           /* typed requests received (diagnostics) */
     km_request_t last_request;
 } km_control_t;

@@ -84,14 +84,11 @@ void km_motor_mode_run(km_motor_mode_t *m, const km_motor_run_t *run, const km_c
     }
 }
 
-int32_t km_motor_mode_step(km_motor_mode_t *m, const km_control_params_t *p, int32_t position,
-                           int32_t speed_ddps, uint32_t dt_us, km_bridge_mode_t *mode)
+/* 0x4D and the counted run: time off, or travel done (modular distance:
+ * defined across the int32 wrap of a long run); stops the motor when it
+ * ends. */
+static void prv_count(km_motor_mode_t *m, int32_t position, uint32_t dt_us)
 {
-    if (!m->running) {
-        *mode = m->stop_bridge;
-        return 0;
-    }
-    /* 0x4D and the counted run */
     m->rotation_rem_us += dt_us;
     const uint32_t ms = km_udiv1000(m->rotation_rem_us);
     m->rotation_rem_us -= ms * 1000u;
@@ -102,23 +99,18 @@ int32_t km_motor_mode_step(km_motor_mode_t *m, const km_control_params_t *p, int
             km_motor_mode_stop(m, m->stop_bridge);
         }
     } else if (m->count_kind >= KM_UNTIL_ANGLE) {
-        /* modular distance: defined across the int32 wrap of a long run */
         uint32_t moved = (uint32_t)position - (uint32_t)m->start_pos;
         moved = moved > 0x80000000u ? 0u - moved : moved;
         if (moved >= (uint32_t)m->travel) {
             km_motor_mode_stop(m, m->stop_bridge);
         }
     }
-    if (!m->running) {
-        *mode = m->stop_bridge;
-        return 0;
-    }
-    *mode = KM_BRIDGE_PWM;
-    if (!m->speed_mode) {
-        return m->pwm;
-    }
-    /* speed loop, 0.1 deg/s */
-    const km_control_gains_t *g = &p->gains;
+}
+
+/* The speed loop (0.1 deg/s): feedforward kv x speed and friction, kd x
+ * the speed error and a bounded integrator; the PWM in +-1000. */
+static int32_t prv_speed_loop(km_motor_mode_t *m, const km_control_gains_t *g, int32_t speed_ddps, uint32_t dt_us)
+{
     const int32_t sp = m->speed_dps;
     const int32_t v = speed_ddps > 1000000 ? 1000000 : (speed_ddps < -1000000 ? -1000000 : speed_ddps);
     int32_t err = sp * 10 - v;
@@ -132,4 +124,20 @@ int32_t km_motor_mode_step(km_motor_mode_t *m, const km_control_params_t *p, int
     pwm += km_sdiv2560((int32_t)g->kd_q8 * err);
     pwm += km_sdiv256000(m->i_acc);
     return pwm > 1000 ? 1000 : (pwm < -1000 ? -1000 : pwm);
+}
+
+int32_t km_motor_mode_step(km_motor_mode_t *m, const km_control_params_t *p, int32_t position,
+                           int32_t speed_ddps, uint32_t dt_us, km_bridge_mode_t *mode)
+{
+    if (!m->running) {
+        *mode = m->stop_bridge;
+        return 0;
+    }
+    prv_count(m, position, dt_us);
+    if (!m->running) {
+        *mode = m->stop_bridge;
+        return 0;
+    }
+    *mode = KM_BRIDGE_PWM;
+    return m->speed_mode ? prv_speed_loop(m, &p->gains, speed_ddps, dt_us) : m->pwm;
 }

@@ -227,31 +227,42 @@ static int32_t prv_brake_speed(const km_profile_t *p, uint32_t k, uint32_t d)
     return (int32_t)prv_isqrt64(((uint64_t)hi << 32) | lo);
 }
 
+/* A stream segment's piece: constant speed; it ends on the target, at
+ * rest, when it reaches or passes it (e: the distance before the piece). */
+static void prv_step_stream(km_profile_t *p, uint32_t dt_us, int32_t e)
+{
+    (void)prv_advance(p, dt_us);
+    const int32_t left = p->target - p->pos;
+    if (left == 0 || (left > 0) != (e > 0)) {
+        p->pos = p->target;
+        p->pos_rem = 0;
+        p->vel = 0;
+        p->done = true;
+    }
+}
+
+/* The speed change a piece allows: accel (u/s per ms) x dt, the remainder
+ * kept for the next piece. */
+static int32_t prv_dv(km_profile_t *p, uint32_t dt_us)
+{
+    if (dt_us == 1000u && p->vel_rem >= 0) {
+        return p->accel; /* (accel x 1000 + rem) / 1000 with 0 <= rem < 1000: rem stays */
+    }
+    const int32_t dv = p->accel * (int32_t)dt_us + p->vel_rem;
+    const int32_t dvq = km_sdiv1000(dv);
+    p->vel_rem = dv - dvq * 1000;
+    return dvq;
+}
+
 /* One piece of at most STEP_MAX_US. */
 static void prv_step(km_profile_t *p, uint32_t dt_us)
 {
     const int32_t e = p->target - p->pos;
     if (p->stream) {
-        (void)prv_advance(p, dt_us);
-        const int32_t left = p->target - p->pos;
-        if (left == 0 || (left > 0) != (e > 0)) {
-            p->pos = p->target;
-            p->pos_rem = 0;
-            p->vel = 0;
-            p->done = true;
-        }
+        prv_step_stream(p, dt_us, e);
         return;
     }
-    /* speed change allowed this piece: accel (u/s per ms) x dt, remainder kept */
-    int32_t dv;
-    if (dt_us == 1000u && p->vel_rem >= 0) {
-        dv = p->accel; /* (accel x 1000 + rem) / 1000 with 0 <= rem < 1000: rem stays */
-    } else {
-        dv = p->accel * (int32_t)dt_us + p->vel_rem;
-        const int32_t dvq = km_sdiv1000(dv);
-        p->vel_rem = dv - dvq * 1000;
-        dv = dvq;
-    }
+    const int32_t dv = prv_dv(p, dt_us);
     /* the fastest speed that can still brake to a stop on the target from
      * where this piece ends (so the last piece arrives at a crawl, not at
      * the speed of the tick before) */

@@ -83,26 +83,12 @@ static uint8_t prv_action_bits(const km_control_params_t *p, uint8_t bit)
     return (uint8_t)((p->prot_state >> (2u * prv_index(bit))) & 3u);
 }
 
-km_prot_action_t km_protect_step(km_protect_t *s, const km_protect_in_t *in, const km_control_params_t *p,
-                                 uint32_t dt_us, km_protect_events_t *ev)
+/* The up/down timer of each protection that is over, active or being
+ * timed (a disabled one's timer dropped): trips at the detection time,
+ * releases automatically when it counted back to 0 (0x33 bit clear). */
+static void prv_time(km_protect_t *s, uint8_t over, uint8_t enabled, const km_control_params_t *p,
+                     uint32_t dt_us, km_protect_events_t *ev)
 {
-    ev->tripped = 0;
-    ev->released = 0;
-
-    /* A disabled protection is released at once and not watched. */
-    const uint8_t enabled = (uint8_t)(p->prot_enable & KM_PROT_ALL);
-    if ((s->active & (uint8_t)~enabled) != 0u) {
-        ev->released |= (uint8_t)(s->active & (uint8_t)~enabled);
-        s->active &= enabled;
-    }
-
-    const uint8_t over = (uint8_t)(prv_excursions(s, in, p) & enabled);
-    s->over = over;
-    if ((over | s->active | s->timing) == 0u) {
-        return KM_PROT_ACT_NONE; /* the usual tick: nothing over, nothing being timed */
-    }
-    /* Only the protections that are over, active or being timed: a
-     * disabled one's timer is dropped. */
     for (uint8_t i = 0; i < PRV_N; i++) {
         if ((s->timing & ~enabled & (1u << i)) != 0u) {
             s->timer_us[i] = 0u;
@@ -138,7 +124,12 @@ km_prot_action_t km_protect_step(km_protect_t *s, const km_protect_in_t *in, con
             s->timing |= bit;
         }
     }
+}
 
+/* The action of the highest active protection (§5.2 priority): 0x34's
+ * two bits; hold only in servo mode and only for current and stall. */
+static km_prot_action_t prv_action(const km_protect_t *s, const km_control_params_t *p, bool servo_mode)
+{
     for (uint8_t k = 0; k < PRV_N; k++) {
         const uint8_t bit = s_priority[k];
         if ((s->active & bit) == 0u) {
@@ -148,12 +139,34 @@ km_prot_action_t km_protect_step(km_protect_t *s, const km_protect_in_t *in, con
         if (a == 0u) {
             return KM_PROT_ACT_FREE;
         }
-        if (a == 1u || !in->servo_mode || bit == KM_PROT_VOLTAGE || bit == KM_PROT_TEMPERATURE) {
+        if (a == 1u || !servo_mode || bit == KM_PROT_VOLTAGE || bit == KM_PROT_TEMPERATURE) {
             return KM_PROT_ACT_BRAKE;
         }
         return KM_PROT_ACT_HOLD;
     }
     return KM_PROT_ACT_NONE;
+}
+
+km_prot_action_t km_protect_step(km_protect_t *s, const km_protect_in_t *in, const km_control_params_t *p,
+                                 uint32_t dt_us, km_protect_events_t *ev)
+{
+    ev->tripped = 0;
+    ev->released = 0;
+
+    /* A disabled protection is released at once and not watched. */
+    const uint8_t enabled = (uint8_t)(p->prot_enable & KM_PROT_ALL);
+    if ((s->active & (uint8_t)~enabled) != 0u) {
+        ev->released |= (uint8_t)(s->active & (uint8_t)~enabled);
+        s->active &= enabled;
+    }
+
+    const uint8_t over = (uint8_t)(prv_excursions(s, in, p) & enabled);
+    s->over = over;
+    if ((over | s->active | s->timing) == 0u) {
+        return KM_PROT_ACT_NONE; /* the usual tick: nothing over, nothing being timed */
+    }
+    prv_time(s, over, enabled, p, dt_us, ev);
+    return prv_action(s, p, in->servo_mode);
 }
 
 bool km_protect_clear(km_protect_t *s, uint8_t mask)

@@ -17,16 +17,10 @@ typedef struct {
     uint8_t hw_found; /* hardware faults found (KM_HW_* bits) */
 } km_protect_events_t;
 
-/* Live state from control, copied in every control tick. */
+/* Live state from control, copied in every control tick. The byte fields
+ * first: on the M0 a byte store or load reaches only 32 bytes into a
+ * struct, and control writes all of them every tick. */
 typedef struct {
-    int32_t position;      /* 0.1 deg, zero offsets applied */
-    int32_t speed;         /* deg/s */
-    int32_t current;       /* mA */
-    int32_t pwm;           /* 0..1000 */
-    int32_t temperature;   /* deg C */
-    int32_t voltage;       /* mV */
-    int32_t deviation;     /* 0.1 deg */
-    uint32_t rotation_ms;  /* 0x4D */
     bool running;          /* status bit 7 */
     bool protecting;       /* a protection acts on the output (torque_switch is PROTECTED) */
     bool torque_forced;    /* control set the torque switch by itself at this tick (a protection
@@ -35,8 +29,16 @@ typedef struct {
     uint8_t torque_switch; /* km_torque_t as control runs it */
     uint8_t protections;   /* active protections, 0x36 bits / status bits 0..3 */
     uint8_t hw_faults;     /* 0x35 bits found by the self-test (latched) */
-    uint32_t time_ms;      /* ms since control started: the fault log's clock */
     km_protect_events_t events; /* what changed at this tick */
+    int32_t position;      /* 0.1 deg, zero offsets applied */
+    int32_t speed;         /* deg/s */
+    int32_t current;       /* mA */
+    int32_t pwm;           /* 0..1000 */
+    int32_t temperature;   /* deg C */
+    int32_t voltage;       /* mV */
+    int32_t deviation;     /* 0.1 deg */
+    uint32_t rotation_ms;  /* 0x4D */
+    uint32_t time_ms;      /* ms since control started: the fault log's clock */
 } km_live_t;
 
 #endif
