@@ -1,6 +1,6 @@
 /* Write hooks of the configuration actions: restart (0x02), user-data
  * reset (0x03), the zero-offset increment (0x18), zeroing by a 0x46 write,
- * and the protection clear (0x36). */
+ * the protection clear (0x36), and the control mode (0x5A). */
 #include "km_hooks.h"
 
 #include <string.h>
@@ -148,4 +148,19 @@ void km_wr_prot_clear(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t
     if (!km_hook_request(s, &req)) {
         km_regfile_fail(&s->reg);
     }
+}
+
+/* §5.4 0x5A: 0 auto, 1 servo only, 2 motor only; switching to motor only
+ * is refused (bit 6) while the servo runs with its torque on (0x64 = 2): a
+ * move would be cut off mid-way. Otherwise stored as written. */
+void km_wr_control_mode(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t len)
+{
+    uint32_t v;
+    if (!km_reg_validate(r, s->reg.product, d, len, &v) ||
+        (v == KM_MODE_MOTOR_ONLY && s->reg.live.running &&
+         km_regfile_get(&s->reg, KM_REG_TORQUE_SWITCH) == KM_TORQUE_ON)) {
+        km_regfile_fail(&s->reg);
+        return;
+    }
+    km_regfile_set(&s->reg, r, v);
 }

@@ -4,7 +4,6 @@
 
 #include <string.h>
 
-#include "km_params.h"
 
 /* "Limits that contradict each other": a minimum angle limit at or above
  * the maximum would leave no target reachable. 0 = no limit (§5.1). */
@@ -81,9 +80,6 @@ bool km_regfile_consistent(const km_regfile_t *rf, km_reg_index_t r, uint32_t v)
         return prv_angle_limits_ok((int16_t)v, (int16_t)rf->value[KM_REG_ANGLE_MAX]);
     case KM_REG_ANGLE_MAX:
         return prv_angle_limits_ok((int16_t)rf->value[KM_REG_ANGLE_MIN], (int16_t)v);
-    case KM_REG_CONTROL_MODE:
-        /* §5.4 0x5A: motor-only only when idle or with torque off. */
-        return !(v == KM_MODE_MOTOR_ONLY && rf->live.running && rf->value[KM_REG_TORQUE_SWITCH] == KM_TORQUE_ON);
     default:
         return true;
     }

@@ -49,8 +49,7 @@ void km_regfile_apply(km_regfile_t *rf, km_reg_index_t r, uint32_t v);
 
 /* "Limits that contradict each other": false for a value that would leave
  * a runtime limit (0x5B..0x5D) above its maximum (0x13..0x15) or the angle
- * limits with min >= max; and 0x5A = 2 (motor only) while running with the
- * torque on (§5.4). */
+ * limits with min >= max. */
 bool km_regfile_consistent(const km_regfile_t *rf, km_reg_index_t r, uint32_t v);
 
 /* Control's report of one tick: the live registers, 0x35's latch, and 0x64
