@@ -92,68 +92,101 @@ static int prv_parse_u32(const char *text, uint32_t *out)
     return 1;
 }
 
+/* --baud N: the master's line rate on the wire (0 = taken, else the exit code). */
+static int prv_baud(const char *value)
+{
+    uint32_t baud;
+    if (!prv_parse_u32(value, &baud) || baud < HS_BAUD_MIN || baud > HS_BAUD_MAX) {
+        fprintf(stderr, "host-sim: --baud '%s': a baud rate is a whole number in %u..%u\n", value, HS_BAUD_MIN,
+                HS_BAUD_MAX);
+        return 2;
+    }
+    hs_uart_set_wire_baud(baud);
+    return 0;
+}
+
+/* --product pot|encoder (0 = taken, else the exit code). */
+static int prv_product(const char *value, const char *argv0)
+{
+    if (strcmp(value, "pot") == 0) {
+        km_sim_product_select(KM_SIM_PRODUCT_POT);
+    } else if (strcmp(value, "encoder") == 0) {
+        km_sim_product_select(KM_SIM_PRODUCT_ENCODER);
+    } else {
+        return prv_usage(argv0);
+    }
+    return 0;
+}
+
+/* What the options say: where the bus and the flash are, and the bus
+ * floors handed to the app. */
+typedef struct {
+    const char *listen_at;
+    const char *flash_path;
+    int use_pty;
+    uint32_t gap_floor_us;
+    uint32_t slot_floor_us;
+} prv_args_t;
+
+/* Option `name` with its `value`: 0 when taken, -1 when `name` is not an
+ * option with a value, else the exit code of a bad value. */
+static int prv_option(prv_args_t *a, const char *name, const char *value, const char *argv0)
+{
+    if (strcmp(name, "--listen") == 0) {
+        a->listen_at = value;
+        return 0;
+    }
+    if (strcmp(name, "--flash") == 0) {
+        a->flash_path = value;
+        return 0;
+    }
+    if (strcmp(name, "--baud") == 0) {
+        return prv_baud(value);
+    }
+    if (strcmp(name, "--gap-floor-us") == 0) {
+        return prv_parse_u32(value, &a->gap_floor_us) ? 0 : prv_usage(argv0);
+    }
+    if (strcmp(name, "--slot-floor-us") == 0) {
+        return prv_parse_u32(value, &a->slot_floor_us) ? 0 : prv_usage(argv0);
+    }
+    if (strcmp(name, "--product") == 0) {
+        return prv_product(value, argv0);
+    }
+    if (strcmp(name, "--scenario") == 0) {
+        return hs_scenario_load(value) ? 0 : 2;
+    }
+    return -1;
+}
+
 int main(int argc, char **argv)
 {
-    const char *listen_at = NULL;
-    const char *flash_path = NULL;
-    int use_pty = 0;
-    uint32_t gap_floor_us = HS_GAP_FLOOR_DEFAULT_US;
-    uint32_t slot_floor_us = 0u;
+    prv_args_t a = {NULL, NULL, 0, HS_GAP_FLOOR_DEFAULT_US, 0u};
     for (int i = 1; i < argc; i++) {
-        if (strcmp(argv[i], "--listen") == 0 && i + 1 < argc) {
-            listen_at = argv[++i];
-        } else if (strcmp(argv[i], "--flash") == 0 && i + 1 < argc) {
-            flash_path = argv[++i];
-        } else if (strcmp(argv[i], "--baud") == 0 && i + 1 < argc) {
-            uint32_t baud;
-            if (!prv_parse_u32(argv[++i], &baud) || baud < HS_BAUD_MIN || baud > HS_BAUD_MAX) {
-                fprintf(stderr, "host-sim: --baud '%s': a baud rate is a whole number in %u..%u\n", argv[i],
-                        HS_BAUD_MIN, HS_BAUD_MAX);
-                return 2;
-            }
-            hs_uart_set_wire_baud(baud);
-        } else if (strcmp(argv[i], "--report-baud") == 0) {
+        if (strcmp(argv[i], "--report-baud") == 0) {
             hs_uart_set_report_baud(true);
-        } else if (strcmp(argv[i], "--gap-floor-us") == 0 && i + 1 < argc) {
-            if (!prv_parse_u32(argv[++i], &gap_floor_us)) {
-                return prv_usage(argv[0]);
-            }
-        } else if (strcmp(argv[i], "--slot-floor-us") == 0 && i + 1 < argc) {
-            if (!prv_parse_u32(argv[++i], &slot_floor_us)) {
-                return prv_usage(argv[0]);
-            }
-        } else if (strcmp(argv[i], "--product") == 0 && i + 1 < argc) {
-            const char *p = argv[++i];
-            if (strcmp(p, "pot") == 0) {
-                km_sim_product_select(KM_SIM_PRODUCT_POT);
-            } else if (strcmp(p, "encoder") == 0) {
-                km_sim_product_select(KM_SIM_PRODUCT_ENCODER);
-            } else {
-                return prv_usage(argv[0]);
-            }
-        } else if (strcmp(argv[i], "--scenario") == 0 && i + 1 < argc) {
-            if (!hs_scenario_load(argv[++i])) {
-                return 2;
-            }
         } else if (strcmp(argv[i], "--pty") == 0) {
-            use_pty = 1;
+            a.use_pty = 1;
         } else {
-            return prv_usage(argv[0]);
+            const int r = i + 1 < argc ? prv_option(&a, argv[i], argv[i + 1], argv[0]) : -1;
+            if (r != 0) {
+                return r < 0 ? prv_usage(argv[0]) : r;
+            }
+            i++;
         }
     }
-    if (!flash_path || (!listen_at && !use_pty)) {
+    if (!a.flash_path || (!a.listen_at && !a.use_pty)) {
         return prv_usage(argv[0]);
     }
     hs_system_set_argv(argv);
     km_flash_t flash;
-    if (!hs_flash_open(flash_path, &flash)) {
+    if (!hs_flash_open(a.flash_path, &flash)) {
         return 1;
     }
     hs_board_set_flash(&flash);
     if (!hs_uart_adopt()) {
-        if (use_pty ? !hs_uart_open_pty() : !hs_uart_open_tcp(listen_at)) {
+        if (a.use_pty ? !hs_uart_open_pty() : !hs_uart_open_tcp(a.listen_at)) {
             return 1;
         }
     }
-    km_sim_board_run(gap_floor_us, slot_floor_us);
+    km_sim_board_run(a.gap_floor_us, a.slot_floor_us);
 }

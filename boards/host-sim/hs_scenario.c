@@ -75,6 +75,34 @@ static int prv_parse(const char *text, unsigned long *t_ms, char *name, size_t n
     return *prv_skip_blanks(end) == '\0' ? 1 : 0;
 }
 
+/* One parsed line as an event after the ones held: false (with the
+ * reason) for an unknown key, a value out of its range, a time before the
+ * last one, or one event too many. */
+static bool prv_add(const char *path, unsigned line, unsigned long t_ms, const char *name, long value)
+{
+    size_t k = 0;
+    while (k < sizeof s_keys / sizeof s_keys[0] && strcmp(s_keys[k].name, name) != 0) {
+        k++;
+    }
+    if (k == sizeof s_keys / sizeof s_keys[0]) {
+        return prv_fail(path, line, "unknown key (supply_mv, ambient_dc, load_mnm, faults, temp_dc)");
+    }
+    if (value < s_keys[k].lo || value > s_keys[k].hi) {
+        return prv_fail(path, line, "value out of range for its key");
+    }
+    if (t_ms > UINT32_MAX || (s_count > 0 && t_ms < s_events[s_count - 1u].t_ms)) {
+        return prv_fail(path, line, "times must not decrease");
+    }
+    if (s_count == KM_SCN_MAX_EVENTS) {
+        return prv_fail(path, line, "more than 64 events");
+    }
+    s_events[s_count].t_ms = (uint32_t)t_ms;
+    s_events[s_count].key = (uint32_t)s_keys[k].key;
+    s_events[s_count].value = (int32_t)value;
+    s_count++;
+    return true;
+}
+
 bool hs_scenario_load(const char *path)
 {
     FILE *f = fopen(path, "r");
@@ -99,28 +127,7 @@ bool hs_scenario_load(const char *path)
         if (n < 0) {
             continue; /* blank or comment */
         }
-        if (n == 0) {
-            ok = prv_fail(path, line, "expected: T_MS KEY VALUE");
-            break;
-        }
-        size_t k = 0;
-        while (k < sizeof s_keys / sizeof s_keys[0] && strcmp(s_keys[k].name, name) != 0) {
-            k++;
-        }
-        if (k == sizeof s_keys / sizeof s_keys[0]) {
-            ok = prv_fail(path, line, "unknown key (supply_mv, ambient_dc, load_mnm, faults, temp_dc)");
-        } else if (value < s_keys[k].lo || value > s_keys[k].hi) {
-            ok = prv_fail(path, line, "value out of range for its key");
-        } else if (t_ms > UINT32_MAX || (s_count > 0 && t_ms < s_events[s_count - 1u].t_ms)) {
-            ok = prv_fail(path, line, "times must not decrease");
-        } else if (s_count == KM_SCN_MAX_EVENTS) {
-            ok = prv_fail(path, line, "more than 64 events");
-        } else {
-            s_events[s_count].t_ms = (uint32_t)t_ms;
-            s_events[s_count].key = (uint32_t)s_keys[k].key;
-            s_events[s_count].value = (int32_t)value;
-            s_count++;
-        }
+        ok = n == 0 ? prv_fail(path, line, "expected: T_MS KEY VALUE") : prv_add(path, line, t_ms, name, value);
     }
     fclose(f);
     if (!ok) {

@@ -169,6 +169,20 @@ static uint8_t prv_target(uint32_t pages, uint8_t active, bool confirmed, uint32
     return (uint8_t)t;
 }
 
+/* What the mount found: the active page's values with this schema, the
+ * defaults (a blank store, no valid page, or another schema's values), or
+ * this schema's keys migrated from another key set (hash). */
+static km_store_mount_t prv_result(const km_store_t *s, const prv_page_t *best, bool all_erased)
+{
+    if (s->active == KM_STORE_NO_PAGE) {
+        return all_erased ? KM_STORE_MOUNT_DEFAULTS_BLANK : KM_STORE_MOUNT_DEFAULTS_INVALID;
+    }
+    if (best->version != s->schema->version) {
+        return KM_STORE_MOUNT_DEFAULTS_SCHEMA;
+    }
+    return best->hash != s->hash ? KM_STORE_MOUNT_MIGRATED : KM_STORE_MOUNT_LOADED;
+}
+
 km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash,
                                 const km_store_schema_t *schema, uint32_t *values_out)
 {
@@ -217,17 +231,7 @@ km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash,
         all_erased = all_erased && pi.erased;
     }
     s->target = prv_target(flash->page_count, s->active, best.confirmed, valid, anchor);
-
-    km_store_mount_t result;
-    if (s->active == KM_STORE_NO_PAGE) {
-        result = all_erased ? KM_STORE_MOUNT_DEFAULTS_BLANK : KM_STORE_MOUNT_DEFAULTS_INVALID;
-    } else if (best.version != schema->version) {
-        result = KM_STORE_MOUNT_DEFAULTS_SCHEMA;
-    } else if (best.hash != s->hash) {
-        result = KM_STORE_MOUNT_MIGRATED;
-    } else {
-        result = KM_STORE_MOUNT_LOADED;
-    }
+    const km_store_mount_t result = prv_result(s, &best, all_erased);
     s->mounted = true;
     if (values_out != NULL) {
         memcpy(values_out, s->values, schema->count * sizeof s->values[0]);

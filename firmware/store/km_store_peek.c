@@ -22,6 +22,40 @@ static void prv_set(const uint8_t *keys, uint32_t n, uint32_t *v, uint8_t key, u
     }
 }
 
+/* keys[]'s values on page p, whose snapshot is *rec, into cand: the
+ * snapshot's, then every delta's, deltas only after a K that reads
+ * programmed (docs/store.md). Reads over rec and buf. */
+static void prv_replay(const km_flash_t *f, uint32_t p, km_rec_t *rec, uint8_t *buf, const uint8_t *keys,
+                       uint32_t n, uint32_t *cand, uint8_t *snap_keys)
+{
+    const uint32_t snap_count = rec->count;
+    uint32_t at = 0u;
+    for (uint32_t i = 0; i < snap_count; i++) {
+        uint32_t v;
+        bool indexed;
+        km_rec_entry(rec, &at, &snap_keys[i], &v, &indexed);
+        prv_set(keys, n, cand, snap_keys[i], v);
+    }
+    uint32_t off = rec->size;
+    if (km_rec_cell_erased(f, p * f->page_size + off)) {
+        return;
+    }
+    off += f->prog_size;
+    while (off < f->page_size && km_rec_read(f, p, off, buf, rec) && rec->type != KM_REC_SNAPSHOT) {
+        at = 0u;
+        for (uint32_t i = 0; i < rec->count; i++) {
+            uint8_t id;
+            uint32_t v;
+            bool indexed;
+            km_rec_entry(rec, &at, &id, &v, &indexed);
+            if (!indexed || id < snap_count) {
+                prv_set(keys, n, cand, indexed ? snap_keys[id] : id, v);
+            }
+        }
+        off += rec->size;
+    }
+}
+
 bool km_store_peek(const km_flash_t *f, uint16_t version, const uint8_t *keys, uint32_t n,
                    uint32_t *values)
 {
@@ -51,33 +85,7 @@ bool km_store_peek(const km_flash_t *f, uint16_t version, const uint8_t *keys, u
             continue;
         }
         memcpy(cand, values, n * sizeof cand[0]);
-        const uint32_t snap_count = rec.count;
-        uint32_t at = 0u;
-        for (uint32_t i = 0; i < snap_count; i++) {
-            uint32_t v;
-            bool indexed;
-            km_rec_entry(&rec, &at, &snap_keys[i], &v, &indexed);
-            prv_set(keys, n, cand, snap_keys[i], v);
-        }
-        /* Deltas only after a K that reads programmed (docs/store.md). */
-        uint32_t off = rec.size;
-        if (!km_rec_cell_erased(f, p * f->page_size + off)) {
-            off += f->prog_size;
-            while (off < f->page_size && km_rec_read(f, p, off, buf, &rec) &&
-                   rec.type != KM_REC_SNAPSHOT) {
-                at = 0u;
-                for (uint32_t i = 0; i < rec.count; i++) {
-                    uint8_t id;
-                    uint32_t v;
-                    bool indexed;
-                    km_rec_entry(&rec, &at, &id, &v, &indexed);
-                    if (!indexed || id < snap_count) {
-                        prv_set(keys, n, cand, indexed ? snap_keys[id] : id, v);
-                    }
-                }
-                off += rec.size;
-            }
-        }
+        prv_replay(f, p, &rec, buf, keys, n, cand, snap_keys);
         memcpy(best, cand, n * sizeof best[0]);
     }
     if (!found || !same) {

@@ -22,15 +22,22 @@ static void prv_drop(km_boot_rx_t *rx, uint16_t k)
     rx->stale = rx->stale > k ? (uint16_t)(rx->stale - k) : 0u;
 }
 
+/* The n bytes held so far of the head candidate (h) cannot start a
+ * frame: the parser's header rules, byte by byte. */
+static bool prv_header_bad(const uint8_t *h, uint16_t n)
+{
+    return h[0] != KM_HDR0 || (n > 1u && h[1] != KM_HDR1_COMMAND && h[1] != KM_HDR1_RESPONSE) ||
+           (n > 2u && (h[1] == KM_HDR1_COMMAND ? !km_id_is_addressable(h[2]) : h[2] > KM_ID_MAX)) ||
+           (n > 3u && (h[3] < KM_LENGTH_MIN || h[3] > KM_LENGTH_MAX));
+}
+
 /* 0: the head candidate is good so far but incomplete; 1: it failed;
  * else its whole length (it is complete and its checksum matches). */
 static uint16_t prv_judge(const km_boot_rx_t *rx)
 {
     const uint8_t *h = rx->buf;
     const uint16_t n = rx->n;
-    if (h[0] != KM_HDR0 || (n > 1u && h[1] != KM_HDR1_COMMAND && h[1] != KM_HDR1_RESPONSE) ||
-        (n > 2u && (h[1] == KM_HDR1_COMMAND ? !km_id_is_addressable(h[2]) : h[2] > KM_ID_MAX)) ||
-        (n > 3u && (h[3] < KM_LENGTH_MIN || h[3] > KM_LENGTH_MAX))) {
+    if (prv_header_bad(h, n)) {
         return 1u;
     }
     const uint16_t need = n > 3u ? (uint16_t)(h[3] + 4u) : 0u;

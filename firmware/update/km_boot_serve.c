@@ -20,6 +20,55 @@ static void prv_status_answer(km_boot_serve_t *s, km_boot_reply_t *r)
     s->status = 0u;
 }
 
+/* 0x02: the version (0x0C) or the status (0x01); anything else is bit 5. */
+static void prv_read(km_boot_serve_t *s, const km_frame_view_t *f, int own, km_boot_reply_t *r)
+{
+    uint8_t body[5];
+    uint8_t n = 0u;
+    if (f->body_len == 1u && f->body[0] == PRV_REG_VERSION) {
+        body[0] = PRV_REG_VERSION;
+        for (uint32_t i = 0; i < 4u; i++) {
+            body[1u + i] = (uint8_t)(s->version >> (8u * i));
+        }
+        n = 5u;
+    } else if (f->body_len == 1u && f->body[0] == PRV_REG_STATUS) {
+        body[0] = PRV_REG_STATUS;
+        body[1] = s->status;
+        body[2] = 0u; /* the "random" byte: one bootloader per ID is all it can tell */
+        n = 3u;
+        s->status = 0u;
+    } else {
+        s->status |= PRV_ST_EXCEPTION;
+        if (own) {
+            prv_status_answer(s, r);
+        }
+        return;
+    }
+    if (own) {
+        r->len = km_encode_response(r->bytes, s->id, PRV_CMD_READ, body, n);
+    }
+}
+
+/* 0x78: the update's frames (km_update_proto.h). */
+static void prv_update(km_boot_serve_t *s, const km_frame_view_t *f, int own, km_boot_reply_t *r)
+{
+    km_update_answer_t a;
+    km_update_frame(&s->upd, f->body, f->body_len, &a);
+    if (s->upd.state == KM_UPD_STATE_COMMITTED || a.action == KM_UPD_ACT_RESTART) {
+        km_boot_trial_fresh(s->shared); /* a new image, or START: new tries */
+    }
+    if (a.action == KM_UPD_ACT_RESTART) {
+        r->action = KM_BOOT_ACT_RESTART;
+    } else if (a.action == KM_UPD_ACT_EXCEPTION) {
+        s->status |= PRV_ST_EXCEPTION;
+        if (own) {
+            prv_status_answer(s, r);
+        }
+    } else if (own && a.len > 0u) {
+        r->len = km_encode_response(r->bytes, s->id, KM_CMD_UPDATE, a.body, a.len);
+    }
+}
+
 void km_boot_serve(km_boot_serve_t *s, const km_frame_view_t *f, km_boot_reply_t *r)
 {
     r->len = 0u;
@@ -37,33 +86,9 @@ void km_boot_serve(km_boot_serve_t *s, const km_frame_view_t *f, km_boot_reply_t
             prv_status_answer(s, r);
         }
         return;
-    case PRV_CMD_READ: {
-        uint8_t body[5];
-        uint8_t n = 0u;
-        if (f->body_len == 1u && f->body[0] == PRV_REG_VERSION) {
-            body[0] = PRV_REG_VERSION;
-            for (uint32_t i = 0; i < 4u; i++) {
-                body[1u + i] = (uint8_t)(s->version >> (8u * i));
-            }
-            n = 5u;
-        } else if (f->body_len == 1u && f->body[0] == PRV_REG_STATUS) {
-            body[0] = PRV_REG_STATUS;
-            body[1] = s->status;
-            body[2] = 0u; /* the "random" byte: one bootloader per ID is all it can tell */
-            n = 3u;
-            s->status = 0u;
-        } else {
-            s->status |= PRV_ST_EXCEPTION;
-            if (own) {
-                prv_status_answer(s, r);
-            }
-            return;
-        }
-        if (own) {
-            r->len = km_encode_response(r->bytes, s->id, PRV_CMD_READ, body, n);
-        }
+    case PRV_CMD_READ:
+        prv_read(s, f, own, r);
         return;
-    }
     case PRV_CMD_WRITE: {
         static const uint8_t k_restart[5] = {PRV_REG_RESTART, 0xE1u, 0xE2u, 0xE3u, 0xE4u};
         if (f->body_len == 5u && memcmp(f->body, k_restart, 5u) == 0) {
@@ -73,24 +98,9 @@ void km_boot_serve(km_boot_serve_t *s, const km_frame_view_t *f, km_boot_reply_t
         }
         return;
     }
-    case KM_CMD_UPDATE: {
-        km_update_answer_t a;
-        km_update_frame(&s->upd, f->body, f->body_len, &a);
-        if (s->upd.state == KM_UPD_STATE_COMMITTED || a.action == KM_UPD_ACT_RESTART) {
-            km_boot_trial_fresh(s->shared); /* a new image, or START: new tries */
-        }
-        if (a.action == KM_UPD_ACT_RESTART) {
-            r->action = KM_BOOT_ACT_RESTART;
-        } else if (a.action == KM_UPD_ACT_EXCEPTION) {
-            s->status |= PRV_ST_EXCEPTION;
-            if (own) {
-                prv_status_answer(s, r);
-            }
-        } else if (own && a.len > 0u) {
-            r->len = km_encode_response(r->bytes, s->id, KM_CMD_UPDATE, a.body, a.len);
-        }
+    case KM_CMD_UPDATE:
+        prv_update(s, f, own, r);
         return;
-    }
     default:
         s->status |= PRV_ST_EXCEPTION;
         return;

@@ -51,6 +51,35 @@ static void prv_status(uint8_t state, uint8_t result, const km_update_t *u, cons
     a->len = (uint8_t)(9u + count);
 }
 
+/* WRITE: block number, the block, its CRC; answered with the block number. */
+static void prv_write(km_update_t *u, const uint8_t *p, uint8_t np, km_update_answer_t *a)
+{
+    km_update_result_t r;
+    if (np != 2u + KM_UPDATE_BLOCK + 4u) {
+        r = KM_UPD_BAD_LENGTH;
+    } else {
+        r = km_update_write(u, prv_le(p, 2), p + 2, prv_le(p + 2 + KM_UPDATE_BLOCK, 4));
+    }
+    prv_answer(a, KM_UPD_SUB_WRITE, (uint8_t)r);
+    a->body[2] = np >= 2u ? p[0] : 0u;
+    a->body[3] = np >= 2u ? p[1] : 0u;
+    a->len = 4u;
+    u->result = (uint8_t)r;
+}
+
+/* VERIFY: the image's CRC in the answer. */
+static void prv_verify(km_update_t *u, uint8_t np, km_update_answer_t *a)
+{
+    uint32_t crc = 0u;
+    const km_update_result_t r = np == 0u ? km_update_verify(u, &crc) : KM_UPD_BAD_LENGTH;
+    u->result = (uint8_t)r;
+    prv_answer(a, KM_UPD_SUB_VERIFY, (uint8_t)r);
+    for (uint32_t i = 0; i < 4u; i++) {
+        a->body[2u + i] = (uint8_t)(crc >> (8u * i));
+    }
+    a->len = 6u;
+}
+
 void km_update_frame(km_update_t *u, const uint8_t *body, uint8_t n, km_update_answer_t *a)
 {
     a->len = 0u;
@@ -75,31 +104,14 @@ void km_update_frame(km_update_t *u, const uint8_t *body, uint8_t n, km_update_a
         r = np == KM_IMAGE_HEADER_SIZE ? km_update_begin(u, p) : KM_UPD_BAD_LENGTH;
         break;
     case KM_UPD_SUB_WRITE:
-        if (np != 2u + KM_UPDATE_BLOCK + 4u) {
-            r = KM_UPD_BAD_LENGTH;
-        } else {
-            r = km_update_write(u, prv_le(p, 2), p + 2, prv_le(p + 2 + KM_UPDATE_BLOCK, 4));
-        }
-        prv_answer(a, sub, (uint8_t)r);
-        a->body[2] = np >= 2u ? p[0] : 0u;
-        a->body[3] = np >= 2u ? p[1] : 0u;
-        a->len = 4u;
-        u->result = (uint8_t)r;
+        prv_write(u, p, np, a);
         return;
     case KM_UPD_SUB_STATUS:
         prv_status(u->state, u->result, u, p, np, a);
         return;
-    case KM_UPD_SUB_VERIFY: {
-        uint32_t crc = 0u;
-        r = np == 0u ? km_update_verify(u, &crc) : KM_UPD_BAD_LENGTH;
-        u->result = (uint8_t)r;
-        prv_answer(a, sub, (uint8_t)r);
-        for (uint32_t i = 0; i < 4u; i++) {
-            a->body[2u + i] = (uint8_t)(crc >> (8u * i));
-        }
-        a->len = 6u;
+    case KM_UPD_SUB_VERIFY:
+        prv_verify(u, np, a);
         return;
-    }
     case KM_UPD_SUB_COMMIT:
         r = np == 0u ? km_update_commit(u) : KM_UPD_BAD_LENGTH;
         break;
