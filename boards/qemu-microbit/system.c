@@ -155,7 +155,7 @@ void km_hal_system_init(void)
     while (NRF_REG(NRF_CLOCK, CLOCK_EVENTS_HFCLKSTARTED) == 0u) {
     }
     /* SysTick runs at 1 kHz: QEMU only re-polls the UART
-     * socket promptly while a guest timer is active (DESIGN.md). TIMER0's
+     * socket promptly while a guest timer is active (QEMU 7.2, seen here). TIMER0's
      * pending compare already keeps one active (echo round trip measured
      * 1.2 ms median without SysTick, 0.95 ms with), so this is a cheap
      * belt-and-braces. A real nRF51 has no SysTick: the writes are ignored. */

@@ -62,7 +62,7 @@ void km_hal_sensors_init(void)
      * pot servo reads its shaft as it is; the encoder product reads a
      * single-turn absolute encoder and counts turns in RAM, so after a
      * restart its 0x46 is the angle within one turn, [0, 360.0) deg, before
-     * the zero offsets (PROTOCOL.md §5.3, §6; docs/protocol-decisions.md). */
+     * the zero offsets (docs/protocol.md §5.3, §6; docs/protocol-decisions.md). */
     s_encoder = km_board_product()->variant == KM_VARIANT_ENCODER;
     if (s_encoder) {
         s_encoder_config = km_plant_default_config;
