@@ -37,17 +37,65 @@ static int32_t prv_clamp32(int64_t v, int32_t lo, int32_t hi)
     return (int32_t)v;
 }
 
+/* Whether the configuration's values can make a plant at all. */
+static bool prv_config_ok(const km_plant_config_t *cfg)
+{
+    return !(cfg->motor_r_mohm == 0 || cfg->motor_ke_uv_s_rad == 0 || cfg->gear_ratio == 0 ||
+             cfg->gear_eff_pct == 0 || cfg->gear_eff_pct > 100 ||
+             (uint32_t)cfg->supply_r_mohm > 4u * cfg->motor_r_mohm ||
+             cfg->substep_us == 0 || cfg->substep_us > 1000 ||
+             cfg->thermal_r_mc_per_w == 0 || cfg->thermal_c_mj_per_c == 0 ||
+             cfg->pot_travel_ddeg < 0 || cfg->endstop_ddeg < 0);
+}
+
+/* Sub-step length, acceleration and thermal constants for damping b_q16. */
+static void prv_init_substep(km_plant_t *p, const km_plant_config_t *cfg, int64_t b_q16,
+                             int64_t j_total)
+{
+    /* Explicit Euler is stable (and not oscillating) while the damping
+     * removes less than half the speed per sub-step: halve until it does. */
+    uint32_t sub = cfg->substep_us;
+    int64_t acc_q24;
+    for (;;) {
+        /* dw[m°/s] = T[µN·m] * dt[µs] * 57.29578 / J[g·mm²] */
+        acc_q24 = (((int64_t)sub * MDEG_PER_RAD_X1000) << 24) / (j_total * 1000000);
+        if (sub == 1 || prv_mulsh(b_q16, acc_q24, 24) < (1 << 15)) {
+            break;
+        }
+        sub /= 2u;
+    }
+    p->sub_us = sub;
+    p->acc_q24 = acc_q24;
+    /* dT[µ°C] = I[mA]^2 * R[mΩ] / 1e6 [mW] * dt[µs] / C[mJ/°C] */
+    p->heat_q30 = (((int64_t)cfg->motor_r_mohm * sub) << 30) /
+                  ((int64_t)cfg->thermal_c_mj_per_c * 1000000);
+    /* dT = -(T - T_amb) * dt / (R_th C), R_th[m°C/W] * C[mJ/°C] = tau in µs */
+    p->cool_q30 = ((int64_t)sub << 30) /
+                  ((int64_t)cfg->thermal_r_mc_per_w * cfg->thermal_c_mj_per_c);
+}
+
+/* The state at power-on: at rest at 0, at ambient temperature. */
+static void prv_init_state(km_plant_t *p, const km_plant_config_t *cfg)
+{
+    p->supply_mv = cfg->supply_mv;
+    p->ambient_uc = (int32_t)cfg->ambient_dc * 100000;
+    p->faults = 0;
+    p->pos_ddeg = 0;
+    p->pos_rem_ndeg = 0;
+    p->speed_mdps = 0;
+    p->current_ma = 0;
+    p->supply_ma = 0;
+    p->bus_mv = p->supply_mv;
+    p->temp_uc = p->ambient_uc;
+    p->carry_us = 0;
+    p->step_peak_ma = 0;
+    p->time_ms = 0;
+    p->time_us_part = 0;
+}
+
 bool km_plant_init(km_plant_t *p, const km_plant_config_t *cfg)
 {
-    if (p == NULL || cfg == NULL) {
-        return false;
-    }
-    if (cfg->motor_r_mohm == 0 || cfg->motor_ke_uv_s_rad == 0 || cfg->gear_ratio == 0 ||
-        cfg->gear_eff_pct == 0 || cfg->gear_eff_pct > 100 ||
-        (uint32_t)cfg->supply_r_mohm > 4u * cfg->motor_r_mohm ||
-        cfg->substep_us == 0 || cfg->substep_us > 1000 ||
-        cfg->thermal_r_mc_per_w == 0 || cfg->thermal_c_mj_per_c == 0 ||
-        cfg->pot_travel_ddeg < 0 || cfg->endstop_ddeg < 0) {
+    if (p == NULL || cfg == NULL || !prv_config_ok(cfg)) {
         return false;
     }
     int64_t ratio = cfg->gear_ratio;
@@ -73,41 +121,8 @@ bool km_plant_init(km_plant_t *p, const km_plant_config_t *cfg)
     /* Damping per m°/s, Q16 µN·m: electrical (Ke Kt / R) plus viscous. */
     p->visc_q16 = ((int64_t)cfg->viscous_unm_per_dps << 16) / 1000;
     int64_t b_q16 = prv_mulsh(prv_mulsh(ke_q24, p->g_q16, 24), kt_q16, 16) + p->visc_q16;
-    /* Explicit Euler is stable (and not oscillating) while the damping
-     * removes less than half the speed per sub-step: halve until it does. */
-    uint32_t sub = cfg->substep_us;
-    int64_t acc_q24;
-    for (;;) {
-        /* dw[m°/s] = T[µN·m] * dt[µs] * 57.29578 / J[g·mm²] */
-        acc_q24 = (((int64_t)sub * MDEG_PER_RAD_X1000) << 24) / (j_total * 1000000);
-        if (sub == 1 || prv_mulsh(b_q16, acc_q24, 24) < (1 << 15)) {
-            break;
-        }
-        sub /= 2u;
-    }
-    p->sub_us = sub;
-    p->acc_q24 = acc_q24;
-    /* dT[µ°C] = I[mA]^2 * R[mΩ] / 1e6 [mW] * dt[µs] / C[mJ/°C] */
-    p->heat_q30 = (((int64_t)cfg->motor_r_mohm * sub) << 30) /
-                  ((int64_t)cfg->thermal_c_mj_per_c * 1000000);
-    /* dT = -(T - T_amb) * dt / (R_th C), R_th[m°C/W] * C[mJ/°C] = tau in µs */
-    p->cool_q30 = ((int64_t)sub << 30) /
-                  ((int64_t)cfg->thermal_r_mc_per_w * cfg->thermal_c_mj_per_c);
-
-    p->supply_mv = cfg->supply_mv;
-    p->ambient_uc = (int32_t)cfg->ambient_dc * 100000;
-    p->faults = 0;
-    p->pos_ddeg = 0;
-    p->pos_rem_ndeg = 0;
-    p->speed_mdps = 0;
-    p->current_ma = 0;
-    p->supply_ma = 0;
-    p->bus_mv = p->supply_mv;
-    p->temp_uc = p->ambient_uc;
-    p->carry_us = 0;
-    p->step_peak_ma = 0;
-    p->time_ms = 0;
-    p->time_us_part = 0;
+    prv_init_substep(p, cfg, b_q16, j_total);
+    prv_init_state(p, cfg);
     /* the realistic model (km_plant_real.c) builds on the state above */
     return cfg->real == NULL || km_plant_init_real(p);
 }
