@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Cross toolchain for the Cortex-M boards (Debian gcc-arm-none-eabi + newlib).
 # The CPU flags come from the board's board.cmake; this file only names tools.
 set(CMAKE_SYSTEM_NAME Generic)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Boards, discovered: every folder boards/<name>/ with a board.cmake is a
 # board called <name>. boards/template/ is the pattern a new board copies
 # (and nothing else: docs/architecture.md "Boards and the build"), not a

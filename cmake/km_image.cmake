@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # km_add_image: one bare-metal firmware image per call, for any board.
 #
 #   km_add_image(NAME <name> LINKER_SCRIPT <file.ld>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The control tick (see km_control.h): sensing, self-test and protection,
  * servo mode, position loop and output stage, in that order, once per
  * tick. */
@@ -207,8 +208,8 @@ static int32_t prv_sense(km_control_t *c, int32_t pos, uint32_t dt_us, int32_t *
 
 /* 2. self-test and protection, on what the bridge drives now; their
  * events go into live. Returns the hardware faults found at this tick. */
-static uint8_t prv_supervise(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p, int32_t pos,
-                             uint32_t dt_us, km_live_t *live)
+static uint8_t prv_supervise(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p,
+                             int32_t pos, uint32_t dt_us, km_live_t *live)
 {
     const int32_t drive = c->bridge.mode == KM_BRIDGE_PWM ? c->bridge.pwm : 0;
     const uint8_t hw = km_selftest_step(&c->selftest, in, p, drive, c->bridge.mode == KM_BRIDGE_FREE, dt_us);
@@ -293,8 +294,8 @@ static void prv_protect_output(km_control_t *c)
 
 /* What this tick reports: every field of live assigned (no memset: it is
  * a byte loop on the M0) but the events the supervisor filled. */
-static void prv_report(km_control_t *c, const km_sensors_t *in, int32_t pos, int32_t speed_dps, bool was_acting,
-                       uint8_t hw_found, km_live_t *live)
+static void prv_report(km_control_t *c, const km_sensors_t *in, int32_t pos, int32_t speed_dps,
+                       bool was_acting, uint8_t hw_found, km_live_t *live)
 {
     const bool motor = c->motor.active;
     live->position = pos;
@@ -322,8 +323,8 @@ static void prv_report(km_control_t *c, const km_sensors_t *in, int32_t pos, int
     live->time_ms = c->time_ms;
 }
 
-void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p,
-                     uint32_t dt_us, km_live_t *live, km_bridge_t *bridge)
+void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p, uint32_t dt_us,
+                     km_live_t *live, km_bridge_t *bridge)
 {
     const int32_t pos = prv_position(in, p);
     int32_t speed_dps;

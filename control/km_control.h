@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Control: one tick turns the sensors into the live registers and a bridge
  * command, as step(state, inputs, dt) so host tests drive it without
  * hardware. The app runs it every KM_CONTROL_TICK_US (1 kHz) on every
@@ -55,26 +56,26 @@
 typedef struct {
     /* The tick's own scalars first: on the M0 a byte load or store reaches
      * 32 bytes into a struct, a word one 128. */
-    uint8_t action;              /* km_prot_action_t in force */
-    uint8_t ts_after;            /* 0x64 once the protections are released */
-    uint8_t hw;                  /* 0x35 bits found */
-    uint8_t cleared;             /* protections a clear request released since the last tick */
+    uint8_t action;   /* km_prot_action_t in force */
+    uint8_t ts_after; /* 0x64 once the protections are released */
+    uint8_t hw;       /* 0x35 bits found */
+    uint8_t cleared;  /* protections a clear request released since the last tick */
     bool have_position;
-    km_bridge_t bridge;          /* the last command */
-    int32_t position;            /* 0.1 deg, master's frame, last tick */
-    int32_t temp_c10;            /* the last temperature read, 0.1 degC, */
-    int32_t temp_c;              /* and it in degC: divided again only when it changes */
-    uint32_t time_ms;            /* since init (the fault log's clock) */
+    km_bridge_t bridge; /* the last command */
+    int32_t position;   /* 0.1 deg, master's frame, last tick */
+    int32_t temp_c10;   /* the last temperature read, 0.1 degC, */
+    int32_t temp_c;     /* and it in degC: divided again only when it changes */
+    uint32_t time_ms;   /* since init (the fault log's clock) */
     uint32_t time_rem_us;
     km_servo_mode_t servo;
     km_motor_mode_t motor;
     km_position_loop_t loop;
-    km_speed_window_t speed;     /* 0x47 */
-    km_speed_fast_t fast;        /* the loop's damping input */
-    km_current_limit_t ilim;     /* 0x5C / 0x14 */
-    km_protect_t prot;           /* the protection supervisor */
-    km_selftest_t selftest;      /* 0x35 */
-    uint32_t requests;           /* typed requests received (diagnostics) */
+    km_speed_window_t speed; /* 0x47 */
+    km_speed_fast_t fast;    /* the loop's damping input */
+    km_current_limit_t ilim; /* 0x5C / 0x14 */
+    km_protect_t prot;       /* the protection supervisor */
+    km_selftest_t selftest;  /* 0x35 */
+    uint32_t requests;       /* typed requests received (diagnostics) */
     km_request_t last_request;
 } km_control_t;
 
@@ -84,7 +85,7 @@ void km_control_init(km_control_t *c, const km_control_params_t *p);
 bool km_control_request(km_control_t *c, const km_request_t *req, const km_control_params_t *p);
 
 /* One control tick: sensors in, live registers and bridge command out. */
-void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p,
-                     uint32_t dt_us, km_live_t *live, km_bridge_t *bridge);
+void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p, uint32_t dt_us,
+                     km_live_t *live, km_bridge_t *bridge);
 
 #endif

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Current limit: an integral PWM cap (contract in km_current_limit.h). */
 #include "km_current_limit.h"
 

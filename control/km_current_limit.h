@@ -1,4 +1,5 @@
-/* Current limit (PROTOCOL.md §5.4 0x5C, bounded by §5.1 0x14): a PWM cap
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Current limit (docs/protocol.md §5.4 0x5C, bounded by §5.1 0x14): a PWM cap
  * that closes while the measured current is above the limit and opens
  * again below it, so the bridge never holds more than the limit for long
  * whatever the load (stall, a heavy inertia accelerated hard, low winding

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Division by the control tick's constants without a divide instruction:
  * reciprocal multiplies, exact (km_fixdiv.h says why;
  * tests/unit/test_control_fixdiv.c checks it). */
@@ -47,15 +48,15 @@ PRV_INLINE uint32_t prv_udiv256000(uint32_t n)
 
 /* Each unsigned one, and its signed twin: truncated toward zero like C's
  * `/` (the magnitude of INT32_MIN is formed in uint32). */
-#define PRV_DIVS(d)                                              \
-    uint32_t km_udiv##d(uint32_t n)                              \
-    {                                                            \
-        return prv_udiv##d(n);                                   \
-    }                                                            \
-    int32_t km_sdiv##d(int32_t n)                                \
-    {                                                            \
+#define PRV_DIVS(d)                                                             \
+    uint32_t km_udiv##d(uint32_t n)                                             \
+    {                                                                           \
+        return prv_udiv##d(n);                                                  \
+    }                                                                           \
+    int32_t km_sdiv##d(int32_t n)                                               \
+    {                                                                           \
         const uint32_t q = prv_udiv##d(n < 0 ? 0u - (uint32_t)n : (uint32_t)n); \
-        return n < 0 ? -(int32_t)q : (int32_t)q;                 \
+        return n < 0 ? -(int32_t)q : (int32_t)q;                                \
     }
 
 PRV_DIVS(10)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Division by the control tick's constants without a divide: the Cortex-M0
  * (ARMv6-M) has no divide instruction, and libgcc's __aeabi_idiv costs
  * 15..100 instructions a call. Each quotient here is a multiply by a
@@ -20,8 +21,8 @@ static inline __attribute__((always_inline)) uint32_t km_umulhi(uint32_t a, uint
 {
     const uint32_t ah = a >> 16, al = a & 0xFFFFu, bh = b >> 16, bl = b & 0xFFFFu;
     const uint32_t ll = al * bl;
-    const uint32_t m1 = ah * bl + (ll >> 16);          /* < 2^32: (2^16-1)^2 + 2^16 */
-    const uint32_t m2 = al * bh + (m1 & 0xFFFFu);      /* likewise */
+    const uint32_t m1 = ah * bl + (ll >> 16);     /* < 2^32: (2^16-1)^2 + 2^16 */
+    const uint32_t m2 = al * bh + (m1 & 0xFFFFu); /* likewise */
     return ah * bh + (m1 >> 16) + (m2 >> 16);
 }
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Motor mode: constant PWM, constant speed, counted runs (see
  * km_motor_mode.h for the rules). */
 #include "km_motor_mode.h"
@@ -78,7 +79,8 @@ void km_motor_mode_run(km_motor_mode_t *m, const km_motor_run_t *run, const km_c
     m->count_kind = run->until;
     m->start_pos = position;
     m->remain_ms = run->until == KM_UNTIL_TIME ? amount * 100u : 0u; /* 0.1 s units */
-    m->travel = run->until == KM_UNTIL_ANGLE ? (int32_t)amount * 10 : (int32_t)amount * 360; /* 1 deg, 0.1 turn */
+    m->travel =
+        run->until == KM_UNTIL_ANGLE ? (int32_t)amount * 10 : (int32_t)amount * 360; /* 1 deg, 0.1 turn */
     if (run->until != KM_UNTIL_NONE && amount == 0u) {
         m->running = false; /* a run of nothing ends at once */
     }
@@ -109,7 +111,8 @@ static void prv_count(km_motor_mode_t *m, int32_t position, uint32_t dt_us)
 
 /* The speed loop (0.1 deg/s): feedforward kv x speed and friction, kd x
  * the speed error and a bounded integrator; the PWM in +-1000. */
-static int32_t prv_speed_loop(km_motor_mode_t *m, const km_control_gains_t *g, int32_t speed_ddps, uint32_t dt_us)
+static int32_t prv_speed_loop(km_motor_mode_t *m, const km_control_gains_t *g, int32_t speed_ddps,
+                              uint32_t dt_us)
 {
     const int32_t sp = m->speed_dps;
     const int32_t v = speed_ddps > 1000000 ? 1000000 : (speed_ddps < -1000000 ? -1000000 : speed_ddps);

@@ -1,4 +1,5 @@
-/* Motor mode (PROTOCOL.md §5.4 0x6E..0x70): the shaft turns at a constant
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Motor mode (docs/protocol.md §5.4 0x6E..0x70): the shaft turns at a constant
  * PWM or at a constant speed instead of holding a position.
  *
  *  0x6E  constant PWM -1000..1000 (sign = direction, 0 = stop), bounded by
@@ -46,21 +47,21 @@
 #include "km_params.h"
 #include "km_request.h"
 
-#define KM_MOTOR_KI_Q8 5120  /* speed loop integrator: PWM per deg of speed error x s, Q8 (20) */
+#define KM_MOTOR_KI_Q8 5120 /* speed loop integrator: PWM per deg of speed error x s, Q8 (20) */
 
 typedef struct {
-    bool active;            /* motor mode owns the bridge */
-    bool running;           /* status bit 7 */
-    bool speed_mode;        /* speed loop, else constant PWM */
-    int32_t pwm;            /* constant PWM, master's frame */
-    int32_t speed_dps;      /* speed set-point, master's frame */
-    uint8_t count_kind;     /* km_run_until_t of the run */
-    uint32_t remain_ms;     /* time left (kind 1), ms */
-    int32_t start_pos;      /* 0.1 deg, kinds 2/3 */
-    int32_t travel;         /* 0.1 deg to go, kinds 2/3 */
+    bool active;                  /* motor mode owns the bridge */
+    bool running;                 /* status bit 7 */
+    bool speed_mode;              /* speed loop, else constant PWM */
+    int32_t pwm;                  /* constant PWM, master's frame */
+    int32_t speed_dps;            /* speed set-point, master's frame */
+    uint8_t count_kind;           /* km_run_until_t of the run */
+    uint32_t remain_ms;           /* time left (kind 1), ms */
+    int32_t start_pos;            /* 0.1 deg, kinds 2/3 */
+    int32_t travel;               /* 0.1 deg to go, kinds 2/3 */
     km_bridge_mode_t stop_bridge; /* output once stopped */
-    int32_t i_acc;          /* speed integrator, PWM x 256000 */
-    uint32_t rotation_ms;   /* 0x4D */
+    int32_t i_acc;                /* speed integrator, PWM x 256000 */
+    uint32_t rotation_ms;         /* 0x4D */
     uint32_t rotation_rem_us;
 } km_motor_mode_t;
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Output stage (see km_output.h). */
 #include "km_output.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Output stage: the one place a bridge command is made. Applies the
  * direction bit (0x11 bit 2: the loop works in the master's frame, the
  * motor turns the sensor's way), the PWM limit (0x5B, and a move's own

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Position loop (see km_position_loop.h): PID with speed feedforward and
  * anti-windup, 32-bit fixed point; its divisions by constants are
  * reciprocal multiplies (km_fixdiv.h: the M0 has no divide), equal to C's. */
@@ -28,7 +29,7 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     const int32_t ev = prv_clamp(vs - prv_clamp(in->speed_ddps, -20000, 20000), -20000, 20000);
     /* kp: PWM per 0.1 deg Q8 -> kp x e_u / 1000 / 256; e_u / 100 first keeps 32 bits */
     int32_t out = km_sdiv2560((int32_t)g->kp_q8 * km_sdiv100(e_u));
-    out += km_sdiv2560((int32_t)g->kd_q8 * ev);   /* kd: PWM per deg/s Q8, ev 0.1 deg/s */
+    out += km_sdiv2560((int32_t)g->kd_q8 * ev); /* kd: PWM per deg/s Q8, ev 0.1 deg/s */
     /* acceleration feedforward: tau x dv/dt as a speed, 0.1 deg/s */
     const int32_t dvs = prv_clamp(vs - l->last_sp_ddps, -20000, 20000);
     const int32_t tau = g->tau_ms > 1000u ? 1000 : (int32_t)g->tau_ms;
@@ -48,8 +49,10 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     int32_t i_pwm = km_sdiv256000(l->i_acc);
     if (in->integrate) {
         const int32_t i_max = (g->i_max_pwm > 1000u ? 1000 : (int32_t)g->i_max_pwm) * 256000;
-        const int32_t e_d = prv_clamp(km_sdiv1000(e_u), -100, 100); /* 10 deg: the integrator is for small errors */
-        const int32_t di = km_sdiv100(km_sdiv10((int32_t)g->ki_q8 * e_d) * (int32_t)(dt_us > 2000u ? 2000u : dt_us));
+        const int32_t e_d =
+            prv_clamp(km_sdiv1000(e_u), -100, 100); /* 10 deg: the integrator is for small errors */
+        const int32_t di =
+            km_sdiv100(km_sdiv10((int32_t)g->ki_q8 * e_d) * (int32_t)(dt_us > 2000u ? 2000u : dt_us));
         const int32_t before = out + i_pwm;
         if (!((before >= in->pwm_max && di > 0) || (before <= -in->pwm_max && di < 0))) {
             l->i_acc = prv_clamp(l->i_acc + di, -i_max, i_max);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Position loop: the PWM that makes the shaft follow the profile's
  * set-point. PWM = feedforward kv x (set-point speed + tau x set-point
  * acceleration), plus friction while the set-point moves; + kp x position
@@ -21,12 +22,12 @@ typedef struct {
 } km_position_loop_t;
 
 typedef struct {
-    int32_t setpoint_u;     /* profile set-point, 0.001 x 0.1 deg */
-    int32_t setpoint_ddps;  /* profile speed, 0.1 deg/s */
-    int32_t position;       /* measured, 0.1 deg */
-    int32_t speed_ddps;     /* measured, 0.1 deg/s */
-    int32_t pwm_max;        /* output bound, 0..1000 */
-    bool integrate;         /* the integrator runs (holding: the set-point is at rest) */
+    int32_t setpoint_u;    /* profile set-point, 0.001 x 0.1 deg */
+    int32_t setpoint_ddps; /* profile speed, 0.1 deg/s */
+    int32_t position;      /* measured, 0.1 deg */
+    int32_t speed_ddps;    /* measured, 0.1 deg/s */
+    int32_t pwm_max;       /* output bound, 0..1000 */
+    bool integrate;        /* the integrator runs (holding: the set-point is at rest) */
 } km_position_loop_in_t;
 
 void km_position_loop_init(km_position_loop_t *l);

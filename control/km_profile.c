@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Trajectory generator (see km_profile.h): time-optimal moves under speed
  * and acceleration bounds, moves in a given time, and constant-speed
  * stream segments. 32-bit arithmetic (one 32 x 32 -> 64 product and its
@@ -51,27 +52,27 @@ static int32_t prv_speed_for(int32_t d, int32_t ms, int32_t vmax)
  * root is 4R + b for the largest b in 0..3 with 8Rb + b^2 <= X. For roots
  * below 2^28, R < 2^26 before the last step, so X <= 32R + 15 < 2^31: all
  * 32-bit. */
-#define PRV_SQRT_NIBBLES(w, n)                                   \
-    for (; (n) > 0u; (n)--) {                                    \
-        const uint32_t x = (rem << 4) | ((w) >> 28);             \
-        (w) <<= 4;                                               \
-        const uint32_t r8 = root << 3, t2 = (r8 << 1) + 4u;      \
-        root <<= 2;                                              \
-        if (x >= t2) {                                           \
-            const uint32_t t3 = t2 + r8 + 5u;                    \
-            if (x >= t3) {                                       \
-                rem = x - t3;                                    \
-                root |= 3u;                                      \
-            } else {                                             \
-                rem = x - t2;                                    \
-                root |= 2u;                                      \
-            }                                                    \
-        } else if (x > r8) {                                     \
-            rem = x - (r8 + 1u);                                 \
-            root |= 1u;                                          \
-        } else {                                                 \
-            rem = x;                                             \
-        }                                                        \
+#define PRV_SQRT_NIBBLES(w, n)                              \
+    for (; (n) > 0u; (n)--) {                               \
+        const uint32_t x = (rem << 4) | ((w) >> 28);        \
+        (w) <<= 4;                                          \
+        const uint32_t r8 = root << 3, t2 = (r8 << 1) + 4u; \
+        root <<= 2;                                         \
+        if (x >= t2) {                                      \
+            const uint32_t t3 = t2 + r8 + 5u;               \
+            if (x >= t3) {                                  \
+                rem = x - t3;                               \
+                root |= 3u;                                 \
+            } else {                                        \
+                rem = x - t2;                               \
+                root |= 2u;                                 \
+            }                                               \
+        } else if (x > r8) {                                \
+            rem = x - (r8 + 1u);                            \
+            root |= 1u;                                     \
+        } else {                                            \
+            rem = x;                                        \
+        }                                                   \
     }
 
 /* floor(sqrt(hi:lo)) for hi:lo < 2^56, one word after the other, leading
@@ -282,8 +283,7 @@ static void prv_step(km_profile_t *p, uint32_t dt_us)
     const int32_t q = prv_abs(prv_advance(p, dt_us)); /* |vel| / 1000: C's / truncates */
     const int32_t left = p->target - p->pos;
     /* arrived (or crossed within one piece): stop on the target */
-    if (left == 0 || ((left > 0) != (e > 0) && e != 0) ||
-        (prv_abs(left) <= q + 1 && prv_abs(p->vel) <= dv)) {
+    if (left == 0 || ((left > 0) != (e > 0) && e != 0) || (prv_abs(left) <= q + 1 && prv_abs(p->vel) <= dv)) {
         p->pos = p->target;
         p->pos_rem = 0;
         p->vel = 0;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Trajectory generator: the set-point the position loop follows.
  *
  * Units: position in u = 0.001 x 0.1 deg (1e-4 deg), speed in u/s
@@ -34,17 +35,17 @@
 #define KM_PROFILE_DDEG_MAX 1000000 /* +-100,000 deg: positions are clamped to it */
 
 typedef struct {
-    int32_t pos;       /* set-point, u */
-    int32_t vel;       /* set-point speed, u/s */
-    int32_t target;    /* u */
-    int32_t vmax;      /* u/s, > 0 */
-    int32_t accel;     /* u/s per ms, > 0 */
-    int32_t pos_rem;   /* position remainder, u/1e6 */
-    int32_t vel_rem;   /* speed remainder, u/s per 1000 */
-    uint32_t vsq_hi;   /* vmax^2 (high, low word), set with vmax by a move: */
-    uint32_t vsq_lo;   /* the braking test of every tick compares with it */
-    bool stream;       /* constant-speed segment (0x68) */
-    bool done;         /* at the target, at rest */
+    int32_t pos;     /* set-point, u */
+    int32_t vel;     /* set-point speed, u/s */
+    int32_t target;  /* u */
+    int32_t vmax;    /* u/s, > 0 */
+    int32_t accel;   /* u/s per ms, > 0 */
+    int32_t pos_rem; /* position remainder, u/1e6 */
+    int32_t vel_rem; /* speed remainder, u/s per 1000 */
+    uint32_t vsq_hi; /* vmax^2 (high, low word), set with vmax by a move: */
+    uint32_t vsq_lo; /* the braking test of every tick compares with it */
+    bool stream;     /* constant-speed segment (0x68) */
+    bool done;       /* at the target, at rest */
 } km_profile_t;
 
 /* At rest at `pos_ddeg`. */

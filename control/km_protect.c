@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Protection supervisor: the four state machines, their timers and the
  * action of the highest active protection (contract in km_protect.h). */
 #include "km_protect.h"
@@ -8,7 +9,8 @@
 #define PRV_US_PER_100MS 100000u
 
 /* §5.2 priority, highest first: voltage > temperature > current > stall. */
-static const uint8_t s_priority[PRV_N] = {KM_PROT_VOLTAGE, KM_PROT_TEMPERATURE, KM_PROT_CURRENT, KM_PROT_STALL};
+static const uint8_t s_priority[PRV_N] = {KM_PROT_VOLTAGE, KM_PROT_TEMPERATURE, KM_PROT_CURRENT,
+                                          KM_PROT_STALL};
 
 static uint8_t prv_index(uint8_t bit)
 {

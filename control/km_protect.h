@@ -1,4 +1,5 @@
-/* Protection supervisor (PROTOCOL.md §5.2, status bits 0-3 of §4): voltage,
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Protection supervisor (docs/protocol.md §5.2, status bits 0-3 of §4): voltage,
  * temperature, current and stall, one state machine each, run every control
  * tick after sensing and before the output stage. Pure, fixed-point.
  *
@@ -55,7 +56,7 @@ typedef enum {
     KM_PROT_ACT_NONE = 0, /* no protection active: control as usual */
     KM_PROT_ACT_FREE,
     KM_PROT_ACT_BRAKE,
-    KM_PROT_ACT_HOLD,     /* hold the position the shaft had at the trip */
+    KM_PROT_ACT_HOLD, /* hold the position the shaft had at the trip */
 } km_prot_action_t;
 
 typedef enum {
@@ -75,12 +76,12 @@ typedef struct {
 } km_protect_in_t;
 
 typedef struct {
-    uint32_t timer_us[4];    /* up/down excursion timers, index = bit number */
-    int32_t stall_anchor;    /* where the current stall excursion began */
+    uint32_t timer_us[4]; /* up/down excursion timers, index = bit number */
+    int32_t stall_anchor; /* where the current stall excursion began */
     bool stall_anchored;
-    uint8_t active;          /* tripped protections, 0x36 bits */
-    uint8_t over;            /* excursions present at the last step */
-    uint8_t timing;          /* timers not at 0 (the step's fast path when none) */
+    uint8_t active; /* tripped protections, 0x36 bits */
+    uint8_t over;   /* excursions present at the last step */
+    uint8_t timing; /* timers not at 0 (the step's fast path when none) */
 } km_protect_t;
 
 void km_protect_init(km_protect_t *s);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Power-on self-test, the run-time sensor supervision and the motor check
  * (contract in km_selftest.h). */
 #include "km_selftest.h"

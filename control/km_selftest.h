@@ -1,4 +1,5 @@
-/* Power-on self-test (PROTOCOL.md §5.2 0x35, status bit 4): sensor
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Power-on self-test (docs/protocol.md §5.2 0x35, status bit 4): sensor
  * plausibility over the first KM_SELFTEST_SAMPLES control ticks after
  * boot, with the bridge off; the same plausibility of the position and
  * temperature sensors supervised at run time; and one check that needs the
@@ -51,8 +52,8 @@
 #include "km_params.h"
 #include "km_status.h"
 
-#define KM_SELFTEST_SAMPLES 16u          /* ticks of the power-on check */
-#define KM_SELFTEST_FREE_MIN 4u          /* bridge-free samples the offset check needs */
+#define KM_SELFTEST_SAMPLES 16u /* ticks of the power-on check */
+#define KM_SELFTEST_FREE_MIN 4u /* bridge-free samples the offset check needs */
 #define KM_SELFTEST_NTC_OPEN_C10 (-300)
 #define KM_SELFTEST_NTC_SHORT_C10 1500
 #define KM_SELFTEST_SUPPLY_MIN_MV 2000
@@ -61,16 +62,16 @@
 #define KM_SELFTEST_MOTOR_PWM 300
 #define KM_SELFTEST_MOTOR_MA 10
 #define KM_SELFTEST_MOTOR_US 500000u
-#define KM_SELFTEST_POS_RUN_US 20000u    /* run-time position check: a wiper lost while holding */
-#define KM_SELFTEST_TEMP_RUN_US 500000u  /* run-time temperature check (heat is slow) */
+#define KM_SELFTEST_POS_RUN_US 20000u   /* run-time position check: a wiper lost while holding */
+#define KM_SELFTEST_TEMP_RUN_US 500000u /* run-time temperature check (heat is slow) */
 
 typedef struct {
-    uint8_t samples;          /* power-on samples taken */
-    uint8_t fails[4];         /* per power-on check: samples that failed */
-    uint8_t free_samples;     /* samples taken with the bridge free (the current check's) */
-    uint8_t faults;           /* 0x35 bits found so far (latched) */
-    uint32_t motor_open_us;   /* driven without current, continuous */
-    uint32_t run_bad_us[2];   /* run-time up/down timers: position, temperature */
+    uint8_t samples;        /* power-on samples taken */
+    uint8_t fails[4];       /* per power-on check: samples that failed */
+    uint8_t free_samples;   /* samples taken with the bridge free (the current check's) */
+    uint8_t faults;         /* 0x35 bits found so far (latched) */
+    uint32_t motor_open_us; /* driven without current, continuous */
+    uint32_t run_bad_us[2]; /* run-time up/down timers: position, temperature */
 } km_selftest_t;
 
 void km_selftest_init(km_selftest_t *t);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Servo mode: torque switch state machine and rotation commands (see
  * km_servo_mode.h for the rules). */
 #include "km_servo_mode.h"
@@ -119,7 +120,8 @@ static void prv_plan(km_servo_mode_t *m, const km_move_t *mv, const km_control_p
     }
 }
 
-bool km_servo_mode_move(km_servo_mode_t *m, const km_move_t *mv, const km_control_params_t *p, int32_t position)
+bool km_servo_mode_move(km_servo_mode_t *m, const km_move_t *mv, const km_control_params_t *p,
+                        int32_t position)
 {
     if (m->ts != KM_TORQUE_ON && m->ts != KM_TORQUE_ARMED) {
         return false; /* torque off or protecting */
@@ -161,8 +163,8 @@ int32_t km_servo_mode_deviation(const km_servo_mode_t *m, int32_t position)
     return m->ts == KM_TORQUE_ON ? position - m->target : 0;
 }
 
-void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_t position, int32_t speed_ddps,
-                        uint32_t dt_us, km_servo_mode_out_t *out)
+void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_t position,
+                        int32_t speed_ddps, uint32_t dt_us, km_servo_mode_out_t *out)
 {
     /* every field assigned below (no memset: a byte loop on the M0) */
     out->pwm_cap = m->pwm_cap;

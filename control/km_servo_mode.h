@@ -1,4 +1,5 @@
-/* Servo mode (PROTOCOL.md §5.4): the torque switch 0x64 as a state machine
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Servo mode (docs/protocol.md §5.4): the torque switch 0x64 as a state machine
  * and the rotation commands 0x65..0x68 turned into profile moves.
  *
  *  0x64 = 0  off, free: motion stops, bridge free.
@@ -46,30 +47,30 @@
 #include "km_params.h"
 #include "km_request.h"
 
-#define KM_STREAM_GAP_US 200000u   /* a 0x68 later than this after the previous one starts a new stream */
+#define KM_STREAM_GAP_US 200000u /* a 0x68 later than this after the previous one starts a new stream */
 
 typedef struct {
-    uint8_t ts;             /* km_torque_t as control runs it */
-    bool touched;           /* a torque command has come since power-on */
+    uint8_t ts;   /* km_torque_t as control runs it */
+    bool touched; /* a torque command has come since power-on */
     km_profile_t profile;
-    int32_t target;         /* 0.1 deg, the target in force */
-    int32_t pwm_cap;        /* this move's own PWM bound, else 1000 */
-    bool running;           /* status bit 7 */
-    uint32_t rotation_ms;   /* 0x4D */
+    int32_t target;       /* 0.1 deg, the target in force */
+    int32_t pwm_cap;      /* this move's own PWM bound, else 1000 */
+    bool running;         /* status bit 7 */
+    uint32_t rotation_ms; /* 0x4D */
     uint32_t rotation_rem_us;
-    uint32_t settle_us;     /* since the profile reached the target */
-    bool streaming;         /* the last move was a stream target */
-    uint32_t stream_us;     /* since the last stream target */
-    bool reset_loop;        /* the loop starts afresh at the next tick */
+    uint32_t settle_us; /* since the profile reached the target */
+    bool streaming;     /* the last move was a stream target */
+    uint32_t stream_us; /* since the last stream target */
+    bool reset_loop;    /* the loop starts afresh at the next tick */
 } km_servo_mode_t;
 
 typedef struct {
-    km_bridge_mode_t bridge;  /* PWM = the position loop drives */
-    int32_t setpoint_u;       /* profile set-point, 0.001 x 0.1 deg */
-    int32_t setpoint_ddps;    /* profile speed, 0.1 deg/s */
-    int32_t pwm_cap;          /* the move's own PWM bound */
-    bool reset_loop;          /* clear the loop's integrator first */
-    bool holding;             /* the set-point is at rest on the target */
+    km_bridge_mode_t bridge; /* PWM = the position loop drives */
+    int32_t setpoint_u;      /* profile set-point, 0.001 x 0.1 deg */
+    int32_t setpoint_ddps;   /* profile speed, 0.1 deg/s */
+    int32_t pwm_cap;         /* the move's own PWM bound */
+    bool reset_loop;         /* clear the loop's integrator first */
+    bool holding;            /* the set-point is at rest on the target */
 } km_servo_mode_out_t;
 
 void km_servo_mode_init(km_servo_mode_t *m, const km_control_params_t *p);
@@ -81,7 +82,8 @@ bool km_servo_mode_torque(km_servo_mode_t *m, km_torque_t torque, int32_t positi
 
 /* A move at measured `position`. False when refused: torque off or
  * protecting. */
-bool km_servo_mode_move(km_servo_mode_t *m, const km_move_t *mv, const km_control_params_t *p, int32_t position);
+bool km_servo_mode_move(km_servo_mode_t *m, const km_move_t *mv, const km_control_params_t *p,
+                        int32_t position);
 
 /* A move has arrived (status bit 7 clears) once the profile is done and
  * the shaft is inside the product's arrive band and slower than this: a
@@ -90,8 +92,8 @@ bool km_servo_mode_move(km_servo_mode_t *m, const km_move_t *mv, const km_contro
 
 /* One tick: advances the profile and the running state; `speed_ddps` is
  * the measured speed (0.1 deg/s). */
-void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_t position, int32_t speed_ddps,
-                        uint32_t dt_us, km_servo_mode_out_t *out);
+void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_t position,
+                        int32_t speed_ddps, uint32_t dt_us, km_servo_mode_out_t *out);
 
 /* Motor mode handed the shaft back: the target in force and the profile
  * restart from `position` (0x64 keeps its value). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Speed estimators of the control tick (see km_speed_est.h). Pure, 32-bit. */
 #include "km_speed_est.h"
 

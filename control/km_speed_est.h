@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Speed estimation from the position samples of the control tick.
  *  - km_speed_window_t: the reported speed (0x47, deg/s): position change
  *    over a 20 ms window. At 0.1 deg resolution a 1 ms difference would
@@ -15,19 +16,19 @@
 #define KM_SPEED_FAST_N 8u
 
 typedef struct {
-    int32_t last_position;  /* 0.1 deg */
-    int32_t acc;            /* 0.1 deg moved since the last update */
-    uint32_t us;            /* time accumulated for the estimate */
-    int32_t dps;            /* the estimate, deg/s */
+    int32_t last_position; /* 0.1 deg */
+    int32_t acc;           /* 0.1 deg moved since the last update */
+    uint32_t us;           /* time accumulated for the estimate */
+    int32_t dps;           /* the estimate, deg/s */
     bool have_position;
 } km_speed_window_t;
 
 typedef struct {
-    int32_t pos[KM_SPEED_FAST_N];  /* 0.1 deg, ring */
-    uint32_t dt[KM_SPEED_FAST_N];  /* us each sample closed */
-    uint32_t span_us;              /* sum of dt over the ring */
+    int32_t pos[KM_SPEED_FAST_N]; /* 0.1 deg, ring */
+    uint32_t dt[KM_SPEED_FAST_N]; /* us each sample closed */
+    uint32_t span_us;             /* sum of dt over the ring */
     uint8_t head, count;
-    int32_t ddps;                  /* the estimate, 0.1 deg/s */
+    int32_t ddps; /* the estimate, 0.1 deg/s */
 } km_speed_fast_t;
 
 void km_speed_window_init(km_speed_window_t *w);

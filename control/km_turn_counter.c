@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Multi-turn position from a single-turn absolute encoder: wrap counting
  * (see km_turn_counter.h for the contract). */
 #include "km_turn_counter.h"

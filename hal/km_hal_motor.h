@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* HAL contract: the H-bridge. Signed PWM in thousandths of full duty; the
  * board owns the PWM frequency and dead time. */
 #ifndef KM_HAL_MOTOR_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* HAL contract: the system. Reset, watchdog, interrupt lock, identity. */
 #ifndef KM_HAL_SYSTEM_H
 #define KM_HAL_SYSTEM_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* HAL contract: time. A free-running monotonic tick (wraps at 2^32; callers
  * use unsigned differences) and one one-shot timer used to start the answer
  * exactly the response delay after a frame's last byte. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* HAL contract: the half-duplex servo bus UART.
  *
  * RX: the board's receive interrupt calls the handler registered here once per

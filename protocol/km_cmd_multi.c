@@ -1,10 +1,10 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The multi-ID commands, sent to the broadcast ID and judged by every
  * servo on the bus: 0x83 write ("Multi-ID write") and 0x82 read ("Multi-ID
  * read 0x82"). Which registers 0x83 may write, with which parameter sizes,
  * is km_registers.def's `multi` column. */
 #include "km_dispatch.h"
 #include "km_hooks.h"
-
 
 /* "Multi-ID write": F9 FF FE len 83 addr k (id, k bytes)... cs. A listed
  * servo runs its first entry as a write of addr. */

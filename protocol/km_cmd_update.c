@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* 0x78 firmware update (docs/update.md), the application's side: the
  * firmware serves it (km_servo_ops_t.update); the dispatcher frames the
  * answer. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The commands of the dispatcher's table (inside protocol/ only): each runs
  * one frame that passed the ID and address rules of km_servo.c and says
  * how its answer dealt with status bits 5 and 6; and what they share

@@ -1,8 +1,8 @@
-/* Encoder for servo -> master frames (PROTOCOL.md §2). */
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Encoder for servo -> master frames (docs/protocol.md §2). */
 #include "km_encoder.h"
 
-uint16_t km_encode_response(uint8_t *out, uint8_t id, uint8_t cmd,
-                            const uint8_t *body, uint8_t body_len)
+uint16_t km_encode_response(uint8_t *out, uint8_t id, uint8_t cmd, const uint8_t *body, uint8_t body_len)
 {
     if (body_len > KM_BODY_MAX) {
         return 0;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The extension command 0x7F (km_ext.h): a read in this firmware's own
  * address space. The dispatcher keeps 0x01..0x03; what it does not keep
  * (the fault log) the firmware answers through ops->ext_read. */

@@ -1,5 +1,6 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* This firmware's extension registers, read with command 0x7F ("customer
- * custom", PROTOCOL.md §7) so they stay out of the vendor's register map:
+ * custom", docs/protocol.md §7) so they stay out of the vendor's register map:
  * `F9 FF id 03 7F addr cs` answers `F9 F5 id len 7F addr value cs`.
  * docs/protocol-decisions.md "Extension command 0x7F" has the frames. The
  * dispatcher keeps 0x01..0x03 (km_ext.c); the fault log's are the
@@ -14,7 +15,7 @@
 #define KM_EXT_FAULT_SUMMARY 0x10u   /* 7 B: u32 events ever, u8 held, u8 kept from before the reset, u8 16 */
 #define KM_EXT_FAULT_ENTRY 0x11u     /* 0x11 + n, n = 0 (newest) .. 15: 18 B, firmware/app/km_fault_log.h */
 #define KM_EXT_FAULT_ENTRIES 16u
-#define KM_EXT_VALUE_MAX 18u         /* the longest extension value */
+#define KM_EXT_VALUE_MAX 18u /* the longest extension value */
 
 /* Extension 0x01: where the user data in force came from at boot. The
  * values follow the store's mount results. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Write hooks of the configuration actions: restart (0x02), user-data
  * reset (0x03), the zero-offset increment (0x18), zeroing by a 0x46 write,
  * the protection clear (0x36), and the control mode (0x5A). */
@@ -50,14 +51,14 @@ static uint8_t prv_reset_list(const km_product_t *p, uint8_t level, uint8_t *reg
 {
     uint8_t n = 0;
     const bool keep_ids = level == 1;
-#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr)                 \
-    if ((persisted) && ((access) & KM_W) &&                                                     \
-        !(keep_ids && (KM_REG_##ident == KM_REG_ID || KM_REG_##ident == KM_REG_BAUD ||          \
-                       KM_REG_##ident == KM_REG_ZERO_OFFSET2))) {                               \
-        regs[n] = (uint8_t)KM_REG_##ident;                                                      \
-        addrs[n] = (addr);                                                                      \
-        values[n] = prv_pack_default((uint32_t)(def), (layout));                                \
-        n++;                                                                                    \
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr)     \
+    if ((persisted) && ((access)&KM_W) &&                                              \
+        !(keep_ids && (KM_REG_##ident == KM_REG_ID || KM_REG_##ident == KM_REG_BAUD || \
+                       KM_REG_##ident == KM_REG_ZERO_OFFSET2))) {                      \
+        regs[n] = (uint8_t)KM_REG_##ident;                                             \
+        addrs[n] = (addr);                                                             \
+        values[n] = prv_pack_default((uint32_t)(def), (layout));                       \
+        n++;                                                                           \
     }
 #include "km_registers.def"
 #undef KM_REG

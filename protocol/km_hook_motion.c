@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Write hooks of the rotation registers (§5.4): the torque switch 0x64,
  * the servo-mode moves 0x65..0x68 and the motor-mode runs 0x6E..0x70.
  * Every byte they take is decoded here into include/km/km_request.h's
@@ -109,7 +110,8 @@ static void prv_motor_run(km_servo_t *s, const km_request_t *req)
 void km_wr_motor(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t len)
 {
     uint32_t packed;
-    if (!km_reg_validate(r, s->reg.product, d, len, &packed) || (r == KM_REG_MOTOR_SPEED && !prv_is_encoder(s))) {
+    if (!km_reg_validate(r, s->reg.product, d, len, &packed) ||
+        (r == KM_REG_MOTOR_SPEED && !prv_is_encoder(s))) {
         km_regfile_fail(&s->reg);
         return;
     }

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Read hooks of the registers whose value is computed, not kept: the
  * status (0x01), the model name (0x0A), the latched hardware faults
  * (0x35), the active protections (0x36) and control's live values

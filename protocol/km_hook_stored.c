@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The hooks of plain registers (`stored`, `none`), the hook tables the
  * dispatcher calls through, and what every hook may use to reach the rest
  * of the firmware (km_hooks.h). */

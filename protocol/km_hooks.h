@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Register hooks: what a read or a write of one register does (inside
  * protocol/ only). km_registers.def names a read hook km_rd_<rd> and a
  * write hook km_wr_<wr> for every register; the dispatcher calls them
@@ -30,8 +31,8 @@ typedef void (*km_write_hook_t)(struct km_servo *s, km_reg_index_t r, const uint
 
 /* Every hook the .def names, declared (a hook used by several registers
  * is declared once per register: compatible redeclarations). */
-#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr)   \
-    uint8_t km_rd_##rd(struct km_servo *s, km_reg_index_t r, uint8_t *out);         \
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) \
+    uint8_t km_rd_##rd(struct km_servo *s, km_reg_index_t r, uint8_t *out);        \
     void km_wr_##wr(struct km_servo *s, km_reg_index_t r, const uint8_t *d, uint8_t len);
 #include "km_registers.def"
 #undef KM_REG

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The control registers decoded into engineering units for control
  * (include/km/km_params.h): the one place their wire forms (0x11 bits,
  * the two-field limits 0x3C..0x3F) are taken apart. */
@@ -5,8 +6,8 @@
 
 #include "km_servo.h"
 
-#define CONFIG_DIRECTION 0x04u     /* 0x11 bit 2: counter-clockwise positive */
-#define CONFIG_IDLE_BRAKE 0x02u    /* 0x11 bit 1 */
+#define CONFIG_DIRECTION 0x04u      /* 0x11 bit 2: counter-clockwise positive */
+#define CONFIG_IDLE_BRAKE 0x02u     /* 0x11 bit 1 */
 #define CONFIG_POWER_ON_BRAKE 0x01u /* 0x11 bit 0 */
 
 static const km_control_gains_t s_default_gains = KM_CONTROL_GAINS_DEFAULT;

@@ -1,4 +1,5 @@
-/* Frame parser (PROTOCOL.md §2 frames, §7 inter-byte gap): turns received
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Frame parser (docs/protocol.md §2 frames, §7 inter-byte gap): turns received
  * bytes into validated command frames, skips other servos' responses whole,
  * and resynchronises inside the bytes already seen after any failure.
  *
@@ -64,7 +65,7 @@
  * stale: complete frames among them are still delivered (they arrived whole),
  * but a candidate that would need a byte from after the cut is dropped.
  *
- * Decisions where the spec is open (see PROTOCOL.md):
+ * Decisions where the spec is open (see docs/protocol.md):
  *  - F9 followed by anything but FF or F5 is hunting noise, not counted.
  *    After a proper two-byte header, a bad ID or length counts one
  *    framing_error. Command IDs: 0..250, 253, 254. Response IDs: 0..250
@@ -136,8 +137,7 @@ static void prv_drop(km_parser_t *p, uint16_t n)
 /* Judges the candidate at head using its first `avail` bytes. Sets *total
  * to the candidate's frame size once its length byte is known. Counts
  * framing and checksum errors; a bad command checksum raises an event. */
-static prv_verdict_t prv_judge(km_parser_t *p, uint16_t avail, uint16_t *total,
-                               unsigned *events)
+static prv_verdict_t prv_judge(km_parser_t *p, uint16_t avail, uint16_t *total, unsigned *events)
 {
     if (prv_at(p, 0) != KM_HDR0) {
         return PRV_DROP;
@@ -284,8 +284,7 @@ static bool prv_header_grows(km_parser_t *p, uint8_t byte)
     case 2u:
         return byte == KM_HDR1_COMMAND || byte == KM_HDR1_RESPONSE;
     case 3u:
-        return prv_at(p, 1) == KM_HDR1_COMMAND ? km_id_is_addressable(byte) != 0
-                                               : byte <= KM_ID_MAX;
+        return prv_at(p, 1) == KM_HDR1_COMMAND ? km_id_is_addressable(byte) != 0 : byte <= KM_ID_MAX;
     case 4u:
         if (byte < KM_LENGTH_MIN || byte > KM_LENGTH_MAX) {
             return false;
@@ -324,8 +323,7 @@ static inline void prv_push(km_parser_t *p, uint8_t byte, uint32_t now)
 
 /* One byte, the rule every entry follows (the batch entry takes shortcuts
  * only where they give the same result). */
-static inline unsigned prv_feed_one(km_parser_t *p, uint8_t byte, uint32_t now,
-                                    km_parser_out_t *out)
+static inline unsigned prv_feed_one(km_parser_t *p, uint8_t byte, uint32_t now, km_parser_out_t *out)
 {
     if (p->fill == 0u) {
         if (byte != KM_HDR0) {
@@ -487,8 +485,8 @@ static uint32_t prv_sum(const uint8_t *b, uint32_t n)
  * way, which counts the failure and rescans. The parser's state ends as
  * the ring's way leaves it: window empty, every byte in `acc`, last_tick
  * the frame's last byte. */
-static bool prv_whole(km_parser_t *p, const uint8_t *f, uint32_t total, uint32_t end_tick,
-                      unsigned *events, km_parser_out_t *out)
+static bool prv_whole(km_parser_t *p, const uint8_t *f, uint32_t total, uint32_t end_tick, unsigned *events,
+                      km_parser_out_t *out)
 {
     const uint32_t sum = prv_sum(&f[2], total - 3u); /* ID .. last parameter */
     const uint8_t check = f[total - 1u];
@@ -526,9 +524,9 @@ typedef enum {
  * byte way. Returns the next i. Inlined into the batch loop, its only
  * caller. */
 static inline __attribute__((always_inline)) uint32_t prv_idle(km_parser_t *p, const uint8_t *bytes,
-                                                                const uint32_t *ticks, uint32_t n, uint32_t i,
-                                                                unsigned *events, km_parser_out_t *out,
-                                                                prv_idle_t *what)
+                                                               const uint32_t *ticks, uint32_t n, uint32_t i,
+                                                               unsigned *events, km_parser_out_t *out,
+                                                               prv_idle_t *what)
 {
     const uint32_t avail = n - i;
     const uint32_t total = avail >= 4u ? prv_header_total(&bytes[i]) : 0u;
@@ -554,15 +552,16 @@ static inline __attribute__((always_inline)) uint32_t prv_idle(km_parser_t *p, c
  * way (a gap right before it is a cut). *whole: the run completed the
  * candidate (judged, maybe handed out). Inlined into the batch loop. */
 static inline __attribute__((always_inline)) uint32_t prv_run(km_parser_t *p, const uint8_t *bytes,
-                                                               const uint32_t *ticks, uint32_t n, uint32_t i,
-                                                               unsigned *events, km_parser_out_t *out,
-                                                               bool *whole)
+                                                              const uint32_t *ticks, uint32_t n, uint32_t i,
+                                                              unsigned *events, km_parser_out_t *out,
+                                                              bool *whole)
 {
     const uint16_t fill = p->fill;
     if (p->need > fill && !p->pending && p->stale == 0u) {
         const uint32_t k_need = (uint32_t)p->need - fill;
         const uint32_t k_min = fill < 4u ? 4u - fill : 1u;
-        const uint32_t k = prv_gapless(&ticks[i], k_need < n - i ? k_need : n - i, p->last_tick, p->gap_ticks);
+        const uint32_t k =
+            prv_gapless(&ticks[i], k_need < n - i ? k_need : n - i, p->last_tick, p->gap_ticks);
         if (k >= k_min) {
             prv_append(p, &bytes[i], k);
             p->last_tick = ticks[i + k - 1u];
@@ -576,8 +575,8 @@ static inline __attribute__((always_inline)) uint32_t prv_run(km_parser_t *p, co
     return 0u;
 }
 
-unsigned km_parser_feed_bytes(km_parser_t *p, const uint8_t *bytes, const uint32_t *ticks,
-                              uint32_t n, uint32_t *used, km_parser_out_t *out)
+unsigned km_parser_feed_bytes(km_parser_t *p, const uint8_t *bytes, const uint32_t *ticks, uint32_t n,
+                              uint32_t *used, km_parser_out_t *out)
 {
     uint32_t i = 0u;
     unsigned events = 0u;

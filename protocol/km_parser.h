@@ -1,4 +1,5 @@
-/* Frame parser (PROTOCOL.md §2, §7 inter-byte gap), fed a byte or a run of
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Frame parser (docs/protocol.md §2, §7 inter-byte gap), fed a byte or a run of
  * bytes at a time.
  *
  * Callable from a UART interrupt: no heap, no recursion, and a stated bound
@@ -20,14 +21,14 @@ typedef struct {
     uint32_t frames_ok;         /* command frames delivered */
     uint32_t responses_skipped; /* whole F9 F5 frames from other servos */
     uint32_t checksum_errors;
-    uint32_t framing_errors;    /* bad header ID, bad length */
-    uint32_t timeouts;          /* partial frames dropped by the gap */
-    uint32_t overruns;          /* bytes the caller reported lost */
+    uint32_t framing_errors; /* bad header ID, bad length */
+    uint32_t timeouts;       /* partial frames dropped by the gap */
+    uint32_t overruns;       /* bytes the caller reported lost */
 } km_parser_stats_t;
 
 /* Events returned by feed/poll, as a bitmask (one call can both finish a
  * checksum failure and, from the bytes already seen, a good frame). */
-#define KM_PARSE_FRAME        0x01u /* *out holds a new command frame */
+#define KM_PARSE_FRAME 0x01u        /* *out holds a new command frame */
 #define KM_PARSE_CHECKSUM_ERR 0x02u /* see km_parser_take_checksum_error() */
 
 typedef struct {
@@ -35,18 +36,18 @@ typedef struct {
      * offset <= 31, a halfword <= 62 and a word <= 124 from the struct
      * pointer in one instruction; behind the arrays each would need the
      * offset built in a register first. */
-    uint8_t head;                   /* ring index of the oldest byte */
-    uint8_t acc;                    /* sum mod 256 of every byte fed */
-    bool pending;                   /* bytes after a delivered frame wait to be judged */
-    bool stale_by_gap;              /* the stale cut was a gap: count a timeout */
-    uint16_t fill;                  /* bytes in window (0..256) */
-    uint16_t need;                  /* bytes the head candidate needs; 0 = re-judge */
-    uint16_t stale;                 /* leading bytes cut off by a gap or overrun */
-    uint32_t last_tick;             /* tick of the newest byte */
-    uint32_t stale_tick;            /* tick of the newest stale byte */
-    uint32_t gap_ticks;             /* inter-byte gap that drops a frame */
+    uint8_t head;        /* ring index of the oldest byte */
+    uint8_t acc;         /* sum mod 256 of every byte fed */
+    bool pending;        /* bytes after a delivered frame wait to be judged */
+    bool stale_by_gap;   /* the stale cut was a gap: count a timeout */
+    uint16_t fill;       /* bytes in window (0..256) */
+    uint16_t need;       /* bytes the head candidate needs; 0 = re-judge */
+    uint16_t stale;      /* leading bytes cut off by a gap or overrun */
+    uint32_t last_tick;  /* tick of the newest byte */
+    uint32_t stale_tick; /* tick of the newest stale byte */
+    uint32_t gap_ticks;  /* inter-byte gap that drops a frame */
     km_parser_stats_t stats;
-    uint8_t bad_ids[32];            /* bitset: IDs seen on checksum-failed frames */
+    uint8_t bad_ids[32]; /* bitset: IDs seen on checksum-failed frames */
     /* A 256-byte ring indexed by uint8_t, so wrap-around is free: the bytes
      * not yet resolved, oldest at `head` (a candidate's F9, or bytes still to
      * rescan after a failure). A frame is at most 256 bytes, so one ring
@@ -85,8 +86,8 @@ unsigned km_parser_feed(km_parser_t *p, uint8_t byte, uint32_t now, km_frame_t *
  * (out->frame, see km_parser_out_t): hand it on before releasing `bytes`.
  * Ticks must not go backwards inside one call (they come from one clock):
  * the gap rule is then checked once per stretch of bytes, not per byte. */
-unsigned km_parser_feed_bytes(km_parser_t *p, const uint8_t *bytes, const uint32_t *ticks,
-                              uint32_t n, uint32_t *used, km_parser_out_t *out);
+unsigned km_parser_feed_bytes(km_parser_t *p, const uint8_t *bytes, const uint32_t *ticks, uint32_t n,
+                              uint32_t *used, km_parser_out_t *out);
 
 /* Time alone: drops a partial frame once the gap has passed in silence
  * (handing out any whole frame found inside it), and hands out a frame found

@@ -1,9 +1,9 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The register file (see km_regfile.h): start-up values, the runtime
  * mirrors, the cross-register rules and control's report. */
 #include "km_regfile.h"
 
 #include <string.h>
-
 
 /* "Limits that contradict each other": a minimum angle limit at or above
  * the maximum would leave no target reachable. 0 = no limit (§5.1). */

@@ -1,4 +1,5 @@
-/* The register file (PROTOCOL.md §4, §5): every register's value, kept as
+/* SPDX-License-Identifier: Apache-2.0 */
+/* The register file (docs/protocol.md §4, §5): every register's value, kept as
  * its wire bytes packed little-endian into a u32; the change counter the
  * control parameters follow; what control reported at its last tick (the
  * live registers, status bits 7 and 0..3); the latched hardware faults

@@ -1,5 +1,6 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The register table generated from km_registers.def, and the checks every
- * write passes before anything changes (PROTOCOL.md §4: out of range or
+ * write passes before anything changes (docs/protocol.md §4: out of range or
  * wrong length = nothing changes, status bit 6). */
 #include "km_registers.h"
 #include "km_registers_range.h"
@@ -12,7 +13,8 @@ const km_reg_t km_reg_table[KM_REG_COUNT] = {
 };
 
 const uint8_t km_reg_by_addr[KM_REG_ADDR_SPAN] = {
-#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) [addr] = KM_REG_##ident + 1,
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) \
+    [addr] = KM_REG_##ident + 1,
 #include "km_registers.def"
 #undef KM_REG
 };
@@ -27,7 +29,7 @@ static uint32_t prv_default_raw(km_reg_index_t reg, const km_product_t *p)
     (void)p;
     switch (reg) {
 #define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) \
-    case KM_REG_##ident:                                            \
+    case KM_REG_##ident:                                                           \
         return (uint32_t)(def);
 #include "km_registers.def"
 #undef KM_REG
@@ -133,8 +135,8 @@ static int32_t prv_first_field(km_layout_t layout, const uint8_t *data)
     }
 }
 
-bool km_reg_validate(km_reg_index_t reg, const km_product_t *p, const uint8_t *data,
-                     uint8_t len, uint32_t *packed)
+bool km_reg_validate(km_reg_index_t reg, const km_product_t *p, const uint8_t *data, uint8_t len,
+                     uint32_t *packed)
 {
     const km_layout_t layout = (km_layout_t)km_reg_table[reg].layout;
     int32_t lo, hi;

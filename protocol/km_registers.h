@@ -1,4 +1,5 @@
-/* The register table (PROTOCOL.md §5) generated from km_registers.def:
+/* SPDX-License-Identifier: Apache-2.0 */
+/* The register table (docs/protocol.md §5) generated from km_registers.def:
  * lookup by address, access, persistence, wire layout, default and range.
  * Values are kept as the wire bytes packed little-endian into a u32
  * (an i16 sits in the low 16 bits, two fields side by side). */
@@ -39,7 +40,8 @@ typedef enum {
 /* How many registers are user data (P), at compile time, to size arrays. */
 enum {
     KM_REG_PERSISTED_COUNT = 0
-#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) +(persisted) // NOLINT(bugprone-macro-parentheses)
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) \
+    +(persisted) // NOLINT(bugprone-macro-parentheses)
 #include "km_registers.def"
 #undef KM_REG
 };
@@ -79,8 +81,8 @@ uint32_t km_reg_default(km_reg_index_t reg, const km_product_t *p);
 
 /* Checks the bytes of a write: length for the layout, every field in range,
  * cross-field rules. On success stores the packed value in *packed. */
-bool km_reg_validate(km_reg_index_t reg, const km_product_t *p, const uint8_t *data,
-                     uint8_t len, uint32_t *packed);
+bool km_reg_validate(km_reg_index_t reg, const km_product_t *p, const uint8_t *data, uint8_t len,
+                     uint32_t *packed);
 
 /* Bytes a stored value takes on the wire for fixed layouts (0 otherwise). */
 uint8_t km_reg_fixed_size(km_layout_t layout);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The registers' names, for tools and tests (tools/regdoc.c prints them):
  * in a file of their own, so the firmware, which never names a register,
  * does not carry the strings. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The write range [lo, hi] of each register's fields under a product
  * config, from km_registers.def (both 0 for a register without one). One
  * definition for the firmware's validation (km_registers.c) and the
@@ -16,9 +17,9 @@ static inline void km_reg_range(km_reg_index_t reg, const km_product_t *p, int32
     (void)p;
     switch (reg) {
 #define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) \
-    case KM_REG_##ident:                                            \
-        *lo_out = (int32_t)(lo);                                    \
-        *hi_out = (int32_t)(hi);                                    \
+    case KM_REG_##ident:                                                           \
+        *lo_out = (int32_t)(lo);                                                   \
+        *hi_out = (int32_t)(hi);                                                   \
         return;
 #include "km_registers.def"
 #undef KM_REG

@@ -1,5 +1,6 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Dispatcher: one validated frame in, register changes, typed requests and
- * at most one answer out (PROTOCOL.md §3 commands, §4 status, §5
+ * at most one answer out (docs/protocol.md §3 commands, §4 status, §5
  * registers). A frame passes the ID rules here, then the command table
  * runs it; ping, read, write and the sync write live here, 0x82/0x83 in
  * km_cmd_multi.c, 0x7F in km_ext.c, 0x78 in km_cmd_update.c; what a
@@ -46,7 +47,7 @@ typedef struct {
  * initializer, which -Woverride-init refuses at compile time); the entry
  * found must then name the command. 0x7E (factory test) and anything else
  * are not supported: bit 5. */
-#define PRV_SLOT(cmd) ((((unsigned)(cmd) >> 4) & 8u) | ((unsigned)(cmd) & 7u))
+#define PRV_SLOT(cmd) ((((unsigned)(cmd) >> 4) & 8u) | ((unsigned)(cmd)&7u))
 
 static const prv_command_t s_commands[16] = {
     [PRV_SLOT(CMD_PING)] = {CMD_PING, RULE_SUPER, km_cmd_ping},
@@ -95,8 +96,8 @@ void km_dispatch_answer_status(km_servo_t *s, uint8_t status, uint8_t frame_id, 
 
 /* ---- init and accessors --------------------------------------------------- */
 
-void km_servo_init(km_servo_t *s, const km_product_t *product, const uint32_t *persisted,
-                   uint32_t seed, const km_servo_ops_t *ops)
+void km_servo_init(km_servo_t *s, const km_product_t *product, const uint32_t *persisted, uint32_t seed,
+                   const km_servo_ops_t *ops)
 {
     memset(s, 0, sizeof *s);
     km_regfile_init(&s->reg, product, persisted, seed);
@@ -174,7 +175,9 @@ static uint16_t prv_read_answer_max(int r)
         return 6u;
     }
     const km_layout_t layout = (km_layout_t)km_reg_table[r].layout;
-    const uint8_t value = layout == KM_L_TEXT ? TEXT_MAX : layout == KM_L_POS ? 4u : km_reg_fixed_size(layout);
+    const uint8_t value = layout == KM_L_TEXT  ? TEXT_MAX
+                          : layout == KM_L_POS ? 4u
+                                               : km_reg_fixed_size(layout);
     return (uint16_t)(7u + value);
 }
 

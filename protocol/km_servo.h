@@ -1,4 +1,5 @@
-/* The servo as the bus sees it (PROTOCOL.md §3, §4, §5): a validated frame
+/* SPDX-License-Identifier: Apache-2.0 */
+/* The servo as the bus sees it (docs/protocol.md §3, §4, §5): a validated frame
  * in, register changes, typed requests to the rest of the firmware and at
  * most one answer out. Pure logic: no hardware, no heap. Decisions where
  * the spec is open are in docs/protocol-decisions.md; how the pieces fit,
@@ -61,25 +62,25 @@ typedef struct {
 } km_reply_t;
 
 typedef struct km_servo {
-    km_regfile_t reg;             /* values, status bits, control's report */
+    km_regfile_t reg; /* values, status bits, control's report */
     const km_servo_ops_t *ops;
-    uint32_t active_baud;         /* bps in force until restart (0x10 applies then) */
-    uint32_t slot_floor_us;       /* least answer slot (emulated boards; 0 = the rule) */
-    bool restarting;              /* a restart was requested: nothing more runs */
-    uint8_t userdata_source;      /* KM_USERDATA_*, extension register 0x01 */
-    uint8_t reset_cause;          /* km_reset_cause_t of this boot, extension 0x02 */
+    uint32_t active_baud;    /* bps in force until restart (0x10 applies then) */
+    uint32_t slot_floor_us;  /* least answer slot (emulated boards; 0 = the rule) */
+    bool restarting;         /* a restart was requested: nothing more runs */
+    uint8_t userdata_source; /* KM_USERDATA_*, extension register 0x01 */
+    uint8_t reset_cause;     /* km_reset_cause_t of this boot, extension 0x02 */
     struct {
         bool full;
         uint8_t addr;
         uint8_t len;
         uint8_t data[8];
-    } sync;                       /* 0x04 buffer */
+    } sync; /* 0x04 buffer */
 } km_servo_t;
 
 /* Persisted values by register address, in table order of the P registers;
  * `persisted` may be NULL (product defaults). */
-void km_servo_init(km_servo_t *s, const km_product_t *product, const uint32_t *persisted,
-                   uint32_t seed, const km_servo_ops_t *ops);
+void km_servo_init(km_servo_t *s, const km_product_t *product, const uint32_t *persisted, uint32_t seed,
+                   const km_servo_ops_t *ops);
 
 /* Processes one validated frame; fills *reply (len 0 = no answer). */
 void km_servo_handle(km_servo_t *s, const km_frame_t *frame, km_reply_t *reply);

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Sanitizer build (preset host-asan): the store's exhaustive power-cut sweep
 # takes ~5 min under ASan, so there it is replaced by its 2,000 seeded random
 # histories (same invariants, ~3 s); the plain host build runs the full sweep.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Control-quality benchmark (issue 20, docs/control-quality.md):
 # bench_control (registered by the tests/bench/bench_*.c glob in
 # tests/CMakeLists.txt, label "bench") runs the simulated product's

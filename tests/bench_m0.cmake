@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Cortex-M0 instruction counts of the firmware's hot paths (parser per byte,
 # dispatcher per command, flash commit, control tick), exact, in QEMU
 # (tools/bench-m0: -singlestep -d exec,nochain, validated on a loop of known

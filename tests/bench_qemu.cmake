@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Answer-delay accuracy of the firmware in QEMU under -icount (virtual time,
 # deterministic): prints the figures, fails only if an answer starts more
 # than one byte time (115200 baud) away from its configured delay.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Step-response benchmark and its plot (issue 7): bench_step (registered by
 # the tests/bench/bench_*.c glob in tests/CMakeLists.txt) writes its traces
 # into this build directory, never the source tree; bench_step_plot then

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Every board found by cmake/km_boards.cmake, from the host build:
 #
 # 1. Its pure parts, the board.cmake's KM_BOARD_HOST_SOURCES (code that runs

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Whole servos on a bus, over bytes only: the QEMU smoke test (one servo) and
 # the three-servo bus test, on QEMU and on host-sim. They run the images the
 # qemu and host-sim presets build (tools/test-all builds them first; a
@@ -15,14 +16,14 @@
 # 0x6F turns past 360 deg, stops on 0, restart reads 0) and the pot
 # product's refusal of 0x6F, about 3 s per backend.
 #
-# protect: the protection supervisor (PROTOCOL.md §5.2) end to end over the
+# protect: the protection supervisor (docs/protocol.md §5.2) end to end over the
 # bus, one servo driven by the bench scenario tests/bus/scenarios/protect.txt
 # (servo-bus --scenario: supply sags, heat, loads on the horn): voltage,
 # temperature and stall trips and releases (automatic and by 0x36), 0x64 = 5,
 # refused moves and clears, and the fault log read over 0x7F; about 50 s per
 # backend (the scenario's own time: 3 s detection times and releases).
 #
-# selftest: the self-test (PROTOCOL.md §5.2 0x35) over the bus with the
+# selftest: the self-test (docs/protocol.md §5.2 0x35) over the bus with the
 # bench scenario tests/bus/scenarios/selftest.txt (issue 18): a horn pushed
 # onto its end stop with the servo free, two restarts, no position fault,
 # 0x64 = 2, 0x6E and a move back taken; an NTC that opens while the servo

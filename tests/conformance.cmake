@@ -1,4 +1,5 @@
-# The conformance suite (tests/conformance/, PROTOCOL.md as the oracle) on
+# SPDX-License-Identifier: Apache-2.0
+# The conformance suite (tests/conformance/, docs/protocol.md as the oracle) on
 # the emulated buses: three servos on host-sim and on QEMU, each started on
 # a free port by run_on_bus.py, which always stops the bus afterwards.
 #

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Replays every committed fuzz input (tests/fuzz/README.md: the §2 seeds,
 # tests/fuzz/corpus/<target>/ with its regress_* findings) through each fuzz
 # target, in every host build, as CTest tests fuzz_replay_<target> (label

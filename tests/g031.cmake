@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Virtual STM32G031 tests (host preset, label g031): the emulator in
 # sim/g031 on Debian's python3-unicorn runs the images the stm32g031 preset
 # built, so that preset must be built first in the same tree; missing

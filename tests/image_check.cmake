@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # tools/image-check must be able to fail: run on the stm32g031 servo image
 # (the board whose image-check.json names flash-busy RAM roots, so all three
 # checks apply), once with a flash-resident function named as a RAM root and

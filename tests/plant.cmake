@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # The plant tests compute expected physics with libm on the host (the plant
 # itself is integer-only).
 foreach(t test_plant test_plant_real)

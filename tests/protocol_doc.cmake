@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # docs/protocol.md holds, below its marker line, a verbatim copy of the
 # protocol reading the project follows (shared/spec/PROTOCOL.md beside the
 # repository), so a plain clone stands alone. This test fails with the diff

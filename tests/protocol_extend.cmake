@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Issue 19: a register is added by touching only the .def files and one
 # hook (docs/architecture.md "Adding a register"). A copy of protocol/ gets
 # one more register that way (tests/extend/add_register.cmake appends a row

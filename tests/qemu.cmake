@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # QEMU tests (host preset): images built by the qemu-microbit board's build
 # (the qemu preset; its test images come from tests/firmware/qemu-microbit/),
 # run under qemu-system-arm -M microbit. A missing image fails the test with

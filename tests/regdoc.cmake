@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # docs/registers.md and docs/registers.json are generated from the register
 # table (protocol/km_registers.def, units and descriptions in
 # km_registers_doc.def) by tools/regdoc.c and tools/regdoc_json.c; these tests

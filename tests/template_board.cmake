@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # boards/template is what a new board starts from: copying it must be all
 # it takes. Two checks of it from the host build:
 #

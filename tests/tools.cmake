@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Python tests of the host tools (tools/kmbus.py, tools/servo-bus) and the host
 # package host/kmx (test_kmx.py: codec, registers, transports, Bus against a
 # real host-sim servo over TCP and a pty and on the 3-servo host-sim bus of

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Firmware update end to end on QEMU (docs/update.md): three servos booting
 # through the bootloader on tools/servo-bus, a wrong-model image refused,
 # v2 by one broadcast pass, back to v1 with 3 restart frames and 4 real

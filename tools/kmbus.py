@@ -1,4 +1,5 @@
-"""KINGMAX serial servo frames (PROTOCOL.md §2, §3) under their old name:
+# SPDX-License-Identifier: Apache-2.0
+"""KINGMAX serial servo frames (docs/protocol.md §2, §3) under their old name:
 the codec now lives in the host package, host/kmx/frame.py; this module
 re-exports it so the tools and tests that import kmbus (tools/servo-bus,
 tools/servo-session, tests/bus/bus_check.py, the test doubles) keep working

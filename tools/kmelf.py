@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Reads a linked ARMv6-M firmware image for the build-time checks
 (tools/image-check) and the footprint table (tools/footprint): functions
 with their object file, frame size and call edges, taken from the ELF

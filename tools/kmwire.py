@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """What a UART at one baud rate decodes from bytes sent at another: the
 emulated bus's model of a baud mismatch (tools/servo-bus, docs/
 protocol-decisions.md "Baud on the emulated bus").

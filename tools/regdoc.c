@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Prints docs/registers.md from the register table (protocol/km_registers.def
  * and its units and descriptions, km_registers_doc.def) so the document cannot
  * drift from the code: CTest (tests/regdoc.cmake) diffs this output against
@@ -16,19 +17,47 @@
 #include "regdoc.h"
 
 const km_product_t regdoc_probe_a = {
-    .model = "A", .firmware_version = 0x11111111u, .variant = KM_VARIANT_POTENTIOMETER,
-    .max_current_ma = 1001, .max_speed_dps = 101, .zero_offset1 = 11, .angle_min = -11,
-    .angle_max = 11, .voltage_high_v = 21, .voltage_low_v = 1, .current_threshold_ma = 901,
-    .baud_min_100 = 91, .baud_max_100 = 9001, .current_max_ma = 2001, .speed_max_dps = 201,
-    .travel_min = -21, .travel_max = 21, .zero_offset2_max = 31, .voltage_max_v = 31,
+    .model = "A",
+    .firmware_version = 0x11111111u,
+    .variant = KM_VARIANT_POTENTIOMETER,
+    .max_current_ma = 1001,
+    .max_speed_dps = 101,
+    .zero_offset1 = 11,
+    .angle_min = -11,
+    .angle_max = 11,
+    .voltage_high_v = 21,
+    .voltage_low_v = 1,
+    .current_threshold_ma = 901,
+    .baud_min_100 = 91,
+    .baud_max_100 = 9001,
+    .current_max_ma = 2001,
+    .speed_max_dps = 201,
+    .travel_min = -21,
+    .travel_max = 21,
+    .zero_offset2_max = 31,
+    .voltage_max_v = 31,
 };
 
 const km_product_t regdoc_probe_b = {
-    .model = "B", .firmware_version = 0x22222222u, .variant = KM_VARIANT_ENCODER,
-    .max_current_ma = 1002, .max_speed_dps = 102, .zero_offset1 = 12, .angle_min = -12,
-    .angle_max = 12, .voltage_high_v = 22, .voltage_low_v = 2, .current_threshold_ma = 902,
-    .baud_min_100 = 92, .baud_max_100 = 9002, .current_max_ma = 2002, .speed_max_dps = 202,
-    .travel_min = -22, .travel_max = 22, .zero_offset2_max = 32, .voltage_max_v = 32,
+    .model = "B",
+    .firmware_version = 0x22222222u,
+    .variant = KM_VARIANT_ENCODER,
+    .max_current_ma = 1002,
+    .max_speed_dps = 102,
+    .zero_offset1 = 12,
+    .angle_min = -12,
+    .angle_max = 12,
+    .voltage_high_v = 22,
+    .voltage_low_v = 2,
+    .current_threshold_ma = 902,
+    .baud_min_100 = 92,
+    .baud_max_100 = 9002,
+    .current_max_ma = 2002,
+    .speed_max_dps = 202,
+    .travel_min = -22,
+    .travel_max = 22,
+    .zero_offset2_max = 32,
+    .voltage_max_v = 32,
 };
 
 const char *regdoc_access_name(uint8_t a)
@@ -39,20 +68,34 @@ const char *regdoc_access_name(uint8_t a)
 static const char *layout_name(uint8_t l)
 {
     switch ((km_layout_t)l) {
-    case KM_L_U8: return "u8";
-    case KM_L_BITS8: return "u8 bits";
-    case KM_L_I8: return "i8";
-    case KM_L_U16: return "u16";
-    case KM_L_I16: return "i16";
-    case KM_L_U32: return "u32";
-    case KM_L_U8U8: return "u8, u8";
-    case KM_L_U16U8: return "u16, u8";
-    case KM_L_STATUS: return "u8 status, u8 random";
-    case KM_L_MAGIC: return "E1 E2 E3 E4";
-    case KM_L_TEXT: return "ASCII, up to 16 B";
-    case KM_L_POS: return "i16 or i32";
-    case KM_L_MOVE: return "i16 [, u16]";
-    case KM_L_ADV: return "u8, 16 bit, 16 bit";
+    case KM_L_U8:
+        return "u8";
+    case KM_L_BITS8:
+        return "u8 bits";
+    case KM_L_I8:
+        return "i8";
+    case KM_L_U16:
+        return "u16";
+    case KM_L_I16:
+        return "i16";
+    case KM_L_U32:
+        return "u32";
+    case KM_L_U8U8:
+        return "u8, u8";
+    case KM_L_U16U8:
+        return "u16, u8";
+    case KM_L_STATUS:
+        return "u8 status, u8 random";
+    case KM_L_MAGIC:
+        return "E1 E2 E3 E4";
+    case KM_L_TEXT:
+        return "ASCII, up to 16 B";
+    case KM_L_POS:
+        return "i16 or i32";
+    case KM_L_MOVE:
+        return "i16 [, u16]";
+    case KM_L_ADV:
+        return "u8, 16 bit, 16 bit";
     }
     return "?";
 }
@@ -61,8 +104,8 @@ static const char *layout_name(uint8_t l)
 int regdoc_has_stored_default(const km_reg_t *r)
 {
     const km_layout_t l = (km_layout_t)r->layout;
-    const int value_layout = l == KM_L_U8 || l == KM_L_BITS8 || l == KM_L_I8 || l == KM_L_U16 || l == KM_L_I16 ||
-                             l == KM_L_U8U8 || l == KM_L_U16U8;
+    const int value_layout = l == KM_L_U8 || l == KM_L_BITS8 || l == KM_L_I8 || l == KM_L_U16 ||
+                             l == KM_L_I16 || l == KM_L_U8U8 || l == KM_L_U16U8;
     return value_layout && (r->access == KM_RW || r->persisted);
 }
 

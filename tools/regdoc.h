@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Shared by the register-document generators (tools/regdoc.c writes
  * docs/registers.md, tools/regdoc_json.c docs/registers.json): the two probe
  * product configs that tell a product-dependent value from a fixed one, and
@@ -17,9 +18,9 @@ const char *regdoc_access_name(uint8_t access);
 /* One row of protocol/km_registers_doc.def, indexed like km_reg_table. */
 typedef struct {
     const char *title;
-    const char *unit;   /* first value field: value in unit = wire value * scale */
+    const char *unit; /* first value field: value in unit = wire value * scale */
     double scale;
-    const char *unit2;  /* second field of two-field layouts, else "" */
+    const char *unit2; /* second field of two-field layouts, else "" */
     double scale2;
     const char *description;
 } regdoc_doc_t;

@@ -1,5 +1,6 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Prints docs/registers.json (`km_regdoc --json`): the register map of
- * PROTOCOL.md §5 for host tools (host/kmx/registers.py), from the firmware's
+ * docs/protocol.md §5 for host tools (host/kmx/registers.py), from the firmware's
  * own table (protocol/km_registers.def: address, access, persistence, wire
  * layout, default, range) and its units and descriptions
  * (km_registers_doc.def). A default or range bound that comes from the
@@ -30,7 +31,9 @@ static const layout_info_t s_layouts[] = {
     [KM_L_U16U8] = {"u16u8", "u16, u8", {"u16", "u8"}, "[3]"},
     [KM_L_STATUS] = {"status", "u8 status, u8 random", {"bits8", "u8"}, "[2]"},
     [KM_L_MAGIC] = {"magic", "E1 E2 E3 E4", {"bytes"}, "[4]"},
-    [KM_L_TEXT] = {"text", "ASCII, up to 16 B", {"ascii"},
+    [KM_L_TEXT] = {"text",
+                   "ASCII, up to 16 B",
+                   {"ascii"},
                    "[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16]"},
     [KM_L_POS] = {"pos", "i16 or i32", {"i16/i32"}, "[2, 4]"},
     [KM_L_MOVE] = {"move", "i16 [, u16]", {"i16", "u16"}, "[2, 4]"},
@@ -113,7 +116,8 @@ static void print_field(unsigned i, unsigned f, const layout_info_t *li)
 {
     const km_reg_t *r = &km_reg_table[i];
     const regdoc_doc_t *d = &regdoc_docs[i];
-    const int second = f == 1u && (r->layout == KM_L_U8U8 || r->layout == KM_L_U16U8 || r->layout == KM_L_MOVE);
+    const int second =
+        f == 1u && (r->layout == KM_L_U8U8 || r->layout == KM_L_U16U8 || r->layout == KM_L_MOVE);
     const char *unit = second ? d->unit2 : (f == 0u ? d->unit : "");
     const double scale = second ? d->scale2 : (f == 0u ? d->scale : 1.0);
     printf("{\"type\": \"%s\", \"unit\": ", li->fields[f]);
@@ -151,7 +155,7 @@ int regdoc_json(void)
            "tools/regdoc_json.c (km_regdoc --json); do not edit. Value in unit = wire value * scale; "
            "\\\"product\\\" = taken from the product config; ranges are the firmware's write check "
            "of the first field (both fields of u8u8).\",\n");
-    printf("  \"protocol\": \"KINGMAX serial servo protocol v5.2.0, PROTOCOL.md section 5\",\n");
+    printf("  \"protocol\": \"KINGMAX serial servo protocol v5.2.0, docs/protocol.md section 5\",\n");
     printf("  \"registers\": [\n");
     for (unsigned i = 0; i < KM_REG_COUNT; i++) {
         const km_reg_t *r = &km_reg_table[i];
@@ -163,11 +167,13 @@ int regdoc_json(void)
             name[n] = (char)(*c >= 'A' && *c <= 'Z' ? *c - 'A' + 'a' : *c);
         }
         name[n] = '\0';
-        printf("    {\"address\": %u, \"hex\": \"0x%02X\", \"name\": \"%s\", \"title\": ", r->addr, r->addr, name);
+        printf("    {\"address\": %u, \"hex\": \"0x%02X\", \"name\": \"%s\", \"title\": ", r->addr, r->addr,
+               name);
         print_string(d->title);
         printf(",\n     \"access\": \"%s\", \"persisted\": %s, \"layout\": \"%s\", \"type\": \"%s\", "
                "\"lengths\": %s,\n     \"default\": ",
-               regdoc_access_name(r->access), r->persisted ? "true" : "false", li->key, li->type, li->lengths);
+               regdoc_access_name(r->access), r->persisted ? "true" : "false", li->key, li->type,
+               li->lengths);
         print_default(i, li);
         printf(",\n     \"fields\": [");
         for (unsigned f = 0; f < 3u && li->fields[f] != NULL; f++) {

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The units, scales and descriptions of protocol/km_registers_doc.def as a
  * table indexed like km_reg_table, checked at compile time to name every
  * register of km_registers.def exactly once: each row is a designated

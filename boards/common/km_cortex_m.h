@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* ARMv6-M (Cortex-M0/M0+) core operations every Cortex-M board shares: the
  * interrupt lock behind km_hal_irq_lock()/restore() and the WFI sleep. */
 #ifndef KM_CORTEX_M_H

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # The host-sim board's declaration (cmake/km_boards.cmake): the firmware as
 # a native Linux program, built with the host compiler and no CPU flags.
 # The bus floors are run-time options (--gap-floor-us, --slot-floor-us,

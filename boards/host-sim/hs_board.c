@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* host-sim: the board-provided pieces the application asks for (its flash
  * region); the product and the plant-backed sensors come from sim-common. */
 #include "km_app.h"

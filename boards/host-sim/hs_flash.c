@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* host-sim: the user-data flash region kept in a file, with NOR rules: erase
  * sets a page to 0xFF, a cell is programmed once between erases (programming
  * a non-erased cell fails, as STM32G0's PROGERR does), and every operation is

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* host-sim: the user-data flash region in a file (see hs_flash.c). */
 #ifndef HS_FLASH_H
 #define HS_FLASH_H

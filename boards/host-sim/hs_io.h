@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* host-sim: the simulated "interrupts". The native program is single-threaded:
  * km_hal_idle() waits (poll) for bus bytes or the next due event and then
  * calls the registered handlers, just as the RX and timer interrupts would

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* host-sim: the firmware as a native Linux program (software in the loop).
  *   km-servo-host-sim --listen 127.0.0.1:7001 --flash servo1.flash
  *   km-servo-host-sim --pty --flash servo1.flash [--gap-floor-us 0] [--slot-floor-us N]
@@ -97,8 +98,8 @@ static int prv_baud(const char *value)
 {
     uint32_t baud;
     if (!prv_parse_u32(value, &baud) || baud < HS_BAUD_MIN || baud > HS_BAUD_MAX) {
-        fprintf(stderr, "host-sim: --baud '%s': a baud rate is a whole number in %u..%u\n", value, HS_BAUD_MIN,
-                HS_BAUD_MAX);
+        fprintf(stderr, "host-sim: --baud '%s': a baud rate is a whole number in %u..%u\n", value,
+                HS_BAUD_MIN, HS_BAUD_MAX);
         return 2;
     }
     hs_uart_set_wire_baud(baud);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* host-sim: the simulated plant's physics across a restart (km_sim_board.h).
  * A restart re-executes the program, so the last physics kept are handed to
  * the next image in the environment (KM_HS_PLANT), as the reset cause and

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* host-sim: --scenario FILE, the text form of a plant scenario
  * (boards/sim-common/km_sim_scenario.h has the format), read once at start
  * (and again by the re-executed image after a restart: same arguments). A
@@ -19,10 +20,8 @@ static const struct {
     km_scn_key_t key;
     long lo, hi;
 } s_keys[] = {
-    {"supply_mv", KM_SCN_SUPPLY_MV, 0, 65535},
-    {"ambient_dc", KM_SCN_AMBIENT_DC, -2730, 3000},
-    {"load_mnm", KM_SCN_LOAD_MNM, -100000, 100000},
-    {"faults", KM_SCN_FAULTS, 0, 7},
+    {"supply_mv", KM_SCN_SUPPLY_MV, 0, 65535},      {"ambient_dc", KM_SCN_AMBIENT_DC, -2730, 3000},
+    {"load_mnm", KM_SCN_LOAD_MNM, -100000, 100000}, {"faults", KM_SCN_FAULTS, 0, 7},
     {"temp_dc", KM_SCN_TEMP_DC, -400, 2000},
 };
 
@@ -43,8 +42,7 @@ static const char *prv_skip_blanks(const char *p)
 /* One line "T_MS KEY VALUE": 1 if well formed, -1 if blank, 0 otherwise.
  * strtoul/strtol, not sscanf: a number too large for its type is an error
  * here, not a silently clamped or undefined value. */
-static int prv_parse(const char *text, unsigned long *t_ms, char *name, size_t name_size,
-                     long *value)
+static int prv_parse(const char *text, unsigned long *t_ms, char *name, size_t name_size, long *value)
 {
     const char *p = prv_skip_blanks(text);
     if (*p == '\0') {
@@ -127,7 +125,8 @@ bool hs_scenario_load(const char *path)
         if (n < 0) {
             continue; /* blank or comment */
         }
-        ok = n == 0 ? prv_fail(path, line, "expected: T_MS KEY VALUE") : prv_add(path, line, t_ms, name, value);
+        ok = n == 0 ? prv_fail(path, line, "expected: T_MS KEY VALUE")
+                    : prv_add(path, line, t_ms, name, value);
     }
     fclose(f);
     if (!ok) {

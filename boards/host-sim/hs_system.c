@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* host-sim: system services. A restart re-executes the program with the same
  * arguments, which keeps the flash file, as a real MCU keeps its flash; the
  * watchdog is a deadline checked at each idle. The reset cause crosses the

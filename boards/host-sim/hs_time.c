@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* host-sim: the emulated clock at 1 MHz, the one-shot timer, and the
  * servicing of every simulated interrupt that km_hal_idle() does.
  *
@@ -24,7 +25,7 @@ static km_timer_handler_t s_handler;
 static void *s_ctx;
 static uint64_t s_at_ns; /* the armed timer's due time */
 static bool s_armed;
-static uint64_t s_last_ns; /* keeps the clock monotonic across holds */
+static uint64_t s_last_ns;       /* keeps the clock monotonic across holds */
 static uint64_t s_firing_due_ns; /* inside the handler: the timer's due time */
 
 uint32_t km_hal_time_tick_hz(void)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* host-sim: the servo bus over TCP (one client at a time; a new client may
  * connect after the old one leaves) or over a pseudo-terminal, behaving like
  * a UART at the servo's baud rate (10 bits per byte, 8N1):
@@ -72,12 +73,12 @@ static uint8_t s_rx_byte[HS_RX_BUF];
 static uint64_t s_rx_due_ns[HS_RX_BUF]; /* when each byte's stop bit ends */
 static uint32_t s_rx_head;              /* free-running; head - tail bytes waiting */
 static uint32_t s_rx_tail;
-static uint64_t s_wire_free_ns;         /* the wire is free after the last buffered byte */
+static uint64_t s_wire_free_ns;                 /* the wire is free after the last buffered byte */
 static uint32_t s_rx_budget = KM_RX_QUEUE_SIZE; /* bytes the app's queue surely takes */
 static uint64_t s_byte_ns = (HS_BITS_PER_BYTE * 1000000000ull) / 115200u;
-static uint64_t s_tx_end_ns;            /* the last answer's last stop bit */
-static bool s_tx_busy;                  /* what tx_busy() last told the app */
-static uint32_t s_wire_baud;   /* the master's rate; 0 = the servo's own */
+static uint64_t s_tx_end_ns; /* the last answer's last stop bit */
+static bool s_tx_busy;       /* what tx_busy() last told the app */
+static uint32_t s_wire_baud; /* the master's rate; 0 = the servo's own */
 static uint32_t s_uart_baud = 115200u;
 static bool s_report_baud;
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* host-sim: the baud mismatch model (hs_wire.h). A sender puts each byte on
  * the wire as 8N1 at its bit time, back to back, idle (1) before and after;
  * the receiver waits for a falling edge, samples start, 8 data bits and stop

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* host-sim: what a UART at one baud rate decodes from bytes sent at
  * another (the wire's baud mismatch model, docs/protocol-decisions.md "Baud
  * on the emulated bus"; the same algorithm as tools/kmwire.py garble()). */

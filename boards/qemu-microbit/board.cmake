@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # The qemu-microbit board's declaration (cmake/km_boards.cmake): QEMU's
 # nRF51822 micro:bit, a Cortex-M0, built with Debian's arm-none-eabi-gcc.
 # -fstack-usage: a .su file per object, to bound the 2 KiB stack by reading.

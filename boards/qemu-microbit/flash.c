@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The user-data store region (km_hal_flash.h) on the nRF51 NVMC.
  *
  * The region is the top flash pages the linker script reserves; offsets are

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* What the qemu-microbit board offers beyond the hal contracts: the store's
  * flash instance and the simulated-plant hook-up (this board has no motor).
  *

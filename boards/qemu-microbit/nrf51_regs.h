@@ -1,6 +1,8 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* nRF51 and Cortex-M0 register map: only what this board uses, written from
  * the nRF51 Series Reference Manual v3.0 and the ARMv6-M ARM. Registers are
  * reached as base + offset so every address appears exactly once here. */
+/* clang-format off: register maps aligned by hand, one address per line */
 #ifndef NRF51_REGS_H
 #define NRF51_REGS_H
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Motor and sensors (km_hal_motor.h, km_hal_sensors.h) for a board without
  * hardware: the motor calls only record the command and the sensors return
  * what a plant adapter last published (km_board.h). Both sides may run in

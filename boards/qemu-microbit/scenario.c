@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* QEMU: the plant scenario (boards/sim-common/km_sim_scenario.h) as a table
  * in RAM at 0x20000040 (nrf51822.ld .km_scenario), which tools/servo-bus
  * --scenario FILE writes with

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Semihosting calls: SYS_WRITEC/SYS_WRITE0 for logs, SYS_EXIT_EXTENDED for
  * an exit code QEMU passes on as its own (test images only). */
 #include "semihost.h"
@@ -54,7 +55,8 @@ _Noreturn void km_semihost_exit(int code)
     const uint32_t block[2] = {PRV_ADP_STOPPED_APPLICATION_EXIT, (uint32_t)code};
     (void)prv_call(PRV_SYS_EXIT_EXTENDED, block);
     /* Hosts without the extended call: plain exit (code lost: 0 or 1). */
-    (void)prv_call(PRV_SYS_EXIT, (const void *)(uintptr_t)(code == 0 ? PRV_ADP_STOPPED_APPLICATION_EXIT : 0x20023u));
+    (void)prv_call(PRV_SYS_EXIT,
+                   (const void *)(uintptr_t)(code == 0 ? PRV_ADP_STOPPED_APPLICATION_EXIT : 0x20023u));
     for (;;) {
     }
 }

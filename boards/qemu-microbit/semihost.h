@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* ARM semihosting for test images only (never in firmware: without a
  * debugger or QEMU's -semihosting, BKPT 0xAB hard-faults a real part). */
 #ifndef KM_SEMIHOST_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The simulated plant's physics across a restart of the emulated MCU
  * (km_sim_board.h): QEMU keeps RAM across a SYSRESETREQ, so the physics
  * are copied into .noinit at every sensor read and taken back at the next

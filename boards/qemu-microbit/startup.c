@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Startup for the nRF51822 (Cortex-M0): the vector table, the reset handler
  * that lays out RAM for C (.data copied from flash, .bss zeroed) and
  * captures the reset cause (system.c), and the default handler every unused
@@ -59,9 +60,16 @@ __attribute__((section(".isr_vector"), used)) const km_vector_t km_vectors[48] =
     Reset_Handler,
     NMI_Handler,
     HardFault_Handler,
-    0, 0, 0, 0, 0, 0, 0,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0,
     SVC_Handler,
-    0, 0,
+    0,
+    0,
     PendSV_Handler,
     SysTick_Handler,
     POWER_CLOCK_IRQHandler, /* 0 */
@@ -90,7 +98,12 @@ __attribute__((section(".isr_vector"), used)) const km_vector_t km_vectors[48] =
     SWI3_IRQHandler,
     SWI4_IRQHandler, /* 24 */
     SWI5_IRQHandler,
-    0, 0, 0, 0, 0, 0,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0,
 };
 
 void Reset_Handler(void)
@@ -115,7 +128,6 @@ void Reset_Handler(void)
  * A plain branch that touches no stack; the stacked PC still says where. */
 __attribute__((naked)) void Default_Handler(void)
 {
-    __asm__ volatile(
-        "ldr r0, =HardFault_Handler\n"
-        "bx  r0                    \n");
+    __asm__ volatile("ldr r0, =HardFault_Handler\n"
+                     "bx  r0                    \n");
 }

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* System services (km_hal_system.h) on the nRF51: clocks, reset, watchdog,
  * interrupt lock, entropy, idle; the reset cause and the HardFault handler.
  *
@@ -21,8 +22,8 @@
 #include "nrf51_regs.h"
 
 #define PRV_WDT_CLK_HZ 32768u
-#define PRV_RNG_BYTE_US 2000u      /* a real (and QEMU's) bias-corrected byte takes ~0.7 ms */
-#define PRV_RNG_SPINS 2000000u     /* last resort if TIMER0 is not running yet */
+#define PRV_RNG_BYTE_US 2000u  /* a real (and QEMU's) bias-corrected byte takes ~0.7 ms */
+#define PRV_RNG_SPINS 2000000u /* last resort if TIMER0 is not running yet */
 #define PRV_SYSTICK_RELOAD (NRF_HFCLK_HZ / 1000u - 1u)
 
 /* POWER shares the peripheral slot (ID 0) with CLOCK (nRF51 RM §12). */
@@ -128,21 +129,20 @@ _Noreturn void km_board_fault_stop(uint32_t pc)
  * ran out, and no C may run on it. */
 __attribute__((naked)) void HardFault_Handler(void)
 {
-    __asm__ volatile(
-        "movs r0, #4                \n"
-        "mov  r1, lr                \n"
-        "tst  r0, r1                \n"
-        "bne  1f                    \n"
-        "mrs  r1, msp               \n"
-        "b    2f                    \n"
-        "1:                         \n"
-        "mrs  r1, psp               \n"
-        "2:                         \n"
-        "ldr  r0, [r1, #24]         \n"
-        "ldr  r1, =__stack_top      \n"
-        "mov  sp, r1                \n"
-        "ldr  r1, =km_board_fault_stop\n"
-        "bx   r1                    \n");
+    __asm__ volatile("movs r0, #4                \n"
+                     "mov  r1, lr                \n"
+                     "tst  r0, r1                \n"
+                     "bne  1f                    \n"
+                     "mrs  r1, msp               \n"
+                     "b    2f                    \n"
+                     "1:                         \n"
+                     "mrs  r1, psp               \n"
+                     "2:                         \n"
+                     "ldr  r0, [r1, #24]         \n"
+                     "ldr  r1, =__stack_top      \n"
+                     "mov  sp, r1                \n"
+                     "ldr  r1, =km_board_fault_stop\n"
+                     "bx   r1                    \n");
 }
 
 void km_hal_system_init(void)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Time (km_hal_time.h) on nRF51 TIMER0: 32-bit, 1 MHz, free running.
  *
  * Why TIMER0 and not SysTick: the nRF51's Cortex-M0 has no SysTick on real

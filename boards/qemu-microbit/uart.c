@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* UART0 as the servo bus (km_hal_uart.h) on the nRF51.
  *
  * RX: one interrupt per byte (RXDRDY), stamped with the tick in the ISR so the

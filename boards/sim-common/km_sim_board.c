@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Simulated boards (qemu-microbit, host-sim): the hal motor and sensors
  * contracts over the simulated plant. The plant advances by the real elapsed
  * tick time at every sensor read, so motion is what the motor commands

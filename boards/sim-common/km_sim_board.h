@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Simulated boards: access to the plant behind the hal (for test hooks). */
 #ifndef KM_SIM_BOARD_H
 #define KM_SIM_BOARD_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The products the simulated boards emulate, on a 2S Li-ion supply (7.4 V)
  * and the plant's default motor (sim/plant/km_plant_default.c):
  *  - "KM-SIM-P135", the default: a potentiometer servo, +-135 deg travel;
@@ -30,16 +31,16 @@ static const km_product_t s_product = {
      * hardware v1.0, software v0.1.00 */
     .firmware_version = PRV_FW_VERSION,
     .variant = KM_VARIANT_POTENTIOMETER,
-    .max_current_ma = 2000,       /* below the plant's 2.5 A stall current */
-    .max_speed_dps = 360,         /* about the plant's no-load speed */
+    .max_current_ma = 2000, /* below the plant's 2.5 A stall current */
+    .max_speed_dps = 360,   /* about the plant's no-load speed */
     .zero_offset1 = 0,
     .angle_min = -1350,
     .angle_max = 1350,
-    .voltage_high_v = 9,          /* 2S: 8.4 V full, 6.0 V empty */
+    .voltage_high_v = 9, /* 2S: 8.4 V full, 6.0 V empty */
     .voltage_low_v = 6,
     .current_threshold_ma = 1500,
-    .baud_min_100 = 96,           /* 9600 */
-    .baud_max_100 = 10000,        /* 1 Mbaud */
+    .baud_min_100 = 96,    /* 9600 */
+    .baud_max_100 = 10000, /* 1 Mbaud */
     .current_max_ma = 3000,
     .speed_max_dps = 720,
     .travel_min = -1350,
@@ -48,7 +49,7 @@ static const km_product_t s_product = {
      * reads +-165.0 deg at the rails (sim/plant/km_plant_default.c) */
     .pos_read_min = -1575,
     .pos_read_max = 1575,
-    .zero_offset2_max = 100,      /* +-10 deg: more skews a pot's two sides */
+    .zero_offset2_max = 100, /* +-10 deg: more skews a pot's two sides */
     .voltage_max_v = 20,
     .gains = &s_gains,
 };
@@ -62,7 +63,7 @@ static const km_product_t s_product_encoder = {
     .max_current_ma = 2000,
     .max_speed_dps = 360,
     .zero_offset1 = 0,
-    .angle_min = 0,               /* 0 = no angle limit (multi-turn) */
+    .angle_min = 0, /* 0 = no angle limit (multi-turn) */
     .angle_max = 0,
     .voltage_high_v = 9,
     .voltage_low_v = 6,
@@ -71,9 +72,9 @@ static const km_product_t s_product_encoder = {
     .baud_max_100 = 10000,
     .current_max_ma = 3000,
     .speed_max_dps = 720,
-    .travel_min = -32000,         /* +-3200.0 deg: the widest 0x19/0x1A carry (i16) */
+    .travel_min = -32000, /* +-3200.0 deg: the widest 0x19/0x1A carry (i16) */
     .travel_max = 32000,
-    .zero_offset2_max = 1800,     /* +-180 deg: an encoder's zero can be anywhere */
+    .zero_offset2_max = 1800, /* +-180 deg: an encoder's zero can be anywhere */
     .voltage_max_v = 20,
     .gains = &s_gains,
 };

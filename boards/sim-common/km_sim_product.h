@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Simulated boards: which product they emulate (km_sim_product.c). */
 #ifndef KM_SIM_PRODUCT_H
 #define KM_SIM_PRODUCT_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The scenario player (km_sim_scenario.h): events applied on the plant's
  * clock. */
 #include "km_sim_scenario.h"
@@ -21,7 +22,9 @@ void km_scn_play(km_scn_player_t *pl, km_plant_t *plant, km_plant_input_t *in)
             km_plant_set_supply_mv(plant, e->value);
             break;
         case KM_SCN_AMBIENT_DC:
-            km_plant_set_ambient_dc(plant, (int16_t)(e->value < -2730 ? -2730 : e->value > 3000 ? 3000 : e->value));
+            km_plant_set_ambient_dc(plant, (int16_t)(e->value < -2730  ? -2730
+                                                     : e->value > 3000 ? 3000
+                                                                       : e->value));
             break;
         case KM_SCN_LOAD_MNM: {
             const int32_t mnm = e->value < -100000 ? -100000 : e->value > 100000 ? 100000 : e->value;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Scenarios on the simulated boards: the bench a customer would build
  * around a servo (supply, ambient temperature, a load on the horn, a
  * broken wire), played on the plant's clock so a protection can be
@@ -33,7 +34,7 @@ typedef enum {
 /* 12 bytes, little-endian words: also the QEMU table's layout. */
 typedef struct {
     uint32_t t_ms;
-    uint32_t key;   /* km_scn_key_t */
+    uint32_t key; /* km_scn_key_t */
     int32_t value;
 } km_scn_event_t;
 
@@ -42,7 +43,7 @@ typedef struct {
 typedef struct {
     const km_scn_event_t *ev;
     uint32_t n;
-    uint32_t next;  /* the first event not yet applied */
+    uint32_t next; /* the first event not yet applied */
 } km_scn_player_t;
 
 void km_scn_start(km_scn_player_t *pl, const km_scn_event_t *ev, uint32_t n);

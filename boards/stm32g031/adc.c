@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Continuous scan of ADC_IN0..3 with 16x hardware oversampling, written by
  * DMA1 channel 1 in circular mode into s_samples (RM0444 §15.5, §15.9).
  *
@@ -40,10 +41,9 @@ void km_adc_start(void)
     ADC_ISR = ADC_ISR_EOCAL;
 
     ADC_CFGR1 = ADC_CFGR1_DMAEN | ADC_CFGR1_DMACFG | ADC_CFGR1_CONT | ADC_CFGR1_OVRMOD;
-    ADC_CFGR2 = ADC_CFGR2_CKMODE_PCLK2 | ADC_CFGR2_OVSE |
-                (3u << ADC_CFGR2_OVSR_SHIFT) |  /* 16 samples */
-                (4u << ADC_CFGR2_OVSS_SHIFT);   /* >> 4: back to 12 bits */
-    ADC_SMPR = ADC_SMPR_SMP1_160_5; /* pot and NTC are high-impedance dividers */
+    ADC_CFGR2 = ADC_CFGR2_CKMODE_PCLK2 | ADC_CFGR2_OVSE | (3u << ADC_CFGR2_OVSR_SHIFT) | /* 16 samples */
+                (4u << ADC_CFGR2_OVSS_SHIFT); /* >> 4: back to 12 bits */
+    ADC_SMPR = ADC_SMPR_SMP1_160_5;           /* pot and NTC are high-impedance dividers */
     /* DMAMUX channel 0 routes the ADC request to DMA1 channel 1. */
     DMAMUX_C0CR = DMAMUX_REQ_ADC;
     DMA1_CCR1 = 0u;
@@ -58,8 +58,7 @@ void km_adc_start(void)
     }
     /* Channel selection is applied by the running ADC: wait for CCRDY
      * before the first start (§15.3.7). Upward scan: index = channel. */
-    ADC_CHSELR = (1u << ADC_CH_POT) | (1u << ADC_CH_SHUNT) |
-                 (1u << ADC_CH_VSUPPLY) | (1u << ADC_CH_NTC);
+    ADC_CHSELR = (1u << ADC_CH_POT) | (1u << ADC_CH_SHUNT) | (1u << ADC_CH_VSUPPLY) | (1u << ADC_CH_NTC);
     while ((ADC_ISR & ADC_ISR_CCRDY) == 0u) {
     }
     ADC_ISR = ADC_ISR_CCRDY;

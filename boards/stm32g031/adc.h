@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* ADC sampler: the four analog inputs converted continuously into a RAM
  * array by DMA. */
 #ifndef ADC_H

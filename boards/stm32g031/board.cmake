@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # The STM32G031 servo board's declaration (cmake/km_boards.cmake): a
 # Cortex-M0+ built with Debian's arm-none-eabi-gcc. Every object of its
 # build gets one section per function/object so --gc-sections drops what

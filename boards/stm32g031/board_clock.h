@@ -1,8 +1,9 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Clock figures the drivers derive their dividers from (set in system.c). */
 #ifndef BOARD_CLOCK_H
 #define BOARD_CLOCK_H
 
 #define BOARD_SYSCLK_HZ 64000000u
-#define BOARD_PCLK_HZ   64000000u   /* APB undivided: timers also see 64 MHz */
+#define BOARD_PCLK_HZ 64000000u /* APB undivided: timers also see 64 MHz */
 
 #endif

@@ -1,10 +1,11 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Default product calibration: 270° pot over (almost) the full ADC range,
  * 50 mΩ shunt with a gain-20 amplifier (INA180A1-like: 1 V/A), a 100k/10k
  * supply divider and a 10 kΩ B3950 NTC under a 10 kΩ pull-up to VDDA. */
 #include "board_config.h"
 
 const km_board_config_t km_board_config = {
-    .pot_raw_min = 205u,   /* 5 % of range: pots rarely reach the rails */
+    .pot_raw_min = 205u, /* 5 % of range: pots rarely reach the rails */
     .pot_raw_max = 3890u,
     .rail_margin = 16u,
     .vref_mv = 3300u,
@@ -14,8 +15,8 @@ const km_board_config_t km_board_config = {
     .vdiv_num = 11u,
     .vdiv_den = 1u,
     /* raw = 4095 * R(T) / (R(T) + 10k), R(T) = 10k * exp(3950 (1/T - 1/298.15)) */
-    .ntc_raw = { 3996u, 3900u, 3740u, 3495u, 3156u, 2738u, 2278u, 1825u, 1419u, 1081u,
-                 815u, 613u, 462u, 350u, 267u, 206u, 160u, 126u, 100u, 80u },
+    .ntc_raw = {3996u, 3900u, 3740u, 3495u, 3156u, 2738u, 2278u, 1825u, 1419u, 1081u,
+                815u,  613u,  462u,  350u,  267u,  206u,  160u,  126u,  100u,  80u},
     .ntc_first_c10 = -400,
     .ntc_step_c10 = 100,
 };

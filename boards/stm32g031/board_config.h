@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Product configuration of an STM32G031 servo: the calibration constants
  * that turn ADC counts into engineering units. One const instance per
  * product (board_config.c); factory calibration may later override it. */
@@ -27,8 +28,8 @@ typedef struct {
     uint16_t vdiv_den;
     /* NTC divider: raw counts at -40, -30 ... +150 °C (falling). */
     uint16_t ntc_raw[KM_NTC_POINTS];
-    int16_t ntc_first_c10;  /* temperature of ntc_raw[0], 0.1 °C */
-    int16_t ntc_step_c10;   /* spacing of the table, 0.1 °C */
+    int16_t ntc_first_c10; /* temperature of ntc_raw[0], 0.1 °C */
+    int16_t ntc_step_c10;  /* spacing of the table, 0.1 °C */
 } km_board_config_t;
 
 extern const km_board_config_t km_board_config;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Pin and peripheral assignment of the STM32G031 servo board (TSSOP20
  * STM32G031F8 or LQFP32 G031K8; the same pins exist on both). The README
  * explains the choice. */
@@ -9,27 +10,27 @@
 /* Servo bus: USART1_TX on PB6 (AF0), single-wire half-duplex, open drain
  * with the bus pull-up. PB6 shares TSSOP20 pin 20 with PB3/PB4/PB5, which
  * stay analog (reset state), so only USART1 drives the pad. */
-#define PIN_BUS_PORT      GPIOB_BASE_R
-#define PIN_BUS_PIN       6u
-#define PIN_BUS_AF        0u
+#define PIN_BUS_PORT GPIOB_BASE_R
+#define PIN_BUS_PIN 6u
+#define PIN_BUS_AF 0u
 
 /* Optional RS-485 driver enable (DE), high while transmitting. Define
  * KM_BOARD_RS485_DE in the build to drive PA4. */
-#define PIN_DE_PORT       GPIOA_BASE_R
-#define PIN_DE_PIN        4u
+#define PIN_DE_PORT GPIOA_BASE_R
+#define PIN_DE_PIN 4u
 
 /* H-bridge inputs: TIM3_CH1 on PA6 -> IN1, TIM3_CH2 on PA7 -> IN2 (AF1). */
-#define PIN_IN1_PORT      GPIOA_BASE_R
-#define PIN_IN1_PIN       6u
-#define PIN_IN2_PORT      GPIOA_BASE_R
-#define PIN_IN2_PIN       7u
-#define PIN_PWM_AF        1u
+#define PIN_IN1_PORT GPIOA_BASE_R
+#define PIN_IN1_PIN 6u
+#define PIN_IN2_PORT GPIOA_BASE_R
+#define PIN_IN2_PIN 7u
+#define PIN_PWM_AF 1u
 
 /* Analog inputs: ADC_IN0..3 on PA0..PA3, converted in this order. */
-#define ADC_CH_POT        0u   /* PA0: potentiometer wiper */
-#define ADC_CH_SHUNT      1u   /* PA1: current shunt amplifier output */
-#define ADC_CH_VSUPPLY    2u   /* PA2: supply divider */
-#define ADC_CH_NTC        3u   /* PA3: NTC divider */
-#define ADC_CHANNELS      4u
+#define ADC_CH_POT 0u     /* PA0: potentiometer wiper */
+#define ADC_CH_SHUNT 1u   /* PA1: current shunt amplifier output */
+#define ADC_CH_VSUPPLY 2u /* PA2: supply divider */
+#define ADC_CH_NTC 3u     /* PA3: NTC divider */
+#define ADC_CHANNELS 4u
 
 #endif

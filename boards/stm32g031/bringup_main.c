@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Bring-up image for the STM32G031 board: initialises every driver and
  * echoes bus bytes back once the line has been quiet for 2 ms, so a USB-UART
  * on the servo bus checks clock, baud, half-duplex turnaround, the timer and
@@ -13,7 +14,7 @@
 #include "km_hal_uart.h"
 
 #define BRINGUP_BAUD 115200u
-#define ECHO_GAP_US  2000u
+#define ECHO_GAP_US 2000u
 
 static uint8_t s_rx[64];
 static volatile uint8_t s_rx_len;

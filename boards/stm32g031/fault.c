@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Faults, reset cause and stack guard of the STM32G031 board.
  *
  * A HardFault (and any vector nothing should raise, which startup.c sends
@@ -88,8 +89,8 @@ void g0_reset_capture(void)
     RCC_CSR = csr | RCC_CSR_RMVF; /* keeps LSION; clears every reset flag */
 
     bool fault = s_fault_record.magic == PRV_FAULT_MAGIC &&
-                 s_fault_record.check == ~(s_fault_record.magic ^ s_fault_record.kind ^
-                                           s_fault_record.pc ^ s_fault_record.lr);
+                 s_fault_record.check ==
+                     ~(s_fault_record.magic ^ s_fault_record.kind ^ s_fault_record.pc ^ s_fault_record.lr);
     if (fault) {
         g0_last_fault.magic = s_fault_record.magic;
         g0_last_fault.kind = s_fault_record.kind;
@@ -123,10 +124,10 @@ static void prv_bridge_free(void)
     RCC_IOPENR |= RCC_IOPENR_GPIOA;
     GPIO_BRR(PIN_IN1_PORT) = 1u << PIN_IN1_PIN;
     GPIO_BRR(PIN_IN2_PORT) = 1u << PIN_IN2_PIN;
-    GPIO_MODER(PIN_IN1_PORT) = (GPIO_MODER(PIN_IN1_PORT) & ~(3u << (2u * PIN_IN1_PIN))) |
-                               (1u << (2u * PIN_IN1_PIN));
-    GPIO_MODER(PIN_IN2_PORT) = (GPIO_MODER(PIN_IN2_PORT) & ~(3u << (2u * PIN_IN2_PIN))) |
-                               (1u << (2u * PIN_IN2_PIN));
+    GPIO_MODER(PIN_IN1_PORT) =
+        (GPIO_MODER(PIN_IN1_PORT) & ~(3u << (2u * PIN_IN1_PIN))) | (1u << (2u * PIN_IN1_PIN));
+    GPIO_MODER(PIN_IN2_PORT) =
+        (GPIO_MODER(PIN_IN2_PORT) & ~(3u << (2u * PIN_IN2_PIN))) | (1u << (2u * PIN_IN2_PIN));
     TIM_CCER(TIM3_BASE_R) = 0u;
 #ifdef KM_BOARD_RS485_DE
     /* Let go of the bus too: a fault mid-answer must not hold the line. */
@@ -136,8 +137,7 @@ static void prv_bridge_free(void)
 
 /* Reached only through g0_fault_stop, with SP already at the top of the
  * stack region. `used`: the only reference is from the asm below. */
-__attribute__((used, noreturn)) static void prv_fault_stop_c(uint32_t kind, uint32_t pc,
-                                                             uint32_t lr)
+__attribute__((used, noreturn)) static void prv_fault_stop_c(uint32_t kind, uint32_t pc, uint32_t lr)
 {
     prv_bridge_free();
     s_fault_record.kind = kind;
@@ -160,11 +160,10 @@ __attribute__((naked, noreturn)) void g0_fault_stop(uint32_t kind __attribute__(
                                                     uint32_t pc __attribute__((unused)),
                                                     uint32_t lr __attribute__((unused)))
 {
-    __asm volatile(
-        "ldr  r3, =_estack         \n"
-        "mov  sp, r3               \n"
-        "ldr  r3, =prv_fault_stop_c\n"
-        "bx   r3                   \n");
+    __asm volatile("ldr  r3, =_estack         \n"
+                   "mov  sp, r3               \n"
+                   "ldr  r3, =prv_fault_stop_c\n"
+                   "bx   r3                   \n");
 }
 
 /* The frame the core stacked is on MSP or PSP as EXC_RETURN bit 2 says (this
@@ -174,19 +173,18 @@ __attribute__((naked, noreturn)) void g0_fault_stop(uint32_t kind __attribute__(
  * HardFault, anything else for a vector nothing should raise. */
 __attribute__((naked)) void HardFault_Handler(void)
 {
-    __asm volatile(
-        "movs r0, #4              \n"
-        "mov  r1, lr              \n"
-        "tst  r0, r1              \n"
-        "bne  1f                  \n"
-        "mrs  r0, msp             \n"
-        "b    2f                  \n"
-        "1:                       \n"
-        "mrs  r0, psp             \n"
-        "2:                       \n"
-        "ldr  r1, [r0, #24]       \n"
-        "ldr  r2, [r0, #20]       \n"
-        "mrs  r0, ipsr            \n"
-        "ldr  r3, =g0_fault_stop  \n"
-        "bx   r3                  \n");
+    __asm volatile("movs r0, #4              \n"
+                   "mov  r1, lr              \n"
+                   "tst  r0, r1              \n"
+                   "bne  1f                  \n"
+                   "mrs  r0, msp             \n"
+                   "b    2f                  \n"
+                   "1:                       \n"
+                   "mrs  r0, psp             \n"
+                   "2:                       \n"
+                   "ldr  r1, [r0, #24]       \n"
+                   "ldr  r2, [r0, #20]       \n"
+                   "mrs  r0, ipsr            \n"
+                   "ldr  r3, =g0_fault_stop  \n"
+                   "bx   r3                  \n");
 }

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fault handling, reset cause and stack guard of the STM32G031 board
  * (fault.c): what startup.c and system.c call. The README's "Faults, reset
  * cause, stack" section explains the whole scheme. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* km_flash_t over the store pages at the end of the G031's single flash bank
  * (RM0444 §3.3): 2 KiB pages, 64-bit double-word programming with ECC.
  *
@@ -109,8 +110,8 @@ static km_flash_result_t prv_erase(void *ctx, uint32_t page)
         return KM_FLASH_ERR_ERASE;
     }
     /* §3.3.7 page erase: PER + PNB, then STRT. */
-    bool idle = prv_run(FLASH_CR_EOPIE | FLASH_CR_PER | ((pnb << FLASH_CR_PNB_SHIFT) & FLASH_CR_PNB_MASK),
-                        0, 0u, 0u);
+    bool idle =
+        prv_run(FLASH_CR_EOPIE | FLASH_CR_PER | ((pnb << FLASH_CR_PNB_SHIFT) & FLASH_CR_PNB_MASK), 0, 0u, 0u);
     return prv_end(idle) ? KM_FLASH_OK : KM_FLASH_ERR_ERASE;
 }
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Cortex-M0+ core registers this board touches (SCB, NVIC), from the ARMv6-M
  * Architecture Reference Manual (B3.2, B3.4) as summarised in PM0223. Only
  * what the board uses; no vendor headers. */
@@ -10,10 +11,10 @@
 
 /* System control block (ARMv6-M B3.2.2). */
 #define SCB_AIRCR G0_REG(0xE000ED0Cu)
-#define SCB_AIRCR_VECTKEY      (0x05FAu << 16)
-#define SCB_AIRCR_SYSRESETREQ  (1u << 2)
-#define SCB_SHPR3 G0_REG(0xE000ED20u)     /* bits 31:24 SysTick priority */
-#define SCB_VTOR  G0_REG(0xE000ED08u)     /* vector table offset (M0+ has it, M0 does not) */
+#define SCB_AIRCR_VECTKEY (0x05FAu << 16)
+#define SCB_AIRCR_SYSRESETREQ (1u << 2)
+#define SCB_SHPR3 G0_REG(0xE000ED20u) /* bits 31:24 SysTick priority */
+#define SCB_VTOR G0_REG(0xE000ED08u)  /* vector table offset (M0+ has it, M0 does not) */
 
 /* A function that must run from RAM because it runs while flash is busy
  * (docs/flash-busy.md): its own section .ramfunc.<name>, which the linker
@@ -22,12 +23,12 @@
 #define G0_RAMFUNC(name) __attribute__((section(".ramfunc." #name), noinline))
 
 /* SysTick (ARMv6-M B3.3): 24-bit down counter on the core clock. */
-#define SYST_CSR  G0_REG(0xE000E010u)
-#define SYST_RVR  G0_REG(0xE000E014u)
-#define SYST_CVR  G0_REG(0xE000E018u)
-#define SYST_CSR_ENABLE    (1u << 0)
-#define SYST_CSR_TICKINT   (1u << 1)
-#define SYST_CSR_CLKSOURCE (1u << 2)   /* processor clock */
+#define SYST_CSR G0_REG(0xE000E010u)
+#define SYST_RVR G0_REG(0xE000E014u)
+#define SYST_CVR G0_REG(0xE000E018u)
+#define SYST_CSR_ENABLE (1u << 0)
+#define SYST_CSR_TICKINT (1u << 1)
+#define SYST_CSR_CLKSOURCE (1u << 2) /* processor clock */
 
 /* NVIC (ARMv6-M B3.4.2): 32 interrupts, 2 priority bits per 8-bit field
  * (bits 7:6), priority registers word-access only on M0+. */
@@ -53,7 +54,7 @@ static inline void g0_nvic_disable(uint32_t irq)
 }
 
 /* STM32G031 vector positions (RM0444 §12.3 table 61, "Vector table"). */
-#define G0_IRQ_TIM2        15u
-#define G0_IRQ_USART1      27u
+#define G0_IRQ_TIM2 15u
+#define G0_IRQ_USART1 27u
 
 #endif

@@ -1,12 +1,13 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Tiny GPIO helpers over the RM0444 §7.4 registers: one call per pin role. */
 #ifndef G0_GPIO_H
 #define G0_GPIO_H
 
 #include "g0_regs.h"
 
-#define G0_GPIO_MODE_INPUT  0u
+#define G0_GPIO_MODE_INPUT 0u
 #define G0_GPIO_MODE_OUTPUT 1u
-#define G0_GPIO_MODE_AF     2u
+#define G0_GPIO_MODE_AF 2u
 #define G0_GPIO_MODE_ANALOG 3u
 
 static inline void g0_gpio_mode(uint32_t port, uint32_t pin, uint32_t mode)
@@ -32,7 +33,13 @@ static inline void g0_gpio_fast(uint32_t port, uint32_t pin)
     GPIO_OSPEEDR(port) |= 3u << (2u * pin);
 }
 
-static inline void g0_gpio_set(uint32_t port, uint32_t pin)   { GPIO_BSRR(port) = 1u << pin; }
-static inline void g0_gpio_clear(uint32_t port, uint32_t pin) { GPIO_BRR(port) = 1u << pin; }
+static inline void g0_gpio_set(uint32_t port, uint32_t pin)
+{
+    GPIO_BSRR(port) = 1u << pin;
+}
+static inline void g0_gpio_clear(uint32_t port, uint32_t pin)
+{
+    GPIO_BRR(port) = 1u << pin;
+}
 
 #endif

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Names of the exception and interrupt handlers in the vector table
  * (startup.c). Drivers include this so their handler definitions are checked
  * against the same declarations the table uses. */

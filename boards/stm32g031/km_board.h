@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Board-specific entry points of the STM32G031 board beyond hal/: the
  * flash region of the user-data store, the bridge's drive direction. */
 #ifndef KM_BOARD_H

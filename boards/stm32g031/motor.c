@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* km_hal_motor on TIM3 CH1/CH2 (PA6 -> IN1, PA7 -> IN2) into a two-input
  * H-bridge driver of the DRV8837 kind: 64 MHz / 3200 = 20 kHz edge-aligned
  * PWM, above hearing. Drive = PWM on one input, the other low (the off phase
@@ -28,8 +29,7 @@ void km_hal_motor_init(void)
     TIM_CR1(TIM3_BASE_R) = 0u;
     TIM_PSC(TIM3_BASE_R) = 0u;
     TIM_ARR(TIM3_BASE_R) = PWM_PERIOD - 1u;
-    TIM_CCMR1(TIM3_BASE_R) = TIM_CCMR1_OC1M_PWM1 | TIM_CCMR1_OC1PE |
-                             TIM_CCMR1_OC2M_PWM1 | TIM_CCMR1_OC2PE;
+    TIM_CCMR1(TIM3_BASE_R) = TIM_CCMR1_OC1M_PWM1 | TIM_CCMR1_OC1PE | TIM_CCMR1_OC2M_PWM1 | TIM_CCMR1_OC2PE;
     prv_set(0u, 0u);
     TIM_CCER(TIM3_BASE_R) = TIM_CCER_CC1E | TIM_CCER_CC2E;
     TIM_EGR(TIM3_BASE_R) = TIM_EGR_UG; /* load ARR/CCR preloads */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The product this board is built as: a potentiometer servo with +-135 deg
  * travel on a 2S Li-ion supply, 20 kg.cm class. A servo maker changes these
  * numbers (and board_config.c's sensor calibration) for their model. */
@@ -19,13 +20,13 @@ static const km_product_t s_product = {
     .variant = KM_VARIANT_POTENTIOMETER,
     .max_current_ma = 2000,
     .max_speed_dps = 360,
-    .zero_offset1 = 0,            /* factory calibration: set per unit at end of line */
+    .zero_offset1 = 0, /* factory calibration: set per unit at end of line */
     .angle_min = -1350,
     .angle_max = 1350,
     .voltage_high_v = 9,
     .voltage_low_v = 6,
     .current_threshold_ma = 1500,
-    .baud_min_100 = 96,           /* USART1 at 64 MHz: 9600 .. 1 Mbaud within 2 % */
+    .baud_min_100 = 96, /* USART1 at 64 MHz: 9600 .. 1 Mbaud within 2 % */
     .baud_max_100 = 10000,
     .current_max_ma = 3000,
     .speed_max_dps = 720,

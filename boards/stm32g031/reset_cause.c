@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* RCC_CSR reset flags (RM0444 §5.4) to km_reset_cause_t, most specific cause
  * first. Why this order:
  *

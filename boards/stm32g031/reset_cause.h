@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The pure part of the STM32G031's reset cause: RCC_CSR flags plus what the
  * board's .noinit RAM says, mapped to the hal's km_reset_cause_t. No
  * register access here, so tests/board/test_stm32g031_reset_cause.c runs it

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fixed-point sensor conversions (see sensor_convert.h). All products are
  * bounded well inside 32 bits: raw <= 4095, factors <= 65535. */
 #include "sensor_convert.h"

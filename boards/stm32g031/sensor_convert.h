@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* ADC counts -> engineering units for the STM32G031 board, in integer fixed
  * point (no FPU on the M0+). Pure functions of a config and raw 12-bit
  * counts, so they can be tested on the host. */
@@ -12,9 +13,9 @@
 #define KM_ADC_FULL_SCALE 4095u
 
 /* Register 0x35 sensor fault bits. */
-#define KM_FAULT_POSITION    (1u << 5)
-#define KM_FAULT_CURRENT     (1u << 4)
-#define KM_FAULT_VOLTAGE     (1u << 3)
+#define KM_FAULT_POSITION (1u << 5)
+#define KM_FAULT_CURRENT (1u << 4)
+#define KM_FAULT_VOLTAGE (1u << 3)
 #define KM_FAULT_TEMPERATURE (1u << 2)
 
 /* 0.1° of the output shaft, -1350..1350 across the calibrated travel

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* km_hal_sensors for the STM32G031 board: the latest ADC set converted with
  * the product calibration, plus the 0x35 sensor fault bits:
  *  - position (bit 5): wiper at a rail (open wiper, broken track or supply);

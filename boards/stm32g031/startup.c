@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Reset entry and vector table of the STM32G031 (RM0444 §12.3 table 61).
  * The reset handler copies .data from flash, zeroes .bss, paints the stack
  * and captures the reset cause (fault.c), then calls main(); no C library
@@ -23,16 +24,14 @@ extern uint32_t _siramfunc, _sramfunc, _eramfunc;
 extern uint32_t __ram_vectors[];
 extern int main(void);
 
-
 /* A vector nothing should raise is handled like a HardFault (fault.c):
  * parking here would leave the bridge driving until the watchdog bites, or
  * for ever before it is started. A plain branch, no stack: IPSR still holds
  * this vector's number, and the fault record keeps it. */
 __attribute__((naked)) static void prv_default_handler(void)
 {
-    __asm volatile(
-        "ldr r0, =HardFault_Handler\n"
-        "bx  r0                    \n");
+    __asm volatile("ldr r0, =HardFault_Handler\n"
+                   "bx  r0                    \n");
 }
 
 /* Handlers a board file may define; otherwise they take the fault path.
@@ -55,56 +54,61 @@ typedef struct {
     prv_vector_t irq[32];
 } prv_vector_table_t;
 
-__attribute__((section(".isr_vector"), used))
-static const prv_vector_table_t s_vectors = {
+__attribute__((section(".isr_vector"), used)) static const prv_vector_table_t s_vectors = {
     .initial_sp = &_estack,
-    .core = {
-        [0] = Reset_Handler,      /* 1 */
-        [1] = NMI_Handler,        /* 2: also flash ECC double errors */
-        [2] = HardFault_Handler,  /* 3 */
-        [3] = prv_default_handler, [4] = prv_default_handler,
-        [5] = prv_default_handler, [6] = prv_default_handler,
-        [7] = prv_default_handler, [8] = prv_default_handler,
-        [9] = prv_default_handler,
-        [10] = SVC_Handler,       /* 11 */
-        [11] = prv_default_handler, [12] = prv_default_handler,
-        [13] = PendSV_Handler,    /* 14 */
-        [14] = SysTick_Handler,   /* 15 */
-    },
-    .irq = {
-        prv_default_handler, /* 0 */
-        prv_default_handler, /* 1 */
-        prv_default_handler, /* 2 */
-        prv_default_handler, /* 3 */
-        prv_default_handler, /* 4 */
-        prv_default_handler, /* 5 */
-        prv_default_handler, /* 6 */
-        prv_default_handler, /* 7 */
-        prv_default_handler, /* 8 */
-        prv_default_handler, /* 9 */
-        prv_default_handler, /* 10 */
-        prv_default_handler, /* 11 */
-        prv_default_handler, /* 12 */
-        prv_default_handler, /* 13 */
-        prv_default_handler, /* 14 */
-        TIM2_IRQHandler, /* 15 */
-        prv_default_handler, /* 16 */
-        prv_default_handler, /* 17 */
-        prv_default_handler, /* 18 */
-        prv_default_handler, /* 19 */
-        prv_default_handler, /* 20 */
-        prv_default_handler, /* 21 */
-        prv_default_handler, /* 22 */
-        prv_default_handler, /* 23 */
-        prv_default_handler, /* 24 */
-        prv_default_handler, /* 25 */
-        prv_default_handler, /* 26 */
-        USART1_IRQHandler, /* 27 */
-        prv_default_handler, /* 28 */
-        prv_default_handler, /* 29 */
-        prv_default_handler, /* 30 */
-        prv_default_handler, /* 31 */
-    },
+    .core =
+        {
+            [0] = Reset_Handler,     /* 1 */
+            [1] = NMI_Handler,       /* 2: also flash ECC double errors */
+            [2] = HardFault_Handler, /* 3 */
+            [3] = prv_default_handler,
+            [4] = prv_default_handler,
+            [5] = prv_default_handler,
+            [6] = prv_default_handler,
+            [7] = prv_default_handler,
+            [8] = prv_default_handler,
+            [9] = prv_default_handler,
+            [10] = SVC_Handler, /* 11 */
+            [11] = prv_default_handler,
+            [12] = prv_default_handler,
+            [13] = PendSV_Handler,  /* 14 */
+            [14] = SysTick_Handler, /* 15 */
+        },
+    .irq =
+        {
+            prv_default_handler, /* 0 */
+            prv_default_handler, /* 1 */
+            prv_default_handler, /* 2 */
+            prv_default_handler, /* 3 */
+            prv_default_handler, /* 4 */
+            prv_default_handler, /* 5 */
+            prv_default_handler, /* 6 */
+            prv_default_handler, /* 7 */
+            prv_default_handler, /* 8 */
+            prv_default_handler, /* 9 */
+            prv_default_handler, /* 10 */
+            prv_default_handler, /* 11 */
+            prv_default_handler, /* 12 */
+            prv_default_handler, /* 13 */
+            prv_default_handler, /* 14 */
+            TIM2_IRQHandler,     /* 15 */
+            prv_default_handler, /* 16 */
+            prv_default_handler, /* 17 */
+            prv_default_handler, /* 18 */
+            prv_default_handler, /* 19 */
+            prv_default_handler, /* 20 */
+            prv_default_handler, /* 21 */
+            prv_default_handler, /* 22 */
+            prv_default_handler, /* 23 */
+            prv_default_handler, /* 24 */
+            prv_default_handler, /* 25 */
+            prv_default_handler, /* 26 */
+            USART1_IRQHandler,   /* 27 */
+            prv_default_handler, /* 28 */
+            prv_default_handler, /* 29 */
+            prv_default_handler, /* 30 */
+            prv_default_handler, /* 31 */
+        },
 };
 
 void Reset_Handler(void)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* km_hal_system for the STM32G031: 64 MHz clock tree, reset, independent
  * watchdog, PRIMASK lock, unique-ID entropy and WFI idle bounded by a 1 kHz
  * SysTick wake-up, which also checks the stack guard. The reset cause and
@@ -24,9 +25,8 @@ static void prv_clock_64mhz(void)
     RCC_CR |= RCC_CR_HSION; /* on after reset; made explicit */
     while ((RCC_CR & RCC_CR_HSIRDY) == 0u) {
     }
-    RCC_PLLCFGR = RCC_PLLCFGR_SRC_HSI16 | (0u << RCC_PLLCFGR_M_SHIFT) |
-                  (8u << RCC_PLLCFGR_N_SHIFT) | (1u << RCC_PLLCFGR_R_SHIFT) |
-                  RCC_PLLCFGR_REN;
+    RCC_PLLCFGR = RCC_PLLCFGR_SRC_HSI16 | (0u << RCC_PLLCFGR_M_SHIFT) | (8u << RCC_PLLCFGR_N_SHIFT) |
+                  (1u << RCC_PLLCFGR_R_SHIFT) | RCC_PLLCFGR_REN;
     RCC_CR |= RCC_CR_PLLON;
     while ((RCC_CR & RCC_CR_PLLRDY) == 0u) {
     }

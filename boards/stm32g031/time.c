@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* km_hal_time on TIM2, the G031's 32-bit timer (RM0444 §22): prescaler 63
  * turns the 64 MHz timer clock into a 1 MHz free-running count that wraps at
  * 2^32 like the contract's tick. Compare channel 1 is the one-shot timer.
@@ -29,7 +30,7 @@ void km_hal_time_init(void)
     TIM_CR1(TIM2_BASE_R) = 0u;
     TIM_PSC(TIM2_BASE_R) = BOARD_PCLK_HZ / TICK_HZ - 1u;
     TIM_ARR(TIM2_BASE_R) = 0xFFFFFFFFu;
-    TIM_CCMR1(TIM2_BASE_R) = 0u; /* channel 1: frozen output compare, flag only */
+    TIM_CCMR1(TIM2_BASE_R) = 0u;       /* channel 1: frozen output compare, flag only */
     TIM_EGR(TIM2_BASE_R) = TIM_EGR_UG; /* load PSC now, not at the first wrap */
     TIM_SR(TIM2_BASE_R) = 0u;
     TIM_DIER(TIM2_BASE_R) = 0u;

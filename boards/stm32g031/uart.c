@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* km_hal_uart on USART1, single-wire half-duplex (HDSEL, RM0444 §33.5.14):
  * TX and RX share PB6, open drain with the bus pull-up. In HDSEL the
  * receiver hears our own transmission; we clear RE for the length of a send

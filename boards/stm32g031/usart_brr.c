@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* USART divider computation (see usart_brr.h). */
 #include "usart_brr.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* USART baud-rate divider for 16x oversampling, pure so the host tests can
  * check every supported rate against the 2 % budget. */
 #ifndef USART_BRR_H

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # The board's declaration (cmake/km_boards.cmake), read before project():
 # its name is its folder's. This template is a Cortex-M0 built with
 # Debian's arm-none-eabi-gcc and newlib-nano: set -mcpu to your core

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Template: the user-data store's flash region (km_hal_flash.h). Offsets are
  * from the region start; keep NOR rules: erase to 0xFF, program whole
  * aligned cells onto erased cells only, report torn cells as ECC errors. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Template: what a board offers beyond the hal contracts. Every board gives
  * the store its flash region this way. */
 #ifndef KM_BOARD_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The servo firmware's entry: the application is the same on every board. */
 #include "km_app.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Template: the H-bridge (km_hal_motor.h). */
 #include "km_hal_motor.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Template: the product this board is built as (km_product.h): the model
  * name, versions and the limits the protocol's registers start from. A
  * servo maker sets these for their model. */
@@ -20,7 +21,7 @@ static const km_product_t s_product = {
     .voltage_high_v = 9,
     .voltage_low_v = 6,
     .current_threshold_ma = 1500,
-    .baud_min_100 = 96,    /* what uart.c can make within 2 % */
+    .baud_min_100 = 96, /* what uart.c can make within 2 % */
     .baud_max_100 = 10000,
     .current_max_ma = 3000,
     .speed_max_dps = 720,

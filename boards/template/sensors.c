@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Template: the sensors in engineering units (km_hal_sensors.h). */
 #include "km_hal_sensors.h"
 

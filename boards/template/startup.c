@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Template: the vector table and the reset handler of a Cortex-M. The
  * reset handler lays out RAM for C (.data copied from flash, .bss zeroed)
  * and calls main(). Add your MCU's device interrupts after the 16 core
@@ -35,9 +36,16 @@ __attribute__((section(".isr_vector"), used)) const km_vector_t km_vectors[16] =
     Reset_Handler,
     NMI_Handler,
     HardFault_Handler,
-    0, 0, 0, 0, 0, 0, 0,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0,
     SVC_Handler,
-    0, 0,
+    0,
+    0,
     PendSV_Handler,
     SysTick_Handler,
 };

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Template: reset, watchdog, interrupt lock, identity, idle (km_hal_system.h). */
 #include "km_hal_system.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Template: the monotonic tick and the one-shot timer (km_hal_time.h). */
 #include "km_hal_time.h"
 

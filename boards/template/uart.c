@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Template: the half-duplex bus UART (km_hal_uart.h). */
 #include "km_hal_uart.h"
 

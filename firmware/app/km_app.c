@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The firmware application (see km_app.h). One main loop, three interrupt
  * handlers (RX byte, answer timer, and whatever the hal uses for TX):
  *
@@ -31,7 +32,7 @@
 #include "km_update_proto.h"
 
 #define KM_APP_TICK_US KM_CONTROL_TICK_US /* control tick: 1 kHz */
-#define KM_APP_RX_BUDGET 64u      /* bytes parsed per loop pass: bounds tick jitter */
+#define KM_APP_RX_BUDGET 64u              /* bytes parsed per loop pass: bounds tick jitter */
 #define KM_APP_WATCHDOG_MS 500u
 /* docs/update.md §3a: the main loop has served the bus this long before
  * the start is confirmed to the bootloader (its trial timer: 2 s). */
@@ -39,18 +40,18 @@
 
 static km_rx_queue_t s_rxq;
 static km_parser_t s_parser;
-static km_parser_out_t s_out;  /* the frame the parser hands out: a view */
+static km_parser_out_t s_out; /* the frame the parser hands out: a view */
 static km_servo_t s_servo;
 static km_reply_t s_reply;
 static km_control_t s_control;
-static km_control_params_t s_params;   /* the control registers, decoded */
+static km_control_params_t s_params; /* the control registers, decoded */
 /* The fault log outlives a reset, not a power loss: .noinit on the MCU
  * boards (neither loaded nor zeroed at startup), so a restart, a watchdog
  * or a fault reset keeps the record of what led to it at no flash cost;
  * km_fault_log_boot() tells a kept log from whatever RAM held. On the host
  * it is process memory (host-sim's restart re-executes: an empty log). */
 static km_fault_log_t s_fault_log __attribute__((section(".noinit")));
-static uint32_t s_params_gen;          /* km_servo_params_gen() they were decoded at */
+static uint32_t s_params_gen; /* km_servo_params_gen() they were decoded at */
 static uint32_t s_last_control_tick;
 static uint32_t s_next_tick;
 static uint32_t s_tick_period;
@@ -59,8 +60,8 @@ static uint32_t s_tick_period;
 static uint8_t s_tx[KM_FRAME_MAX];
 static uint16_t s_tx_len;
 static volatile bool s_tx_armed;
-static uint32_t s_armed_frame_end;       /* the armed answer's frame end tick */
-static uint32_t s_armed_delay_us;        /* and the delay it asked for */
+static uint32_t s_armed_frame_end; /* the armed answer's frame end tick */
+static uint32_t s_armed_delay_us;  /* and the delay it asked for */
 /* The answer that started, as the timer interrupt saw it: its own frame end
  * and delay are copied with its start tick, so a report made late (after a
  * next answer was armed) never pairs one answer's start with another's frame. */
@@ -68,15 +69,15 @@ static volatile uint32_t s_answer_frame_end;
 static volatile uint32_t s_answer_delay_us;
 static volatile uint32_t s_answer_start; /* tick the answer's first byte was handed to the UART */
 static volatile bool s_answer_started;
-static volatile uint32_t s_tx_refused;   /* answers the UART would not take (diagnostic) */
+static volatile uint32_t s_tx_refused; /* answers the UART would not take (diagnostic) */
 
 /* An answer in s_reply waiting for the TX buffer (frame end in s_reply_end):
  * while it waits, no further frame is parsed, so s_reply stays intact. */
 static bool s_reply_waiting;
 static uint32_t s_reply_end;
 static bool s_restart_pending;
-static bool s_boot_confirmed;    /* km_board_boot_confirm() was called */
-static uint32_t s_confirm_at;    /* tick at which the start is confirmed */
+static bool s_boot_confirmed; /* km_board_boot_confirm() was called */
+static uint32_t s_confirm_at; /* tick at which the start is confirmed */
 
 static void ISR_rx_byte(void *ctx, uint8_t byte, uint32_t tick, bool lost)
 {
@@ -178,8 +179,7 @@ static void prv_on_events(unsigned events)
 {
     /* The parser reports a call's checksum failures before the frame that
      * call hands out, so they are judged against the ID in force then. */
-    if ((events & KM_PARSE_CHECKSUM_ERR) &&
-        km_parser_take_checksum_error(&s_parser, km_servo_id(&s_servo))) {
+    if ((events & KM_PARSE_CHECKSUM_ERR) && km_parser_take_checksum_error(&s_parser, km_servo_id(&s_servo))) {
         km_servo_note_checksum_error(&s_servo);
     }
     if (events & KM_PARSE_FRAME) {
@@ -273,7 +273,7 @@ static void prv_control_tick(uint32_t now)
 
 /* ---- what the dispatcher calls --------------------------------------- */
 
-/* DESIGN.md "The servo <-> control seam": a flash erase stalls the CPU
+/* docs/architecture.md ("Flash work and the bridge"): a flash erase stalls the CPU
  * (22-40 ms on the G0) while the bridge keeps its last PWM and no control
  * tick runs. Store work therefore runs only with the bridge free or braked:
  * a commit asked for while driving brakes first (the next tick drives
@@ -308,8 +308,7 @@ static bool prv_ops_request(void *ctx, const km_request_t *req)
 /* 0x78 in the application (docs/update.md §4): ENTER leaves the request
  * for the bootloader and restarts like 0x02 (nothing after it runs);
  * without a bootloader (km_board_boot_request() false) it is refused. */
-static bool prv_ops_update(void *ctx, const uint8_t *body, uint8_t n, uint8_t *answer,
-                           uint8_t *answer_len)
+static bool prv_ops_update(void *ctx, const uint8_t *body, uint8_t n, uint8_t *answer, uint8_t *answer_len)
 {
     km_update_answer_t a;
     km_update_app_frame(body, n, &a);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The firmware application, the same on every board: hal -> receive queue ->
  * parser -> dispatcher -> answer timer -> hal; the user-data store; the fixed
  * control tick. A board's main() prepares its hal and calls km_app_run(). */

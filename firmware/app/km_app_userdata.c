@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Persisted registers over the store (see km_app_userdata.h). */
 #include "km_app_userdata.h"
 
@@ -15,8 +16,7 @@ static km_store_key_t s_keys[KM_USERDATA_MAX];
 static km_store_schema_t s_schema;
 static km_store_t s_store;
 
-km_store_mount_t km_app_userdata_mount(const km_flash_t *flash, const km_product_t *product,
-                                       uint32_t *values)
+km_store_mount_t km_app_userdata_mount(const km_flash_t *flash, const km_product_t *product, uint32_t *values)
 {
     uint8_t n = 0;
     for (unsigned i = 0; i < KM_REG_COUNT && n < KM_USERDATA_MAX; i++) {

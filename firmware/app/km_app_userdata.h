@@ -1,4 +1,5 @@
-/* The persisted registers (P in PROTOCOL.md §5) over the user-data store:
+/* SPDX-License-Identifier: Apache-2.0 */
+/* The persisted registers (P in docs/protocol.md §5) over the user-data store:
  * the schema is built from the register table, defaults from the product. */
 #ifndef KM_APP_USERDATA_H
 #define KM_APP_USERDATA_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fault log: a ring of the last events, kept across resets in RAM that a
  * reset leaves alone (contract in km_fault_log.h). */
 #include "km_fault_log.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fault log (beyond the spec: a servo that shut down in the field must say
  * why): the last KM_FAULT_LOG_LEN protection and self-test events, each with
  * when (ms since its boot, and which boot), what (trip, release, clear,
@@ -27,33 +28,33 @@
 #define KM_FAULT_ENTRY_SIZE 18u /* bytes of one entry on the wire */
 
 typedef enum {
-    KM_FAULT_EV_TRIP = 1,     /* protections tripped (0x36 bits) */
-    KM_FAULT_EV_RELEASE = 2,  /* released by themselves (automatic, or disabled) */
-    KM_FAULT_EV_CLEAR = 3,    /* released by a 0x36 write */
-    KM_FAULT_EV_HW = 4,       /* hardware faults found (0x35 bits) */
+    KM_FAULT_EV_TRIP = 1,    /* protections tripped (0x36 bits) */
+    KM_FAULT_EV_RELEASE = 2, /* released by themselves (automatic, or disabled) */
+    KM_FAULT_EV_CLEAR = 3,   /* released by a 0x36 write */
+    KM_FAULT_EV_HW = 4,      /* hardware faults found (0x35 bits) */
 } km_fault_kind_t;
 
 typedef struct {
-    uint32_t t_ms;        /* ms since the boot it happened in */
-    int32_t position;     /* 0.1 deg, as 0x46 */
+    uint32_t t_ms;    /* ms since the boot it happened in */
+    int32_t position; /* 0.1 deg, as 0x46 */
     uint16_t voltage_mv;
     int16_t current_ma;
-    int16_t temp_c10;     /* 0.1 degC */
-    uint8_t kind;         /* km_fault_kind_t */
-    uint8_t bits;         /* 0x36 bits (protections) or 0x35 bits (hardware) */
-    uint8_t boots_ago;    /* 0 = this boot, 1 = the boot before the last reset, ... (saturates) */
+    int16_t temp_c10;  /* 0.1 degC */
+    uint8_t kind;      /* km_fault_kind_t */
+    uint8_t bits;      /* 0x36 bits (protections) or 0x35 bits (hardware) */
+    uint8_t boots_ago; /* 0 = this boot, 1 = the boot before the last reset, ... (saturates) */
     uint8_t reserved;
 } km_fault_entry_t;
 
 typedef struct {
     uint32_t magic;
-    uint32_t total;       /* entries ever added to this log (wraps) */
-    uint8_t head;         /* the slot the next entry goes to */
-    uint8_t held;         /* entries held, <= KM_FAULT_LOG_LEN */
-    uint8_t kept;         /* of them, from before the last reset */
+    uint32_t total; /* entries ever added to this log (wraps) */
+    uint8_t head;   /* the slot the next entry goes to */
+    uint8_t held;   /* entries held, <= KM_FAULT_LOG_LEN */
+    uint8_t kept;   /* of them, from before the last reset */
     uint8_t reserved;
     km_fault_entry_t entries[KM_FAULT_LOG_LEN];
-    uint32_t check;       /* over everything above */
+    uint32_t check; /* over everything above */
 } km_fault_log_t;
 
 /* At boot, on the log's RAM as the reset left it: keeps a log that checks

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* SPSC receive queue: see km_rx_queue.h for why it exists and its ordering. */
 #include "km_rx_queue.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Single-producer single-consumer queue of received bus bytes, from the UART
  * receive interrupt (producer) to the main loop (consumer).
  *
@@ -30,16 +31,16 @@ typedef struct {
      * then one load or store from the queue pointer (immediate offsets
      * reach 124 bytes for words, 31 for bytes), which the interrupt side
      * pays per received byte. */
-    atomic_uint head;        /* written by the producer only */
-    atomic_uint tail;        /* written by the consumer only */
+    atomic_uint head; /* written by the producer only */
+    atomic_uint tail; /* written by the consumer only */
     /* LOST-marked bytes stored, ever (producer) and taken (consumer): while
      * they are equal no byte waiting is marked, and a run is handed out
      * without looking at one flag. */
     atomic_uint marks;
     uint32_t marks_taken;
-    uint32_t dropped;        /* producer side: bytes lost because the queue was full */
-    bool pending_loss;       /* producer side: mark the next stored byte as LOST */
-    bool run_lost;           /* consumer side: the run peeked starts with a LOST byte */
+    uint32_t dropped;  /* producer side: bytes lost because the queue was full */
+    bool pending_loss; /* producer side: mark the next stored byte as LOST */
+    bool run_lost;     /* consumer side: the run peeked starts with a LOST byte */
     uint32_t tick[KM_RX_QUEUE_SIZE];
     uint8_t byte[KM_RX_QUEUE_SIZE];
     uint8_t flags[KM_RX_QUEUE_SIZE];
@@ -49,8 +50,8 @@ typedef struct {
 typedef struct {
     const uint8_t *bytes;
     const uint32_t *ticks;
-    uint32_t n;              /* >= 1 */
-    bool lost;               /* bytes were lost right before bytes[0] */
+    uint32_t n; /* >= 1 */
+    bool lost;  /* bytes were lost right before bytes[0] */
 } km_rx_run_t;
 
 void km_rx_queue_init(km_rx_queue_t *q);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* What a board gives its bootloader (docs/update.md §3, §5): polled UART,
  * a microsecond clock, the application region and the user-data store as
  * km_flash_t, the shared RAM words (km_boot_trial.h), the watchdog, and
@@ -15,20 +16,20 @@
 #include "km_boot_trial.h"
 #include "km_image.h"
 
-#define KM_BOOT_VERSION 0x10u             /* 0x0C bootloader byte: v1.0 */
+#define KM_BOOT_VERSION 0x10u /* 0x0C bootloader byte: v1.0 */
 
 volatile km_boot_shared_t *km_bootb_shared(void);
 
-void km_bootb_init(void);                       /* clocks and the microsecond clock */
-const km_flash_t *km_bootb_region(void);        /* the application region */
-const km_flash_t *km_bootb_store(void);         /* the user-data store */
+void km_bootb_init(void);                /* clocks and the microsecond clock */
+const km_flash_t *km_bootb_region(void); /* the application region */
+const km_flash_t *km_bootb_store(void);  /* the user-data store */
 const km_image_target_t *km_bootb_target(void);
-uint32_t km_bootb_hw_version(void);             /* 0x0C hardware byte, e.g. 0x10 */
+uint32_t km_bootb_hw_version(void); /* 0x0C hardware byte, e.g. 0x10 */
 /* Before the boot check: a board with a factory slot installs it (QEMU). */
 void km_bootb_factory(void);
 
-bool km_bootb_uart_init(uint32_t baud);         /* false: the board cannot make it */
-bool km_bootb_uart_rx(uint8_t *byte);           /* a received byte, if any */
+bool km_bootb_uart_init(uint32_t baud);              /* false: the board cannot make it */
+bool km_bootb_uart_rx(uint8_t *byte);                /* a received byte, if any */
 void km_bootb_uart_tx(const uint8_t *p, uint32_t n); /* returns after the last stop bit */
 uint32_t km_bootb_now_us(void);
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The bootloader (docs/update.md §3): the first code after reset. Starts
  * the application on trial (§3a: the start counted, the watchdog armed) if
  * the boot and entry checks pass, no update was asked for and the image
@@ -20,8 +21,8 @@
 #include "km_store_peek.h"
 
 #define PRV_FALLBACK_BAUD 115200u
-#define PRV_ANSWER_DELAY_US 200u   /* the 0x12 default: the master turns its line around */
-#define PRV_KICK_US 50000u         /* watchdog reloads: 10 per 500 ms timeout */
+#define PRV_ANSWER_DELAY_US 200u /* the 0x12 default: the master turns its line around */
+#define PRV_KICK_US 50000u       /* watchdog reloads: 10 per 500 ms timeout */
 
 /* An emulated bus's least inter-byte gap, set by the simulated board's
  * build (boards/qemu-microbit: 20 ms, as QEMU hands bytes over when the
@@ -34,7 +35,7 @@
 static km_boot_serve_t s_serve;
 static km_boot_rx_t s_rx;
 static km_boot_reply_t s_reply;
-static uint32_t s_kicked_us;   /* when the watchdog was last reloaded */
+static uint32_t s_kicked_us; /* when the watchdog was last reloaded */
 
 /* ID and baud from the user data (what a mount of a schema of 0x0F and
  * 0x10 would load: km_store_peek), or the fallback (docs/update.md §3). */

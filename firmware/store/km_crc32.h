@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* CRC-32 (IEEE 802.3, reflected, poly 0xEDB88320): guards every store record. */
 #ifndef KM_CRC32_H
 #define KM_CRC32_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Commit, reset and idle compaction of the user-data store.
  *
  * Why each step is safe at a power cut is argued in docs/store.md; in short:
@@ -52,16 +53,15 @@ static bool prv_cell(const km_flash_t *f, uint32_t addr, const uint8_t *cell)
 {
     uint8_t back[KM_REC_MAX_CELL];
     return f->program(f->ctx, addr, cell, f->prog_size) == KM_FLASH_OK &&
-           f->read(f->ctx, addr, back, f->prog_size) == KM_FLASH_OK &&
-           memcmp(back, cell, f->prog_size) == 0;
+           f->read(f->ctx, addr, back, f->prog_size) == KM_FLASH_OK && memcmp(back, cell, f->prog_size) == 0;
 }
 
 /* Programs a record one cell at a time and reads it back. A snapshot ends
  * in a commit cell, programmed only once the body read back good (K after
  * it then proves the body solid); a dense delta is whole when its CRC
  * matches, so it is programmed in one pass and then read back. */
-static bool prv_write(km_store_t *s, uint32_t page, uint32_t offset, const uint8_t *rec,
-                      uint32_t size, bool commit_cell)
+static bool prv_write(km_store_t *s, uint32_t page, uint32_t offset, const uint8_t *rec, uint32_t size,
+                      bool commit_cell)
 {
     const km_flash_t *f = s->flash;
     const uint32_t c = f->prog_size;
@@ -74,8 +74,7 @@ static bool prv_write(km_store_t *s, uint32_t page, uint32_t offset, const uint8
         }
     }
     for (uint32_t chk = 0; chk < body; chk += c) {
-        if (f->read(f->ctx, base + chk, back, c) != KM_FLASH_OK ||
-            memcmp(back, &rec[chk], c) != 0) {
+        if (f->read(f->ctx, base + chk, back, c) != KM_FLASH_OK || memcmp(back, &rec[chk], c) != 0) {
             return false;
         }
     }
@@ -104,16 +103,13 @@ static bool prv_compact(km_store_t *s, uint32_t target, const uint32_t *state)
     }
     s->erased &= ~prv_page_bit(target); /* programmed from here on */
     uint8_t buf[KM_REC_MAX_BYTES];
-    const km_rec_t hdr = {.type = KM_REC_SNAPSHOT,
-                          .version = s->schema->version,
-                          .gen = s->gen + 1u,
-                          .hash = s->hash};
+    const km_rec_t hdr = {
+        .type = KM_REC_SNAPSHOT, .version = s->schema->version, .gen = s->gen + 1u, .hash = s->hash};
     const uint32_t size =
         km_rec_encode(buf, &hdr, s->schema, state, km_store_all_keys(s->schema), f->prog_size);
     static const uint8_t k_zero[KM_REC_MAX_CELL] = {0};
     /* K last: a K that reads programmed then proves the snapshot solid. */
-    if (!prv_write(s, target, 0u, buf, size, true) ||
-        !prv_cell(f, target * f->page_size + size, k_zero)) {
+    if (!prv_write(s, target, 0u, buf, size, true) || !prv_cell(f, target * f->page_size + size, k_zero)) {
         s->target = (uint8_t)target; /* a retry erases it again */
         return false;
     }
@@ -167,8 +163,7 @@ static km_store_status_t prv_commit_state(km_store_t *s, const uint32_t *next)
     return KM_STORE_OK;
 }
 
-km_store_status_t km_store_commit(km_store_t *s, const uint8_t *keys, const uint32_t *values,
-                                  uint32_t n)
+km_store_status_t km_store_commit(km_store_t *s, const uint8_t *keys, const uint32_t *values, uint32_t n)
 {
     if (!s->mounted || n > KM_STORE_MAX_KEYS) {
         return KM_STORE_ERR_ARG;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* User-data store: the persisted (P) registers in a power-loss-safe journal
  * over the hal flash contract. Knows nothing of the protocol: the firmware
  * hands it a schema (key = register address, default value).
@@ -20,18 +21,18 @@
 
 #include "km_hal_flash.h"
 
-#define KM_STORE_MAX_KEYS 32u   /* bitmaps of keys are one u32 */
-#define KM_STORE_MAX_PAGES 32u  /* bitmaps of pages are one u32 */
+#define KM_STORE_MAX_KEYS 32u  /* bitmaps of keys are one u32 */
+#define KM_STORE_MAX_PAGES 32u /* bitmaps of pages are one u32 */
 #define KM_STORE_NO_PAGE 0xFFu
 
 typedef struct {
-    uint8_t key;    /* register address */
-    uint32_t def;   /* product default */
+    uint8_t key;  /* register address */
+    uint32_t def; /* product default */
 } km_store_key_t;
 
 typedef struct {
     const km_store_key_t *keys;
-    uint8_t count;       /* 1..KM_STORE_MAX_KEYS, keys unique */
+    uint8_t count; /* 1..KM_STORE_MAX_KEYS, keys unique */
     /* Bump when a key's meaning or encoding changes: stored values are then
      * dropped for the defaults. Adding or removing keys needs no bump. */
     uint16_t version;
@@ -48,8 +49,8 @@ typedef enum {
 
 typedef enum {
     KM_STORE_OK = 0,
-    KM_STORE_ERR_ARG,    /* unknown or repeated key, store not mounted */
-    KM_STORE_ERR_FLASH,  /* program/erase error or read-back mismatch: old values stay */
+    KM_STORE_ERR_ARG,   /* unknown or repeated key, store not mounted */
+    KM_STORE_ERR_FLASH, /* program/erase error or read-back mismatch: old values stay */
 } km_store_status_t;
 
 /* All RAM of the store; contents are private. */
@@ -57,22 +58,22 @@ typedef struct {
     const km_flash_t *flash;
     const km_store_schema_t *schema;
     uint32_t values[KM_STORE_MAX_KEYS]; /* committed values, schema order */
-    uint32_t hash;          /* of the schema's key list */
-    uint32_t gen;           /* generation of the active page's snapshot (the highest read) */
-    uint32_t tail;          /* next byte offset to program in the active page, once own */
-    uint32_t suspect;       /* pages without a valid snapshot: erased by the first commit */
-    uint32_t erased;        /* pages erased and blank-checked in this session, untouched since */
-    uint8_t active;         /* page the values come from, or KM_STORE_NO_PAGE */
-    uint8_t target;         /* page the session's first commit erases and writes */
+    uint32_t hash;                      /* of the schema's key list */
+    uint32_t gen;                       /* generation of the active page's snapshot (the highest read) */
+    uint32_t tail;                      /* next byte offset to program in the active page, once own */
+    uint32_t suspect;                   /* pages without a valid snapshot: erased by the first commit */
+    uint32_t erased;                    /* pages erased and blank-checked in this session, untouched since */
+    uint8_t active;                     /* page the values come from, or KM_STORE_NO_PAGE */
+    uint8_t target;                     /* page the session's first commit erases and writes */
     bool mounted;
-    bool own;               /* this session erased the active page and confirmed its snapshot:
-                               deltas go after tail; before that every commit compacts */
+    bool own; /* this session erased the active page and confirmed its snapshot:
+                 deltas go after tail; before that every commit compacts */
 } km_store_t;
 
 /* Reads the flash and loads values (schema order) into values_out (may be
  * NULL). No flash write or erase, whatever the flash holds. */
-km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash,
-                                const km_store_schema_t *schema, uint32_t *values_out);
+km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash, const km_store_schema_t *schema,
+                                uint32_t *values_out);
 
 /* True if the mount result means product defaults are in force. */
 bool km_store_mount_is_defaults(km_store_mount_t m);
@@ -83,8 +84,7 @@ bool km_store_mount_is_defaults(km_store_mount_t m);
  * may read differently at the next mount); after it, unchanged values cost
  * no flash op. On any error the old values stay in force. Commit an ID or
  * baud change before applying it. */
-km_store_status_t km_store_commit(km_store_t *s, const uint8_t *keys, const uint32_t *values,
-                                  uint32_t n);
+km_store_status_t km_store_commit(km_store_t *s, const uint8_t *keys, const uint32_t *values, uint32_t n);
 
 /* User data reset: commits the default of every key not listed in keep. */
 km_store_status_t km_store_reset(km_store_t *s, const uint8_t *keep, uint32_t n_keep);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Helpers shared by the store's source files; not part of the API. */
 #ifndef KM_STORE_INTERNAL_H
 #define KM_STORE_INTERNAL_H

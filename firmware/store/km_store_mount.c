@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Mount: find the newest valid snapshot, replay its page, and choose the
  * page the session's first commit will erase. Reads only: a boot that
  * commits nothing leaves the flash untouched. */
@@ -9,9 +10,9 @@
 #include "km_store_record.h"
 
 typedef struct {
-    bool valid;           /* the snapshot at offset 0 reads valid */
-    bool confirmed;       /* ... and its confirmation cell K reads programmed */
-    bool erased;          /* no valid snapshot and every cell reads all ones */
+    bool valid;     /* the snapshot at offset 0 reads valid */
+    bool confirmed; /* ... and its confirmation cell K reads programmed */
+    bool erased;    /* no valid snapshot and every cell reads all ones */
     uint16_t version;
     uint32_t gen;
     uint32_t hash;
@@ -44,8 +45,8 @@ static void prv_defaults(const km_store_schema_t *schema, uint32_t *values)
  * dropped from the schema are ignored. Dense deltas name a key by its index
  * in the page's snapshot (snap_keys, snap_count): the snapshot may predate
  * a change of the key list. */
-static void prv_apply(const km_store_schema_t *schema, const km_rec_t *rec, uint32_t *values,
-                      bool apply, const uint8_t *snap_keys, uint32_t snap_count)
+static void prv_apply(const km_store_schema_t *schema, const km_rec_t *rec, uint32_t *values, bool apply,
+                      const uint8_t *snap_keys, uint32_t snap_count)
 {
     uint32_t at = 0;
     for (uint32_t i = 0; apply && i < rec->count; i++) {
@@ -108,8 +109,7 @@ static void prv_scan(const km_store_t *s, uint32_t page, prv_page_t *pi, uint32_
         return;
     }
     off += f->prog_size;
-    while (off < f->page_size && km_rec_read(f, page, off, buf, &rec) &&
-           rec.type != KM_REC_SNAPSHOT) {
+    while (off < f->page_size && km_rec_read(f, page, off, buf, &rec) && rec.type != KM_REC_SNAPSHOT) {
         prv_apply(s->schema, &rec, values, same, snap_keys, snap_count);
         off += rec.size;
     }
@@ -148,8 +148,7 @@ static bool prv_geometry_ok(const km_flash_t *f, const km_store_schema_t *schema
  *    solid state is in another page. With three pages or more, a page that
  *    is neither the active nor the highest confirmed one; with two, the
  *    active page itself (the residual case of docs/store.md). */
-static uint8_t prv_target(uint32_t pages, uint8_t active, bool confirmed, uint32_t valid,
-                          uint8_t anchor)
+static uint8_t prv_target(uint32_t pages, uint8_t active, bool confirmed, uint32_t valid, uint8_t anchor)
 {
     /* pages >= 2 after the geometry check; said again for the analyzers,
      * which cannot see that s->values never aliases the flash's page count. */
@@ -183,8 +182,8 @@ static km_store_mount_t prv_result(const km_store_t *s, const prv_page_t *best, 
     return best->hash != s->hash ? KM_STORE_MOUNT_MIGRATED : KM_STORE_MOUNT_LOADED;
 }
 
-km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash,
-                                const km_store_schema_t *schema, uint32_t *values_out)
+km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash, const km_store_schema_t *schema,
+                                uint32_t *values_out)
 {
     memset(s, 0, sizeof *s);
     s->active = KM_STORE_NO_PAGE;

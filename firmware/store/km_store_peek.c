@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* km_store_peek (km_store_peek.h): the mount's page choice and replay
  * (km_store_mount.c prv_scan and the active-page rule), reads only, each
  * record read once. A weak cell may read differently at each read, for
@@ -56,8 +57,7 @@ static void prv_replay(const km_flash_t *f, uint32_t p, km_rec_t *rec, uint8_t *
     }
 }
 
-bool km_store_peek(const km_flash_t *f, uint16_t version, const uint8_t *keys, uint32_t n,
-                   uint32_t *values)
+bool km_store_peek(const km_flash_t *f, uint16_t version, const uint8_t *keys, uint32_t n, uint32_t *values)
 {
     uint8_t buf[KM_REC_MAX_BYTES];
     uint8_t snap_keys[KM_STORE_MAX_KEYS];

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A read-only look at a few stored values (the bootloader's ID and baud,
  * docs/update.md §3): what km_store_mount() would load for a schema of just
  * those keys, without the mount's page bookkeeping (suspect pages, the
@@ -18,7 +19,6 @@
  * `version`): values[] then holds that page's values of the keys it has
  * (the others keep their defaults). False (defaults in force): values[]
  * untouched. n <= 4. */
-bool km_store_peek(const km_flash_t *f, uint16_t version, const uint8_t *keys, uint32_t n,
-                   uint32_t *values);
+bool km_store_peek(const km_flash_t *f, uint16_t version, const uint8_t *keys, uint32_t n, uint32_t *values);
 
 #endif

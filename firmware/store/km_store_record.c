@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Encoding and checking of store records: the only code that knows the bytes. */
 #include "km_store_record.h"
 
@@ -5,7 +6,7 @@
 
 #include "km_crc32.h"
 
-#define PRV_DENSE_MASK 0xE0u  /* a dense tag is 0b100c_cccc: count - 1 in the low five bits */
+#define PRV_DENSE_MASK 0xE0u /* a dense tag is 0b100c_cccc: count - 1 in the low five bits */
 #define PRV_IDX_LEN_SHIFT 5u
 
 static uint32_t prv_round_up(uint32_t n, uint32_t cell)
@@ -100,9 +101,9 @@ uint32_t km_rec_encode(uint8_t *buf, const km_rec_t *rec, const km_store_schema_
 
 typedef struct {
     const km_flash_t *f;
-    uint32_t addr;   /* of the record */
-    uint32_t room;   /* bytes from the record to the end of its page */
-    uint32_t have;   /* bytes read so far, whole cells */
+    uint32_t addr; /* of the record */
+    uint32_t room; /* bytes from the record to the end of its page */
+    uint32_t have; /* bytes read so far, whole cells */
     uint8_t *buf;
 } prv_reader_t;
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* On-flash record format of the store (docs/store.md has the byte layout).
  *
  * Snapshot: a body of whole cells, then one commit cell of all zero bytes:
@@ -26,24 +27,24 @@
 #include "km_store.h"
 
 #define KM_REC_SNAPSHOT 0x53u
-#define KM_REC_DELTA 0x80u         /* dense delta: tag 0x80..0x9F */
-#define KM_REC_DELTA_LEGACY 0x44u  /* read only */
+#define KM_REC_DELTA 0x80u        /* dense delta: tag 0x80..0x9F */
+#define KM_REC_DELTA_LEGACY 0x44u /* read only */
 #define KM_REC_HDR_SNAPSHOT 12u
 #define KM_REC_HDR_LEGACY 4u
-#define KM_REC_ENTRY 5u            /* snapshot and legacy entry */
+#define KM_REC_ENTRY 5u /* snapshot and legacy entry */
 #define KM_REC_CRC 4u
 #define KM_REC_MAX_CELL 8u
 #define KM_REC_MAX_BYTES \
     (KM_REC_HDR_SNAPSHOT + KM_STORE_MAX_KEYS * KM_REC_ENTRY + KM_REC_CRC + 2u * KM_REC_MAX_CELL)
 
 typedef struct {
-    uint8_t type;            /* KM_REC_SNAPSHOT, KM_REC_DELTA or KM_REC_DELTA_LEGACY */
+    uint8_t type; /* KM_REC_SNAPSHOT, KM_REC_DELTA or KM_REC_DELTA_LEGACY */
     uint8_t count;
-    uint16_t version;        /* snapshot only */
-    uint32_t gen;            /* snapshot only */
-    uint32_t hash;           /* snapshot only */
-    uint32_t size;           /* bytes on flash, commit cell included */
-    const uint8_t *entries;  /* count entries */
+    uint16_t version;       /* snapshot only */
+    uint32_t gen;           /* snapshot only */
+    uint32_t hash;          /* snapshot only */
+    uint32_t size;          /* bytes on flash, commit cell included */
+    const uint8_t *entries; /* count entries */
 } km_rec_t;
 
 /* Bytes a snapshot of count entries takes with cells of cell bytes. */

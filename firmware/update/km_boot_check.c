@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The boot decision (docs/update.md §3). */
 #include "km_boot_check.h"
 
@@ -41,16 +42,16 @@ static uint32_t prv_le32(const uint8_t *b)
     return (uint32_t)b[0] | ((uint32_t)b[1] << 8) | ((uint32_t)b[2] << 16) | ((uint32_t)b[3] << 24);
 }
 
-bool km_boot_entry(const km_flash_t *region, const km_image_header_t *h, uint32_t sp_lo,
-                   uint32_t sp_hi, km_boot_entry_t *e)
+bool km_boot_entry(const km_flash_t *region, const km_image_header_t *h, uint32_t sp_lo, uint32_t sp_hi,
+                   km_boot_entry_t *e)
 {
     uint8_t table[8] = {0};
     const bool read = region->read(region->ctx, h->vectors, table, sizeof table) == KM_FLASH_OK;
     e->sp = prv_le32(table);
     e->pc = prv_le32(table + 4);
-    const uint32_t code = e->pc & ~1u;        /* the first instruction's address */
+    const uint32_t code = e->pc & ~1u; /* the first instruction's address */
     const uint32_t from = h->base + h->vectors;
     const uint32_t end = h->base + h->length; /* km_boot_check: length <= region size */
-    return read && e->sp >= sp_lo && e->sp <= sp_hi && (e->pc & 1u) != 0u && code >= from &&
-           code < end && end - code >= 2u;
+    return read && e->sp >= sp_lo && e->sp <= sp_hi && (e->pc & 1u) != 0u && code >= from && code < end &&
+           end - code >= 2u;
 }

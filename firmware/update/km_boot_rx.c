@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The bootloader's frame decoder (km_boot_rx.h). The held bytes are one
  * array, the head candidate at buf[0]; a failed candidate loses its F9 and
  * the array shifts left, so the rescan is the same judging loop. A shift

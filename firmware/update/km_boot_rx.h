@@ -1,5 +1,6 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The bootloader's frame decoder (docs/update.md §1, §3): the same frames
- * as the application's parser (protocol/km_parser.c, PROTOCOL.md §2, §7):
+ * as the application's parser (protocol/km_parser.c, docs/protocol.md §2, §7):
  * F9 FF command frames with an addressable ID, length 2..252 and a good
  * checksum are handed out, F9 F5 responses from other servos are skipped
  * whole, after any failure the bytes already seen are rescanned from the
@@ -18,12 +19,12 @@
 #include "km_frame.h"
 
 typedef struct {
-    uint16_t n;        /* bytes held; buf[0] is the head candidate */
-    uint16_t stale;    /* leading bytes received before a gap */
-    uint16_t taken;    /* a handed-out frame's bytes, removed at the next call */
-    uint32_t last;     /* tick of the newest byte */
+    uint16_t n;          /* bytes held; buf[0] is the head candidate */
+    uint16_t stale;      /* leading bytes received before a gap */
+    uint16_t taken;      /* a handed-out frame's bytes, removed at the next call */
+    uint32_t last;       /* tick of the newest byte */
     uint32_t stale_tick; /* tick of the newest byte before the gap */
-    uint32_t gap;      /* a silence longer than this cuts (ticks) */
+    uint32_t gap;        /* a silence longer than this cuts (ticks) */
     uint8_t buf[KM_FRAME_MAX];
 } km_boot_rx_t;
 

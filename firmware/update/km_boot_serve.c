@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The bootloader's dispatcher (km_boot_serve.h). */
 #include "km_boot_serve.h"
 

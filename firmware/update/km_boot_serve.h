@@ -1,7 +1,8 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* What the bootloader answers on the bus in update mode (docs/update.md
  * §3, §4): ping, read 0x01 (status) and 0x0C (versions), the standard
  * restart (write 0x02 E1 E2 E3 E4), and 0x78 on the update state machine.
- * Anything else sets status bit 5 (PROTOCOL.md §4), answered by the next
+ * Anything else sets status bit 5 (docs/protocol.md §4), answered by the next
  * ping. Frames to its own ID and broadcast (never answered) run; the rest
  * are ignored. A committed image and START give the image new tries
  * (§3a: km_boot_trial_fresh on the shared words); the standard restart
@@ -17,21 +18,21 @@
 
 typedef struct {
     km_update_t upd;
-    uint8_t id;          /* the ID it answers on (stored, or the fallback 0) */
-    uint8_t status;      /* unreported status bits (bit 5) */
-    uint32_t version;    /* the 0x0C answer */
+    uint8_t id;                        /* the ID it answers on (stored, or the fallback 0) */
+    uint8_t status;                    /* unreported status bits (bit 5) */
+    uint32_t version;                  /* the 0x0C answer */
     volatile km_boot_shared_t *shared; /* the words shared with the application */
 } km_boot_serve_t;
 
 typedef enum {
     KM_BOOT_ACT_NONE = 0,
-    KM_BOOT_ACT_RESTART,  /* restart now (START, or the standard restart) */
+    KM_BOOT_ACT_RESTART, /* restart now (START, or the standard restart) */
 } km_boot_action_t;
 
 typedef struct {
-    uint16_t len;         /* 0 = no answer */
+    uint16_t len; /* 0 = no answer */
     uint8_t bytes[KM_FRAME_MAX];
-    uint8_t action;       /* km_boot_action_t */
+    uint8_t action; /* km_boot_action_t */
 } km_boot_reply_t;
 
 void km_boot_serve(km_boot_serve_t *s, const km_frame_view_t *f, km_boot_reply_t *r);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The trial of a new image (km_boot_trial.h, docs/update.md §3a). */
 #include "km_boot_trial.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The trial of a new image (docs/update.md §3a): the words the bootloader
  * and the application share at the top of RAM, and the bootloader's
  * decision over them at every reset. An image is started on trial: the
@@ -34,10 +35,10 @@ typedef struct {
 } km_boot_shared_t;
 
 typedef enum {
-    KM_BOOT_RUN = 0,        /* start the image (the start is counted) */
-    KM_BOOT_STAY_NO_IMAGE,  /* update mode: no image passes the boot check */
-    KM_BOOT_STAY_ASKED,     /* update mode: the application asked (0x78 ENTER) */
-    KM_BOOT_STAY_GAVE_UP,   /* update mode: KM_BOOT_TRIAL_MAX starts never confirmed */
+    KM_BOOT_RUN = 0,       /* start the image (the start is counted) */
+    KM_BOOT_STAY_NO_IMAGE, /* update mode: no image passes the boot check */
+    KM_BOOT_STAY_ASKED,    /* update mode: the application asked (0x78 ENTER) */
+    KM_BOOT_STAY_GAVE_UP,  /* update mode: KM_BOOT_TRIAL_MAX starts never confirmed */
 } km_boot_decision_t;
 
 /* At every reset, before anything else reads the words: what to do, given

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Image header decode and check (docs/update.md §2). */
 #include "km_image.h"
 
@@ -20,8 +21,8 @@ void km_image_decode(const uint8_t raw[KM_IMAGE_HEADER_SIZE], km_image_header_t 
     h->head_crc = prv_le32(raw + 28);
 }
 
-km_image_verdict_t km_image_check(const uint8_t raw[KM_IMAGE_HEADER_SIZE],
-                                  const km_image_target_t *t, km_image_header_t *h)
+km_image_verdict_t km_image_check(const uint8_t raw[KM_IMAGE_HEADER_SIZE], const km_image_target_t *t,
+                                  km_image_header_t *h)
 {
     km_image_header_t local = {0};
     km_image_header_t *d = h != 0 ? h : &local;

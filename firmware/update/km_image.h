@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The application image's header (docs/update.md §2): what BEGIN checks
  * before anything is erased and what the boot check reads at every reset.
  * Pure: bytes in, fields and a verdict out. */
@@ -6,9 +7,9 @@
 
 #include <stdint.h>
 
-#define KM_IMAGE_MAGIC 0x57464D4Bu      /* bytes 4B 4D 46 57, "KMFW" */
+#define KM_IMAGE_MAGIC 0x57464D4Bu /* bytes 4B 4D 46 57, "KMFW" */
 #define KM_IMAGE_HEADER_SIZE 32u
-#define KM_IMAGE_VECTORS 0x100u         /* vector table offset (VTOR: 256-aligned) */
+#define KM_IMAGE_VECTORS 0x100u                  /* vector table offset (VTOR: 256-aligned) */
 #define KM_IMAGE_MIN_LEN (KM_IMAGE_VECTORS + 8u) /* at least initial SP + reset vector */
 
 /* Board models (docs/update.md §2): an image carries the one it is built for. */
@@ -18,26 +19,26 @@
 typedef struct {
     uint32_t magic;
     uint32_t model;
-    uint32_t length;    /* bytes of the image, header included */
-    uint32_t version;   /* the application's 0x0C value, bootloader byte 0 */
-    uint32_t vectors;   /* vector table offset from the image start */
-    uint32_t base;      /* address the image is linked for */
-    uint32_t body_crc;  /* CRC-32 of bytes [32, length) */
-    uint32_t head_crc;  /* CRC-32 of bytes [0, 28) */
+    uint32_t length;   /* bytes of the image, header included */
+    uint32_t version;  /* the application's 0x0C value, bootloader byte 0 */
+    uint32_t vectors;  /* vector table offset from the image start */
+    uint32_t base;     /* address the image is linked for */
+    uint32_t body_crc; /* CRC-32 of bytes [32, length) */
+    uint32_t head_crc; /* CRC-32 of bytes [0, 28) */
 } km_image_header_t;
 
 typedef enum {
     KM_IMAGE_OK = 0,
-    KM_IMAGE_BAD_HEADER,   /* magic, header CRC, vectors or base */
-    KM_IMAGE_WRONG_MODEL,  /* an image for another board */
-    KM_IMAGE_BAD_SIZE,     /* length below the minimum or above the region */
+    KM_IMAGE_BAD_HEADER,  /* magic, header CRC, vectors or base */
+    KM_IMAGE_WRONG_MODEL, /* an image for another board */
+    KM_IMAGE_BAD_SIZE,    /* length below the minimum or above the region */
 } km_image_verdict_t;
 
 /* What a board accepts. */
 typedef struct {
     uint32_t model;
-    uint32_t base;         /* the application region's address */
-    uint32_t region_size;  /* bytes of the application region */
+    uint32_t base;        /* the application region's address */
+    uint32_t region_size; /* bytes of the application region */
 } km_image_target_t;
 
 void km_image_decode(const uint8_t raw[KM_IMAGE_HEADER_SIZE], km_image_header_t *h);
@@ -45,7 +46,7 @@ void km_image_decode(const uint8_t raw[KM_IMAGE_HEADER_SIZE], km_image_header_t 
 /* Checks a header against the board; fills *h (may be NULL). The header
  * CRC and magic come first, so a wrong model is reported only for a header
  * that is otherwise sound. */
-km_image_verdict_t km_image_check(const uint8_t raw[KM_IMAGE_HEADER_SIZE],
-                                  const km_image_target_t *t, km_image_header_t *h);
+km_image_verdict_t km_image_check(const uint8_t raw[KM_IMAGE_HEADER_SIZE], const km_image_target_t *t,
+                                  km_image_header_t *h);
 
 #endif

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The update state machine (km_update.h, docs/update.md). */
 #include "km_update.h"
 
@@ -113,8 +114,8 @@ static bool prv_same(const km_flash_t *f, uint32_t off, const uint8_t *data, uin
     return true;
 }
 
-km_update_result_t km_update_write(km_update_t *u, uint32_t block,
-                                   const uint8_t data[KM_UPDATE_BLOCK], uint32_t crc)
+km_update_result_t km_update_write(km_update_t *u, uint32_t block, const uint8_t data[KM_UPDATE_BLOCK],
+                                   uint32_t crc)
 {
     if (u->state != KM_UPD_STATE_RECEIVING) {
         return prv_result(u, KM_UPD_BAD_STATE);
@@ -135,8 +136,8 @@ km_update_result_t km_update_write(km_update_t *u, uint32_t block,
     const uint32_t base = block * KM_UPDATE_BLOCK;
     if (km_update_has(u, block)) {
         /* A re-send: every cell was programmed once already; compare only. */
-        return prv_result(u, prv_same(f, base + skip, data + skip, KM_UPDATE_BLOCK - skip)
-                                 ? KM_UPD_OK : KM_UPD_MISMATCH);
+        return prv_result(u, prv_same(f, base + skip, data + skip, KM_UPDATE_BLOCK - skip) ? KM_UPD_OK
+                                                                                           : KM_UPD_MISMATCH);
     }
     /* One cell per call: a cut tears at most that cell. */
     for (uint32_t i = skip; i < KM_UPDATE_BLOCK; i += cell) {

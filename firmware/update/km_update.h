@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The update state machine (docs/update.md §4, §7): a session that takes an
  * image in 128-byte blocks into the application region and makes it
  * bootable with a single program at the end (the commit cell).
@@ -20,23 +21,23 @@
 #include "km_image.h"
 
 #define KM_UPDATE_BLOCK 128u
-#define KM_UPDATE_MAX_BLOCKS 1024u   /* 128 KiB of image: the largest region is 112 KiB */
+#define KM_UPDATE_MAX_BLOCKS 1024u /* 128 KiB of image: the largest region is 112 KiB */
 #define KM_UPDATE_MAX_CELL 8u
 
 typedef enum {
-    KM_UPD_STATE_APP = 0,    /* the application is running (its STATUS answer) */
-    KM_UPD_STATE_IDLE,       /* bootloader, no session */
-    KM_UPD_STATE_RECEIVING,  /* erased, taking blocks */
-    KM_UPD_STATE_VERIFIED,   /* every block in, CRCs matched */
-    KM_UPD_STATE_COMMITTED,  /* commit cell programmed, boot check passed */
-    KM_UPD_STATE_FAILED,     /* a flash error: a new BEGIN starts over */
+    KM_UPD_STATE_APP = 0,   /* the application is running (its STATUS answer) */
+    KM_UPD_STATE_IDLE,      /* bootloader, no session */
+    KM_UPD_STATE_RECEIVING, /* erased, taking blocks */
+    KM_UPD_STATE_VERIFIED,  /* every block in, CRCs matched */
+    KM_UPD_STATE_COMMITTED, /* commit cell programmed, boot check passed */
+    KM_UPD_STATE_FAILED,    /* a flash error: a new BEGIN starts over */
 } km_update_state_t;
 
 typedef enum {
     KM_UPD_OK = 0,
-    KM_UPD_BAD_LENGTH = 1,   /* params of the wrong size */
-    KM_UPD_BAD_STATE = 2,    /* not allowed in this state */
-    KM_UPD_BAD_MAGIC = 3,    /* ENTER/START magic */
+    KM_UPD_BAD_LENGTH = 1, /* params of the wrong size */
+    KM_UPD_BAD_STATE = 2,  /* not allowed in this state */
+    KM_UPD_BAD_MAGIC = 3,  /* ENTER/START magic */
     KM_UPD_BAD_HEADER = 4,
     KM_UPD_WRONG_MODEL = 5,
     KM_UPD_TOO_BIG = 6,      /* image length out of range */
@@ -51,9 +52,9 @@ typedef enum {
 typedef struct {
     const km_flash_t *flash;
     km_image_target_t target;
-    uint8_t state;             /* km_update_state_t */
-    uint8_t result;            /* km_update_result_t of the last operation */
-    uint16_t blocks;           /* of the session's image */
+    uint8_t state;   /* km_update_state_t */
+    uint8_t result;  /* km_update_result_t of the last operation */
+    uint16_t blocks; /* of the session's image */
     uint16_t received;
     uint8_t header[KM_IMAGE_HEADER_SIZE]; /* BEGIN's; its first cell is the commit cell */
     km_image_header_t hdr;
@@ -67,8 +68,8 @@ void km_update_init(km_update_t *u, const km_flash_t *region, const km_image_tar
 void km_update_reset(km_update_t *u);
 
 km_update_result_t km_update_begin(km_update_t *u, const uint8_t header[KM_IMAGE_HEADER_SIZE]);
-km_update_result_t km_update_write(km_update_t *u, uint32_t block,
-                                   const uint8_t data[KM_UPDATE_BLOCK], uint32_t crc);
+km_update_result_t km_update_write(km_update_t *u, uint32_t block, const uint8_t data[KM_UPDATE_BLOCK],
+                                   uint32_t crc);
 /* *crc: CRC-32 of image bytes [0, length) as read back (0 if not computed). */
 km_update_result_t km_update_verify(km_update_t *u, uint32_t *crc);
 km_update_result_t km_update_commit(km_update_t *u);

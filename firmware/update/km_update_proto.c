@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The 0x78 frames (km_update_proto.h, docs/update.md §4). */
 #include "km_update_proto.h"
 
@@ -29,8 +30,8 @@ static void prv_answer(km_update_answer_t *a, uint8_t sub, uint8_t result)
 }
 
 /* STATUS answer: sub, state, result, blocks, received, first, bitmap. */
-static void prv_status(uint8_t state, uint8_t result, const km_update_t *u, const uint8_t *p,
-                       uint8_t n, km_update_answer_t *a)
+static void prv_status(uint8_t state, uint8_t result, const km_update_t *u, const uint8_t *p, uint8_t n,
+                       km_update_answer_t *a)
 {
     const uint32_t blocks = u != NULL ? u->blocks : 0u;
     uint32_t first = n == 2u ? prv_le(p, 2) : 0u;

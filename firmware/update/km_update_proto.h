@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The 0x78 frames (docs/update.md §4): a frame's body (the sub-command in
  * the address byte, then its parameters) in, the answer's body out. Two
  * entries: the bootloader's, over the update state machine, and the
@@ -20,21 +21,21 @@
 #define KM_UPD_SUB_COMMIT 0x06u
 #define KM_UPD_SUB_START 0x07u
 
-#define KM_UPD_STATUS_BITMAP_MAX 64u   /* bitmap bytes per STATUS answer */
+#define KM_UPD_STATUS_BITMAP_MAX 64u /* bitmap bytes per STATUS answer */
 #define KM_UPD_ANSWER_MAX (9u + KM_UPD_STATUS_BITMAP_MAX)
 
 /* What the caller does after a 0x78 frame. */
 typedef enum {
     KM_UPD_ACT_NONE = 0,
-    KM_UPD_ACT_EXCEPTION,   /* unknown or missing sub-command: status bit 5 */
-    KM_UPD_ACT_RESTART,     /* START (bootloader) */
-    KM_UPD_ACT_ENTER,       /* ENTER (application): restart into update mode */
+    KM_UPD_ACT_EXCEPTION, /* unknown or missing sub-command: status bit 5 */
+    KM_UPD_ACT_RESTART,   /* START (bootloader) */
+    KM_UPD_ACT_ENTER,     /* ENTER (application): restart into update mode */
 } km_update_action_t;
 
 typedef struct {
-    uint8_t len;                          /* answer body bytes; 0 = no answer */
-    uint8_t body[KM_UPD_ANSWER_MAX];      /* starts with the sub-command */
-    uint8_t action;                       /* km_update_action_t */
+    uint8_t len;                     /* answer body bytes; 0 = no answer */
+    uint8_t body[KM_UPD_ANSWER_MAX]; /* starts with the sub-command */
+    uint8_t action;                  /* km_update_action_t */
 } km_update_answer_t;
 
 /* Bootloader: runs the frame on the state machine. The answer is filled

@@ -1,4 +1,5 @@
-"""kmx: host package for KINGMAX serial bus servos (PROTOCOL.md, protocol
+# SPDX-License-Identifier: Apache-2.0
+"""kmx: host package for KINGMAX serial bus servos (docs/protocol.md, protocol
 v5.2.0). Modules: frame (codec), transport (TCP, serial, pty), bus (master),
 registers (names, units, ranges), errors (KmxError hierarchy)."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """python3 -m kmx: the kmx command (kmx/cli.py)."""
 import _signal  # signal without its enum import: the handler is in place sooner
 import os

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The baud-rate commands of kmx: set-baud, scan --all-bauds and rescue.
 
 They need a bus whose line rate the master can change: a serial port
@@ -6,7 +7,7 @@ They need a bus whose line rate the master can change: a serial port
 bytes at whatever rate the hub was started with and cannot follow a servo
 to another baud, so these commands say so instead of failing later.
 
-A baud change is stored at once (0x10 = baud / 100, PROTOCOL.md §5.1) and
+A baud change is stored at once (0x10 = baud / 100, docs/protocol.md §5.1) and
 takes effect at the next restart (§3): set-baud writes it, restarts the
 servo, switches the master and pings the servo at the new rate. scan
 --all-bauds and rescue try the standard rates in turn with a super-ID ping

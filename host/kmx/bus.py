@@ -1,4 +1,5 @@
-"""The bus master (PROTOCOL.md §1, §3) over a transport: one question, the
+# SPDX-License-Identifier: Apache-2.0
+"""The bus master (docs/protocol.md §1, §3) over a transport: one question, the
 answers it expects within a timeout, each stamped with its arrival time.
 Echoes of its own command frames (a half-duplex wire hears the master's
 bytes back) are parsed and dropped, never taken for noise or answers.
@@ -6,7 +7,7 @@ Reads and pings retry; writes are sent once (a retried write may act twice).
 A write that changes an ID (0x0F, or 0x03 = 2, which sets it to 0) is
 refused with IdTaken when another servo answers on the new ID, or when two
 servos already share the old one (it would move both): two servos on one
-ID cannot be told apart by any frame afterwards (PROTOCOL.md §5.1 0x01).
+ID cannot be told apart by any frame afterwards (docs/protocol.md §5.1 0x01).
 transact() and send_bytes() send raw frames and check nothing.
 
     bus = Bus(open_transport("tcp:127.0.0.1:7000"))
@@ -327,7 +328,7 @@ class Bus:
     def shared_id(self, dev_id, tries=3):
         """How two or more servos answering on dev_id showed (words: "2
         answers to one read of 0x01 (random bytes 0x23, 0x59)"), or None (one
-        servo, or none). PROTOCOL.md §5.1: 0x01 reads [status][random], the
+        servo, or none). docs/protocol.md §5.1: 0x01 reads [status][random], the
         random byte new in every answer, so two servos' answers to one read
         differ: on the emulated bus both arrive, on a wire they collide and
         fail the checksum. Reads 0x01 and listens the whole timeout; a read

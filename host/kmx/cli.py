@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The `kmx` command: find servos on a bus and read and set their registers
 by name, with units (names, units and ranges from docs/registers.json).
 
@@ -26,7 +27,7 @@ exit 130, never a traceback.
 One servo per ID: a write that changes an ID (set ID id N, set-id, set ID
 userdata_reset 2) is refused when another servo answers on the new ID or
 two servos share the old one; scan warns about an ID two servos answer on
-(PROTOCOL.md §5.1 0x01's random byte) and prints the command that separates
+(docs/protocol.md §5.1 0x01's random byte) and prints the command that separates
 them once one of them is alone on the bus.
 """
 
@@ -138,7 +139,7 @@ def cmd_scan(bus, regs, args):
 
 def _shared_warning(bus, dev_id, how, taken):
     """What to do about two servos on one ID. No frame addresses one of
-    them alone (every frame to the ID reaches both, PROTOCOL.md §1), so the
+    them alone (every frame to the ID reaches both, docs/protocol.md §1), so the
     way apart is physical: one of them alone on the bus gets another ID."""
     free = next(i for i in range(1, fr.ID_MAX + 1) if i not in taken)
     return ("warning: ID %d gave %s: two servos share ID %d. No command reaches one of them alone "

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Optional packages from Debian's archive (pyserial, matplotlib), found
 even by an interpreter that does not see Debian's dist-packages (a pyenv or
 venv python3: `apt-get install python3-serial` installs for /usr/bin/python3

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Every failure kmx reports, as one exception hierarchy under KmxError, so
 a tool catches KmxError and prints its message: no library traceback
 reaches a user. Messages say what happened and what to do."""

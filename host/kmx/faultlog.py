@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Our extension reads (command 0x7F, docs/protocol-decisions.md "Extension
 command 0x7F"): where the user data came from at boot, why the MCU last
 reset, and the fault log (the last 16 protection and self-test events,

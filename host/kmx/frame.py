@@ -1,4 +1,5 @@
-"""KINGMAX serial servo frames (PROTOCOL.md §2, §3): checksum, command and
+# SPDX-License-Identifier: Apache-2.0
+"""KINGMAX serial servo frames (docs/protocol.md §2, §3): checksum, command and
 response encoders, the command and special-ID constants, and a stream parser
 that resyncs on noise and counts checksum errors. Standard library only.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Traces to pictures: samples position, speed and current of one servo at
 a fixed period (optionally right after a step command) and draws them to a
 PNG with Debian's python3-matplotlib (a MissingPackage error naming it when

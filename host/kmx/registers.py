@@ -1,4 +1,5 @@
-"""Registers by name with units (PROTOCOL.md §5), loaded from the
+# SPDX-License-Identifier: Apache-2.0
+"""Registers by name with units (docs/protocol.md §5), loaded from the
 machine-readable description the firmware's register list generates
 (docs/registers.json, `km_regdoc --json`): lookup by name or address,
 decoding by wire layout into values in units, encoding from units with

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Byte transports to a servo bus, opened from one spec string:
 
     tcp:HOST:PORT              the emulated bus (tools/servo-bus, host-sim --listen)

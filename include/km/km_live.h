@@ -1,4 +1,5 @@
-/* What control reports back every tick: the live registers (PROTOCOL.md
+/* SPDX-License-Identifier: Apache-2.0 */
+/* What control reports back every tick: the live registers (docs/protocol.md
  * §5.3), status bit 7, the protections and hardware faults, the torque
  * switch as control runs it. Shared by protocol/ and control/. */
 #ifndef KM_LIVE_H
@@ -21,24 +22,24 @@ typedef struct {
  * first: on the M0 a byte store or load reaches only 32 bytes into a
  * struct, and control writes all of them every tick. */
 typedef struct {
-    bool running;          /* status bit 7 */
-    bool protecting;       /* a protection acts on the output (torque_switch is PROTECTED) */
-    bool torque_forced;    /* control set the torque switch by itself at this tick (a protection
-                            * acts or just ended, a hardware fault stopped the output): 0x64
-                            * shows torque_switch; otherwise 0x64 keeps what the master wrote */
-    uint8_t torque_switch; /* km_torque_t as control runs it */
-    uint8_t protections;   /* active protections, 0x36 bits / status bits 0..3 */
-    uint8_t hw_faults;     /* 0x35 bits found by the self-test (latched) */
+    bool running;               /* status bit 7 */
+    bool protecting;            /* a protection acts on the output (torque_switch is PROTECTED) */
+    bool torque_forced;         /* control set the torque switch by itself at this tick (a protection
+                                 * acts or just ended, a hardware fault stopped the output): 0x64
+                                 * shows torque_switch; otherwise 0x64 keeps what the master wrote */
+    uint8_t torque_switch;      /* km_torque_t as control runs it */
+    uint8_t protections;        /* active protections, 0x36 bits / status bits 0..3 */
+    uint8_t hw_faults;          /* 0x35 bits found by the self-test (latched) */
     km_protect_events_t events; /* what changed at this tick */
-    int32_t position;      /* 0.1 deg, zero offsets applied */
-    int32_t speed;         /* deg/s */
-    int32_t current;       /* mA */
-    int32_t pwm;           /* 0..1000 */
-    int32_t temperature;   /* deg C */
-    int32_t voltage;       /* mV */
-    int32_t deviation;     /* 0.1 deg */
-    uint32_t rotation_ms;  /* 0x4D */
-    uint32_t time_ms;      /* ms since control started: the fault log's clock */
+    int32_t position;           /* 0.1 deg, zero offsets applied */
+    int32_t speed;              /* deg/s */
+    int32_t current;            /* mA */
+    int32_t pwm;                /* 0..1000 */
+    int32_t temperature;        /* deg C */
+    int32_t voltage;            /* mV */
+    int32_t deviation;          /* 0.1 deg */
+    uint32_t rotation_ms;       /* 0x4D */
+    uint32_t time_ms;           /* ms since control started: the fault log's clock */
 } km_live_t;
 
 #endif

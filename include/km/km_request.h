@@ -1,8 +1,9 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* What the dispatcher asks of control, decoded: every wire byte of a
  * motion, torque or protection register is turned into these types by the
  * register's hook in protocol/, so control never sees a control byte, a
  * nibble or a register value. Control answers accepted or refused; the
- * dispatcher sets status bit 6 on a refusal (PROTOCOL.md §4, §6).
+ * dispatcher sets status bit 6 on a refusal (docs/protocol.md §4, §6).
  * Shared by protocol/ and control/; a leaf header. */
 #ifndef KM_REQUEST_H
 #define KM_REQUEST_H
@@ -52,7 +53,7 @@ typedef enum {
 
 /* The output once a run has stopped. */
 typedef enum {
-    KM_AFTER_IDLE,  /* the idle output (0x11 bit 1) */
+    KM_AFTER_IDLE, /* the idle output (0x11 bit 1) */
     KM_AFTER_FREE,
     KM_AFTER_BRAKE,
 } km_run_after_t;

@@ -1,14 +1,15 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The bits protocol and control both speak: the servo status byte
- * (PROTOCOL.md §4), the protection bits (0x32, 0x33, 0x36 and status bits
+ * (docs/protocol.md §4), the protection bits (0x32, 0x33, 0x36 and status bits
  * 0..3, §5.2) and the hardware fault bits (0x35, §5.2). A leaf header. */
 #ifndef KM_STATUS_H
 #define KM_STATUS_H
 
 /* Status byte bits (§4). */
-#define KM_ST_RUNNING    0x80u
-#define KM_ST_FAILED     0x40u
-#define KM_ST_EXCEPTION  0x20u
-#define KM_ST_HW_FAULT   0x10u
+#define KM_ST_RUNNING 0x80u
+#define KM_ST_FAILED 0x40u
+#define KM_ST_EXCEPTION 0x20u
+#define KM_ST_HW_FAULT 0x10u
 #define KM_ST_PROTECTION 0x0Fu /* stall, temperature, current, voltage */
 
 /* Protections: 0x32/0x33/0x36 bits, status bits 0..3. */

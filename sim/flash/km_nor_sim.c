@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* NOR flash simulator: controller rules, counters and power-cut outcomes.
  * See km_nor_sim.h for the model. */
 #include "km_nor_sim.h"
@@ -6,12 +7,12 @@
 
 enum {
     CELL_ERASED = 0,
-    CELL_PROGRAMMED,  /* fully programmed (even if its value is all ones) */
-    CELL_TORN_ONES,   /* program began, no bit moved: passes the erased check */
+    CELL_PROGRAMMED, /* fully programmed (even if its value is all ones) */
+    CELL_TORN_ONES,  /* program began, no bit moved: passes the erased check */
     CELL_TORN_MIXED,
-    CELL_UNSTABLE,    /* data = a mix, alt = the target: reads one or the other */
+    CELL_UNSTABLE, /* data = a mix, alt = the target: reads one or the other */
     CELL_ECC,
-    CELL_WEAK,        /* data = high side, alt = low side: reads either or between */
+    CELL_WEAK, /* data = high side, alt = low side: reads either or between */
 };
 
 static uint32_t prv_rand(km_nor_sim_t *sim)
@@ -80,8 +81,7 @@ static void prv_mix(km_nor_sim_t *sim, uint8_t *out, const uint8_t *target, uint
     }
 }
 
-static void prv_tear_cell(km_nor_sim_t *sim, uint32_t cell, const uint8_t *target,
-                          km_nor_prog_outcome_t o)
+static void prv_tear_cell(km_nor_sim_t *sim, uint32_t cell, const uint8_t *target, km_nor_prog_outcome_t o)
 {
     const uint32_t c = sim->cfg.prog_size;
     uint8_t *d = &sim->data[cell * c];
@@ -440,8 +440,8 @@ uint32_t km_nor_sim_ops(const km_nor_sim_t *sim)
 
 const char *km_nor_prog_outcome_name(km_nor_prog_outcome_t o)
 {
-    static const char *const names[] = {"not-done", "done", "torn-ones",
-                                        "torn-mixed", "torn-unstable", "torn-ecc", "torn-weak"};
+    static const char *const names[] = {"not-done",      "done",     "torn-ones", "torn-mixed",
+                                        "torn-unstable", "torn-ecc", "torn-weak"};
     return (o < KM_NOR_PROG_OUTCOMES) ? names[o] : "?";
 }
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* NOR flash simulator for host tests: a km_flash_t that keeps the rules of a
  * real flash controller and can cut power at any program or erase.
  *
@@ -51,13 +52,13 @@
 #define KM_NOR_SIM_NO_CUT 0xFFFFFFFFu
 
 typedef enum {
-    KM_NOR_PROG_NOT_DONE = 0, /* power gone before the program started */
-    KM_NOR_PROG_DONE,         /* programmed fully, power gone right after */
-    KM_NOR_PROG_TORN_ONES,    /* no bit moved yet: reads all ones */
-    KM_NOR_PROG_TORN_MIXED,   /* some of the bits to clear are cleared */
-    KM_NOR_PROG_TORN_UNSTABLE,/* each read returns the target or a mix, at random */
-    KM_NOR_PROG_TORN_ECC,     /* reads report an uncorrectable ECC error */
-    KM_NOR_PROG_TORN_WEAK,    /* weak: each read erased, the target, or a mix */
+    KM_NOR_PROG_NOT_DONE = 0,  /* power gone before the program started */
+    KM_NOR_PROG_DONE,          /* programmed fully, power gone right after */
+    KM_NOR_PROG_TORN_ONES,     /* no bit moved yet: reads all ones */
+    KM_NOR_PROG_TORN_MIXED,    /* some of the bits to clear are cleared */
+    KM_NOR_PROG_TORN_UNSTABLE, /* each read returns the target or a mix, at random */
+    KM_NOR_PROG_TORN_ECC,      /* reads report an uncorrectable ECC error */
+    KM_NOR_PROG_TORN_WEAK,     /* weak: each read erased, the target, or a mix */
     KM_NOR_PROG_OUTCOMES
 } km_nor_prog_outcome_t;
 
@@ -72,31 +73,31 @@ typedef enum {
 } km_nor_erase_outcome_t;
 
 typedef struct {
-    uint32_t page_size;  /* 2048 STM32G0, 1024 F0 and nRF51 */
-    uint32_t prog_size;  /* 8 STM32G0, 2 F0, 4 nRF51 */
+    uint32_t page_size; /* 2048 STM32G0, 1024 F0 and nRF51 */
+    uint32_t prog_size; /* 8 STM32G0, 2 F0, 4 nRF51 */
     uint32_t page_count;
-    uint8_t fill;        /* initial content: 0xFF shipped part, 0x00 QEMU nRF51 */
+    uint8_t fill; /* initial content: 0xFF shipped part, 0x00 QEMU nRF51 */
 } km_nor_sim_config_t;
 
 typedef struct {
-    bool ecc_dword;      /* STM32G0: a started program makes the cell unprogrammable */
-    bool content_check;  /* the controller's erased check reads the cell's content */
+    bool ecc_dword;     /* STM32G0: a started program makes the cell unprogrammable */
+    bool content_check; /* the controller's erased check reads the cell's content */
 } km_nor_sim_rules_t;
 
 /* How weak cells read. */
 typedef enum {
-    KM_NOR_WEAK_RANDOM = 0,   /* each read drawn from the PRNG */
-    KM_NOR_WEAK_HIGH,         /* always the erased side (a weak program reads 0xFF) */
-    KM_NOR_WEAK_LOW,          /* always the programmed side (target, or old content) */
+    KM_NOR_WEAK_RANDOM = 0, /* each read drawn from the PRNG */
+    KM_NOR_WEAK_HIGH,       /* always the erased side (a weak program reads 0xFF) */
+    KM_NOR_WEAK_LOW,        /* always the programmed side (target, or old content) */
 } km_nor_weak_reads_t;
 
 typedef struct {
-    uint32_t programs;        /* program calls that reached the array */
+    uint32_t programs; /* program calls that reached the array */
     uint32_t erases;
     uint32_t reads;
-    uint32_t illegal;         /* refused programs: cell not erased */
-    uint32_t violations;      /* programs onto a cell not cleanly erased, refused or not */
-    uint32_t align_errors;    /* refused calls: misaligned or out of region */
+    uint32_t illegal;      /* refused programs: cell not erased */
+    uint32_t violations;   /* programs onto a cell not cleanly erased, refused or not */
+    uint32_t align_errors; /* refused calls: misaligned or out of region */
     uint32_t page_erases[KM_NOR_SIM_MAX_PAGES];
 } km_nor_sim_counters_t;
 
@@ -105,16 +106,16 @@ typedef struct {
     km_nor_sim_rules_t rules;
     km_nor_weak_reads_t weak_reads;
     km_nor_sim_counters_t count;
-    uint32_t ops;             /* programs + erases since the last power cycle */
+    uint32_t ops; /* programs + erases since the last power cycle */
     uint32_t cut_at;
     km_nor_prog_outcome_t cut_prog;
     km_nor_erase_outcome_t cut_erase;
     bool dead;
-    bool cut_was_erase;       /* kind of the op the cut fell on */
+    bool cut_was_erase; /* kind of the op the cut fell on */
     uint32_t rng;
     uint8_t data[KM_NOR_SIM_MAX_BYTES];
-    uint8_t alt[KM_NOR_SIM_MAX_BYTES];    /* target of an unstable cell, low side of a weak one */
-    uint8_t state[KM_NOR_SIM_MAX_CELLS];  /* km_nor_cell_t per cell */
+    uint8_t alt[KM_NOR_SIM_MAX_BYTES];   /* target of an unstable cell, low side of a weak one */
+    uint8_t state[KM_NOR_SIM_MAX_CELLS]; /* km_nor_cell_t per cell */
 } km_nor_sim_t;
 
 /* Sets up a simulated region and fills *flash to reach it. Returns false if
@@ -122,8 +123,8 @@ typedef struct {
 bool km_nor_sim_init(km_nor_sim_t *sim, const km_nor_sim_config_t *cfg, km_flash_t *flash);
 /* Re-points *flash at sim (after the sim struct was copied). */
 void km_nor_sim_bind(km_nor_sim_t *sim, km_flash_t *flash);
-void km_nor_sim_arm_cut(km_nor_sim_t *sim, uint32_t op_index,
-                        km_nor_prog_outcome_t prog, km_nor_erase_outcome_t erase);
+void km_nor_sim_arm_cut(km_nor_sim_t *sim, uint32_t op_index, km_nor_prog_outcome_t prog,
+                        km_nor_erase_outcome_t erase);
 /* Power returns: the flash works again, no cut armed, op count restarts. */
 void km_nor_sim_power_cycle(km_nor_sim_t *sim);
 void km_nor_sim_seed(km_nor_sim_t *sim, uint32_t seed);

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Fails a virtual-G031 test with the install advice when the interpreter
 running it lacks python3-unicorn or python3-pyelftools (tools/install-deps
 installs both for Debian's /usr/bin/python3)."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Where ST's STM32G031 SVD (g031_regmap.py, generated) is wrong for an
 emulator, corrected from RM0444 / the Cortex-M0+ TRM. One visible table:
 each entry says what the SVD says, what the part does and where that is

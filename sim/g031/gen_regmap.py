@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """gen_regmap.py SVD OUT: writes the virtual G031's register map (a Python
 data table) from ST's CMSIS SVD of the STM32G031.
 

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """vg031: a virtual STM32G031 on unicorn (Debian's python3-unicorn) that
 runs the shipped, unmodified images and answers on an emulated bus.
 

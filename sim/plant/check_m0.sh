@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Checks the plant against the Cortex-M0 bar: it must compile for the M0 with
 # the project's warnings as errors, use no floating point (no soft-float
 # helpers), no heap, and no 64-bit division outside km_plant_init (64-bit

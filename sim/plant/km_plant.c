@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Simulated servo plant: fixed-point integration of the motor, gearbox, load,
  * supply and heat described in km_plant.h. No float, no heap, no recursion,
  * and no 64-bit division in km_plant_step (only 64-bit multiplies and shifts,
@@ -8,10 +9,10 @@
 
 #include "km_plant_real.h"
 
-#define NDEG_PER_DDEG 100000000   /* nano-degrees per 0.1° */
-#define MDEG_PER_RAD_X1000 57295780LL /* (180/pi) * 1e6: m°/rad, times 1000 */
-#define EMF_MAX_MV 100000         /* init refuses configs whose EMF at overspeed exceeds this */
-#define TEMP_LIMIT_UC 2000000000  /* saturation of the temperature state, µ°C */
+#define NDEG_PER_DDEG 100000000             /* nano-degrees per 0.1° */
+#define MDEG_PER_RAD_X1000 57295780LL       /* (180/pi) * 1e6: m°/rad, times 1000 */
+#define EMF_MAX_MV 100000                   /* init refuses configs whose EMF at overspeed exceeds this */
+#define TEMP_LIMIT_UC 2000000000            /* saturation of the temperature state, µ°C */
 #define TORQUE_LIMIT_UNM ((int64_t)1 << 40) /* keeps torque * gain inside int64 */
 
 /* a * b / 2^shift, rounded to nearest, symmetric about zero (so the model
@@ -42,15 +43,13 @@ static bool prv_config_ok(const km_plant_config_t *cfg)
 {
     return !(cfg->motor_r_mohm == 0 || cfg->motor_ke_uv_s_rad == 0 || cfg->gear_ratio == 0 ||
              cfg->gear_eff_pct == 0 || cfg->gear_eff_pct > 100 ||
-             (uint32_t)cfg->supply_r_mohm > 4u * cfg->motor_r_mohm ||
-             cfg->substep_us == 0 || cfg->substep_us > 1000 ||
-             cfg->thermal_r_mc_per_w == 0 || cfg->thermal_c_mj_per_c == 0 ||
+             (uint32_t)cfg->supply_r_mohm > 4u * cfg->motor_r_mohm || cfg->substep_us == 0 ||
+             cfg->substep_us > 1000 || cfg->thermal_r_mc_per_w == 0 || cfg->thermal_c_mj_per_c == 0 ||
              cfg->pot_travel_ddeg < 0 || cfg->endstop_ddeg < 0);
 }
 
 /* Sub-step length, acceleration and thermal constants for damping b_q16. */
-static void prv_init_substep(km_plant_t *p, const km_plant_config_t *cfg, int64_t b_q16,
-                             int64_t j_total)
+static void prv_init_substep(km_plant_t *p, const km_plant_config_t *cfg, int64_t b_q16, int64_t j_total)
 {
     /* Explicit Euler is stable (and not oscillating) while the damping
      * removes less than half the speed per sub-step: halve until it does. */
@@ -67,11 +66,9 @@ static void prv_init_substep(km_plant_t *p, const km_plant_config_t *cfg, int64_
     p->sub_us = sub;
     p->acc_q24 = acc_q24;
     /* dT[µ°C] = I[mA]^2 * R[mΩ] / 1e6 [mW] * dt[µs] / C[mJ/°C] */
-    p->heat_q30 = (((int64_t)cfg->motor_r_mohm * sub) << 30) /
-                  ((int64_t)cfg->thermal_c_mj_per_c * 1000000);
+    p->heat_q30 = (((int64_t)cfg->motor_r_mohm * sub) << 30) / ((int64_t)cfg->thermal_c_mj_per_c * 1000000);
     /* dT = -(T - T_amb) * dt / (R_th C), R_th[m°C/W] * C[mJ/°C] = tau in µs */
-    p->cool_q30 = ((int64_t)sub << 30) /
-                  ((int64_t)cfg->thermal_r_mc_per_w * cfg->thermal_c_mj_per_c);
+    p->cool_q30 = ((int64_t)sub << 30) / ((int64_t)cfg->thermal_r_mc_per_w * cfg->thermal_c_mj_per_c);
 }
 
 /* The state at power-on: at rest at 0, at ambient temperature. */

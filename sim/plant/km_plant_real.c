@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The realistic servo plant (docs/plant.md): the motor, supply and heat of
  * km_plant.h, plus what a real servo adds, all referred to the output
  * shaft:
@@ -35,26 +36,26 @@
 #include <stddef.h>
 
 #define DDEG_PER_TURN 3600
-#define DDEG_PER_RAD_X1E5 57295780LL            /* (1800 / pi) * 1e5 */
-#define DEFL_MAX_Q32 ((int64_t)50 << 32)          /* 5°: the deflection never exceeds it */
-#define TORQUE_MAX_UNM ((int64_t)1 << 26)         /* 67 N·m: keeps torque * gain in int64 */
+#define DDEG_PER_RAD_X1E5 57295780LL      /* (1800 / pi) * 1e5 */
+#define DEFL_MAX_Q32 ((int64_t)50 << 32)  /* 5°: the deflection never exceeds it */
+#define TORQUE_MAX_UNM ((int64_t)1 << 26) /* 67 N·m: keeps torque * gain in int64 */
 #define SPEED_MAX_Q16 ((int32_t)(KM_PLANT_SPEED_MAX_MDPS / 100) * 65536)
 #define TEMP_LIMIT_UC 2000000000
-#define STIFF_MAX 200000u                         /* µN·m per m° */
-#define DAMP_MAX 100000u                          /* µN·m per °/s */
-#define ENC_PER_DDEG_Q20 1193047LL                /* 4096 / 3600 * 2^20 */
-#define NOISE_UNIT_SD_X1000 147800LL              /* sd of the generator's draw, x1000 */
+#define STIFF_MAX 200000u            /* µN·m per m° */
+#define DAMP_MAX 100000u             /* µN·m per °/s */
+#define ENC_PER_DDEG_Q20 1193047LL   /* 4096 / 3600 * 2^20 */
+#define NOISE_UNIT_SD_X1000 147800LL /* sd of the generator's draw, x1000 */
 #define EMF_MAX_MV 100000
 
 /* exp(-(k/4)^2), k = 0..12, Q15: the Stribeck excess's shape. */
 static const int16_t k_stribeck_q15[13] = {32767, 30782, 25519, 18670, 12054, 6868, 3454,
                                            1533,  600,   207,   63,    17,    4};
 /* sin(2k°), k = 0..45, Q15. */
-static const int16_t k_sin_q15[46] = {
-    0,     1144,  2286,  3425,  4560,  5690,  6813,  7927,  9032,  10126, 11207, 12275,
-    13328, 14364, 15383, 16383, 17364, 18323, 19260, 20173, 21062, 21925, 22762, 23571,
-    24351, 25101, 25821, 26509, 27165, 27788, 28377, 28932, 29451, 29934, 30381, 30791,
-    31163, 31498, 31794, 32051, 32269, 32448, 32587, 32687, 32747, 32767};
+static const int16_t k_sin_q15[46] = {0,     1144,  2286,  3425,  4560,  5690,  6813,  7927,  9032,  10126,
+                                      11207, 12275, 13328, 14364, 15383, 16383, 17364, 18323, 19260, 20173,
+                                      21062, 21925, 22762, 23571, 24351, 25101, 25821, 26509, 27165, 27788,
+                                      28377, 28932, 29451, 29934, 30381, 30791, 31163, 31498, 31794, 32051,
+                                      32269, 32448, 32587, 32687, 32747, 32767};
 
 /* a * b / 2^shift rounded to nearest, symmetric about zero. */
 static int64_t prv_mulsh(int64_t a, int64_t b, unsigned shift)
@@ -150,7 +151,8 @@ static void km_plant_init_real_gains(km_plant_t *p)
     r->rtemp_q32 = ((int64_t)rp->winding_r_mohm * rp->tempco_ppm << 32) / 1000000000000LL;
     r->heat_q40 = (sub << 40) / ((int64_t)c->thermal_c_mj_per_c * 1000000);
     p->cool_q30 = (sub << 30) / ((int64_t)c->thermal_r_mc_per_w * c->thermal_c_mj_per_c);
-    r->adc_gain_q24 = c->pot_travel_ddeg > 0 ? ((int64_t)KM_PLANT_POT_ADC_MAX << 24) / (2 * c->pot_travel_ddeg) : 0;
+    r->adc_gain_q24 =
+        c->pot_travel_ddeg > 0 ? ((int64_t)KM_PLANT_POT_ADC_MAX << 24) / (2 * c->pot_travel_ddeg) : 0;
     r->lag_q32 = ((int64_t)rp->pot_window_us << 31) / 1000000; /* half the window */
     r->inv_ws_q16 = ((int64_t)1 << 16) / rp->stribeck_ddps;
     r->noise_pot_q8 = (int32_t)(((int64_t)rp->pot_noise_mlsb << 24) / NOISE_UNIT_SD_X1000);
@@ -209,7 +211,8 @@ static void prv_sample_pot(km_plant_t *p)
     for (uint32_t i = 0; i < n; i++) {
         const int32_t s = a_q16 + (int32_t)prv_mulsh(prv_noise(r), r->noise_pot_q8, 8);
         const int32_t v = s < 0 ? 0 : (s + 32768) >> 16;
-        sum += (uint32_t)(v < 0 ? 0 : (v > (int32_t)KM_PLANT_POT_ADC_MAX ? (int32_t)KM_PLANT_POT_ADC_MAX : v));
+        sum +=
+            (uint32_t)(v < 0 ? 0 : (v > (int32_t)KM_PLANT_POT_ADC_MAX ? (int32_t)KM_PLANT_POT_ADC_MAX : v));
     }
     const uint32_t raw = (sum + n / 2u) >> p->cfg->real->pot_oversample_log2;
     r->adc = (uint16_t)raw;
@@ -278,9 +281,9 @@ static int32_t prv_duty(const km_plant_real_state_t *r, int16_t pwm)
     const int32_t d = pwm > 1000 ? 1000 : (pwm < -1000 ? -1000 : pwm);
     int32_t mag = d < 0 ? -d : d;
     if (mag < r->min_pm) {
-        mag = 0;          /* too short to switch */
+        mag = 0; /* too short to switch */
     } else if (mag > 1000 - r->min_pm) {
-        mag = 1000;       /* the off-pulse too short: stays on */
+        mag = 1000; /* the off-pulse too short: stays on */
     } else {
         mag -= r->dead_pm;
         mag = mag < 0 ? 0 : mag;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The realistic model behind km_plant.h (cfg->real != NULL): internal to
  * sim/plant, called by km_plant.c. */
 #ifndef KM_PLANT_REAL_H

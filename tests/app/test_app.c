@@ -1,9 +1,10 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The real main loop (firmware/app/km_app.c: RX queue, parser, dispatcher,
  * answer timer, store on the NOR simulator, control tick, watchdog) driven
  * over a simulated wire in virtual time (tests/support/km_fake_hal.h).
  * These are the defects issue 13 found in the glue between parser, app loop
  * and dispatcher, each with the bytes that showed it; each test fails on the
- * code before its fix. PROTOCOL.md sections and docs/protocol-decisions.md
+ * code before its fix. docs/protocol.md sections and docs/protocol-decisions.md
  * headings are named per test. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -159,8 +160,8 @@ static void test_s3_restart_waits_seconds_for_super_id_slot(void **state)
 {
     (void)state;
     boot();
-    exchange("F9 FF 00 05 03 10 60 00 87", 5, NULL);      /* 0x10 = 96: 9600 baud */
-    exchange("F9 FF 00 04 03 0F FA EF", 5, NULL);         /* ID 250 */
+    exchange("F9 FF 00 05 03 10 60 00 87", 5, NULL);        /* 0x10 = 96: 9600 baud */
+    exchange("F9 FF 00 04 03 0F FA EF", 5, NULL);           /* ID 250 */
     exchange("F9 FF FA 07 03 02 E1 E2 E3 E4 6F", 20, NULL); /* restart: 9600 from now */
     assert_int_equal(kf_world.baud, 9600);
     const uint32_t sent = kf_world.now;
@@ -190,10 +191,10 @@ static void test_s4_no_stale_bit5_after_id_change(void **state)
 {
     (void)state;
     boot();
-    exchange("F9 FF 05 02 01 08", 5, NULL);    /* bad checksum, ID 5, we are 0 */
+    exchange("F9 FF 05 02 01 08", 5, NULL);       /* bad checksum, ID 5, we are 0 */
     exchange("F9 FF 00 04 03 0F 05 E4", 5, NULL); /* ID becomes 5 */
     exchange("F9 FF 05 02 01 F7", 5, "F9 F5 05 02 00 F8");
-    exchange("F9 FF 09 02 01 0C", 5, NULL);    /* bad checksum, ID 9: not ours */
+    exchange("F9 FF 09 02 01 0C", 5, NULL); /* bad checksum, ID 9: not ours */
     exchange("F9 FF 05 02 01 F7", 5, "F9 F5 05 02 00 F8");
 }
 
@@ -319,7 +320,7 @@ static void test_ext_userdata_source(void **state)
     exchange("F9 FF 00 05 03 13 E7 03 FA", 5, NULL);                /* a commit */
     exchange("F9 FF 00 07 03 02 E1 E2 E3 E4 69", 20, NULL);
     exchange("F9 FF 00 03 7F 01 7C", 5, "F9 F5 00 04 7F 01 00 7B"); /* loaded */
-    exchange("F9 FF 00 03 02 0D ED", 5, "F9 F5 00 02 20 DD"); /* 0x0D: reserved again */
+    exchange("F9 FF 00 03 02 0D ED", 5, "F9 F5 00 02 20 DD");       /* 0x0D: reserved again */
 }
 
 /* ---- 15: TX race and unchecked UART results ------------------------------------ */

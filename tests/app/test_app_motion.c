@@ -1,7 +1,8 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The servo moves, through the whole firmware: bytes on the simulated wire
  * -> parser -> dispatcher -> typed request -> control at the app's 1 kHz
  * tick -> the bridge of the fake board -> the servo plant (sim/plant,
- * kf_use_plant) -> sensors -> 0x46 read back over the bus. PROTOCOL.md
+ * kf_use_plant) -> sensors -> 0x46 read back over the bus. docs/protocol.md
  * §5.3 0x46/0x4D, §5.4 0x64/0x65/0x66/0x6E/0x70, §4 bit 7. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -51,7 +52,8 @@ static int32_t read_reg(uint8_t addr, unsigned *len)
     if (vlen == 2u) {
         return (int16_t)(a[6] | (a[7] << 8));
     }
-    return (int32_t)((uint32_t)a[6] | ((uint32_t)a[7] << 8) | ((uint32_t)a[8] << 16) | ((uint32_t)a[9] << 24));
+    return (int32_t)((uint32_t)a[6] | ((uint32_t)a[7] << 8) | ((uint32_t)a[8] << 16) |
+                     ((uint32_t)a[9] << 24));
 }
 
 static uint8_t ping_status(void)
@@ -147,7 +149,7 @@ static void test_s5_4_move_refused_torque_off(void **state)
     assert_int_equal(read_reg(0x46, &len), 100);
 }
 
-/* DESIGN.md "The servo <-> control seam": a commit (here 0x12, persisted)
+/* docs/architecture.md ("Flash work and the bridge"): a commit (here 0x12, persisted)
  * while the bridge drives brakes it first, as a flash erase would stall the
  * CPU with the last PWM on the bridge; the next tick drives again and the
  * move still arrives. */

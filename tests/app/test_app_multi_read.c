@@ -1,5 +1,6 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Multi-ID read 0x82 through the real main loop over bytes in virtual time
- * (docs/protocol-decisions.md "Multi-ID read 0x82"; PROTOCOL.md §3, §7):
+ * (docs/protocol-decisions.md "Multi-ID read 0x82"; docs/protocol.md §3, §7):
  * the answer of a listed servo starts response_delay + j x slot after the
  * frame's last byte, j its position in the list, on the wire; a list longer
  * than a frame can carry is no frame. Prints the time to read 0x46 from 20

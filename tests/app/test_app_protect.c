@@ -1,5 +1,6 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Protections and the fault log through the whole firmware, bytes on the
- * simulated wire in virtual time (PROTOCOL.md §5.2 0x33/0x35/0x36, §4 bits
+ * simulated wire in virtual time (docs/protocol.md §5.2 0x33/0x35/0x36, §4 bits
  * 0-4 and 6, §5.4 0x64 = 5; the fault log of docs/protocol-decisions.md,
  * read with 0x7F): the dispatcher and control wired as the boards wire
  * them, sensors set by the test (the plant-level scenarios are in
@@ -99,7 +100,7 @@ static void test_s5_2_voltage_sag_trip_refuse_release_log(void **state)
     const uint8_t move[5] = {0x65, 0x84, 0x03, 0xF4, 0x01};
     uint8_t v[32];
     assert_int_equal(exchange(0x03, move, 5, v), -2);
-    assert_int_equal(ping(), 0x41); /* bit 6: refused; bit 0 still */
+    assert_int_equal(ping(), 0x41);           /* bit 6: refused; bit 0 still */
     assert_int_equal(kf_world.motor_mode, 0); /* 0x34 voltage 00: free */
     kf_world.voltage_mv = 7400;
     run_ms(2900);
@@ -109,9 +110,9 @@ static void test_s5_2_voltage_sag_trip_refuse_release_log(void **state)
     assert_int_equal(read_u8(0x64), 3);
 
     assert_int_equal(ext(0x10, v), 7);
-    assert_int_equal(v[0], 2); /* events ever */
-    assert_int_equal(v[4], 2); /* held */
-    assert_int_equal(v[5], 0); /* kept from before a reset */
+    assert_int_equal(v[0], 2);          /* events ever */
+    assert_int_equal(v[4], 2);          /* held */
+    assert_int_equal(v[5], 0);          /* kept from before a reset */
     assert_int_equal(ext(0x11, v), 18); /* newest: the release */
     assert_int_equal(v[4], 2);
     assert_int_equal(v[5], 0x01);
@@ -121,7 +122,7 @@ static void test_s5_2_voltage_sag_trip_refuse_release_log(void **state)
     assert_int_equal(v[8] | (v[9] << 8), 5000);
     const uint32_t t_trip = (uint32_t)v[0] | ((uint32_t)v[1] << 8) | ((uint32_t)v[2] << 16);
     assert_true(t_trip > 3000u && t_trip < 3300u); /* ms since boot: 50 + ~4 + 3000 */
-    assert_int_equal(ext(0x13, v), 18); /* not held yet: zeros, kind 0 */
+    assert_int_equal(ext(0x13, v), 18);            /* not held yet: zeros, kind 0 */
     assert_int_equal(v[4], 0);
 }
 

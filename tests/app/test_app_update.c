@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* 0x78 in the application (docs/update.md §4, application column), through
  * the real main loop on the fake board: STATUS answers state 0, ENTER
  * restarts into the bootloader when the board has one (nothing after it
@@ -19,9 +20,9 @@
 /* This test's board: a bootloader present or not, and what it was asked. */
 static bool s_has_bootloader;
 static unsigned s_requests;
-static unsigned s_confirms;        /* km_board_boot_confirm() calls */
-static uint32_t s_confirm_now;     /* virtual time of the last one */
-static unsigned s_confirm_boot;    /* kf_world.boots then */
+static unsigned s_confirms;     /* km_board_boot_confirm() calls */
+static uint32_t s_confirm_now;  /* virtual time of the last one */
+static unsigned s_confirm_boot; /* kf_world.boots then */
 
 void km_board_boot_confirm(void)
 {

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Control-quality benchmark (issue 20; docs/control-quality.md): the eight
  * criteria as figures, each beside its target, measured on the realistic
  * plant (sim/plant, km_plant_realistic_config; docs/plant.md).
@@ -44,16 +45,16 @@
 #include "km_turn_counter.h"
 
 #define TICK_US 1000u
-#define REC_MAX 40000u              /* recorded ticks of one scenario */
-#define SERVO_ID 0u                 /* the servo ID's default (0x0F = 0) */
-#define ARRIVE_DDEG 5               /* the product's arrive band (gains.arrive_ddeg): 0.5° */
-#define MOVE_MAX_MS 8000u           /* a move not over by then is a broken run */
+#define REC_MAX 40000u    /* recorded ticks of one scenario */
+#define SERVO_ID 0u       /* the servo ID's default (0x0F = 0) */
+#define ARRIVE_DDEG 5     /* the product's arrive band (gains.arrive_ddeg): 0.5° */
+#define MOVE_MAX_MS 8000u /* a move not over by then is a broken run */
 #define CHECKS_MAX 40u
 
 /* ---- the bench rig: plant, dispatcher, control ---------------------------- */
 
 typedef struct {
-    km_plant_real_t real;       /* the realism this scenario runs (a copy it may vary) */
+    km_plant_real_t real; /* the realism this scenario runs (a copy it may vary) */
     km_plant_config_t cfg;
     km_plant_t plant;
     km_servo_t servo;
@@ -66,21 +67,21 @@ typedef struct {
     km_plant_input_t in;
     km_turn_counter_t turns;
     bool encoder;
-    bool refused;               /* control refused the last request */
-    int32_t start_turns;        /* encoder: turns the counter starts at (a shaft that has turned before) */
-    int32_t ext_unm;            /* external torque on the output, µN·m */
+    bool refused;        /* control refused the last request */
+    int32_t start_turns; /* encoder: turns the counter starts at (a shaft that has turned before) */
+    int32_t ext_unm;     /* external torque on the output, µN·m */
 } br_t;
 
 /* One recorded tick. */
 typedef struct {
-    int64_t shaft_udeg;         /* the output shaft, truth, µ° */
-    int32_t report;             /* 0x46, 0.1° */
-    int32_t speed_mdps;         /* the output shaft, truth */
-    int32_t pwm;                /* the bridge command, signed (0 = free or brake) */
-    int32_t current_ma;         /* motor current at the end of the tick */
-    int32_t peak_ma;            /* the largest |current| within the tick */
-    int32_t target;             /* what the scenario asked, 0.1° */
-    bool running;               /* status bit 7 */
+    int64_t shaft_udeg; /* the output shaft, truth, µ° */
+    int32_t report;     /* 0x46, 0.1° */
+    int32_t speed_mdps; /* the output shaft, truth */
+    int32_t pwm;        /* the bridge command, signed (0 = free or brake) */
+    int32_t current_ma; /* motor current at the end of the tick */
+    int32_t peak_ma;    /* the largest |current| within the tick */
+    int32_t target;     /* what the scenario asked, 0.1° */
+    bool running;       /* status bit 7 */
 } br_sample_t;
 
 typedef struct {
@@ -93,14 +94,14 @@ typedef struct {
 
 static br_t s_b;
 static br_sample_t s_rec[REC_MAX];
-static uint32_t s_n;            /* recorded ticks */
+static uint32_t s_n; /* recorded ticks */
 static FILE *s_csv;
 static int s_broken;
 static br_check_t s_checks[CHECKS_MAX];
 static unsigned s_nchecks;
-static int32_t s_stall_ma;      /* measured on the plant at full PWM */
+static int32_t s_stall_ma; /* measured on the plant at full PWM */
 static int32_t s_stall_unm;
-static char s_defects[2048];    /* the issue's defect figures, for the summary */
+static char s_defects[2048]; /* the issue's defect figures, for the summary */
 static unsigned s_hours = 1;
 
 /* Marks the run broken (exit 1) and says why. */
@@ -232,7 +233,7 @@ static void br_tick(br_t *b)
     km_servo_set_live(&b->servo, &b->live);
     b->in.bridge = b->bridge.mode == KM_BRIDGE_PWM     ? KM_PLANT_DRIVE
                    : b->bridge.mode == KM_BRIDGE_BRAKE ? KM_PLANT_BRAKE
-                                                        : KM_PLANT_COAST;
+                                                       : KM_PLANT_COAST;
     b->in.pwm = b->bridge.mode == KM_BRIDGE_PWM ? b->bridge.pwm : 0;
 }
 
@@ -500,12 +501,12 @@ static void prv_measure_stall(void)
 /* ---- moves ---------------------------------------------------------------- */
 
 typedef struct {
-    int32_t end_ms;        /* bit 7 cleared this long after the command (-1: never) */
-    int32_t over_mdeg;     /* furthest past the target in the move's direction, truth */
-    int32_t clear_err_mdeg;/* |shaft - target| at the tick bit 7 cleared */
-    int32_t final_err_mdeg;/* shaft - target `after` ms after bit 7 cleared */
-    int32_t peak_ma;       /* the largest |current| from the command on */
-    uint32_t cmd_idx;      /* record index of the command's first tick */
+    int32_t end_ms;         /* bit 7 cleared this long after the command (-1: never) */
+    int32_t over_mdeg;      /* furthest past the target in the move's direction, truth */
+    int32_t clear_err_mdeg; /* |shaft - target| at the tick bit 7 cleared */
+    int32_t final_err_mdeg; /* shaft - target `after` ms after bit 7 cleared */
+    int32_t peak_ma;        /* the largest |current| from the command on */
+    uint32_t cmd_idx;       /* record index of the command's first tick */
 } prv_move_t;
 
 /* Bit-7 honesty tallies (criterion 6): unloaded and loaded moves. */
@@ -560,9 +561,9 @@ static bool prv_follow(br_t *b, int32_t target, int32_t sign, uint32_t after, pr
 }
 
 typedef struct {
-    uint8_t cmd;           /* 0x65 time, 0x66 speed */
-    int32_t from, to;      /* 0.1° */
-    int32_t param;         /* ms or °/s (0 = fastest) */
+    uint8_t cmd;      /* 0x65 time, 0x66 speed */
+    int32_t from, to; /* 0.1° */
+    int32_t param;    /* ms or °/s (0 = fastest) */
 } prv_move_spec_t;
 
 /* Torque on at `from`, settled, then the move; figures in *m. */
@@ -583,10 +584,10 @@ static bool prv_move_case(br_t *b, const prv_move_spec_t *sp, prv_move_t *m)
 /* ---- 1. quiet hold --------------------------------------------------------- */
 
 typedef struct {
-    double sd_counts;      /* measured sd of the position reading at rest, 0x46 counts */
+    double sd_counts; /* measured sd of the position reading at rest, 0x46 counts */
     int32_t mean_ma, rms_ma;
     double flips_per_s;
-    int32_t report_span;   /* max - min of 0x46 while holding, counts */
+    int32_t report_span; /* max - min of 0x46 while holding, counts */
     int32_t shaft_span_mdeg;
 } prv_hold_t;
 
@@ -655,7 +656,8 @@ static bool prv_hold_spots(int32_t sigma_x100, prv_hold_t *worst, prv_hold_t *me
         worst->rms_ma = h.rms_ma > worst->rms_ma ? h.rms_ma : worst->rms_ma;
         worst->flips_per_s = h.flips_per_s > worst->flips_per_s ? h.flips_per_s : worst->flips_per_s;
         worst->report_span = h.report_span > worst->report_span ? h.report_span : worst->report_span;
-        worst->shaft_span_mdeg = h.shaft_span_mdeg > worst->shaft_span_mdeg ? h.shaft_span_mdeg : worst->shaft_span_mdeg;
+        worst->shaft_span_mdeg =
+            h.shaft_span_mdeg > worst->shaft_span_mdeg ? h.shaft_span_mdeg : worst->shaft_span_mdeg;
         mean->sd_counts += h.sd_counts / HOLD_SPOTS;
         mean->mean_ma += h.mean_ma / HOLD_SPOTS;
         mean->rms_ma += h.rms_ma / HOLD_SPOTS;
@@ -675,23 +677,24 @@ static void prv_c1(void)
         if (!prv_hold_spots(k_sigma[k], &w[k], &m[k])) {
             return;
         }
-        prv_defect("- D2 hold, position noise sigma %.2f count (measured sd of the reading %.2f), worst of %d "
-                   "targets (mean): %.1f (%.1f) PWM sign flips/s, %d (%d) mA rms, mean current %d (%d) mA, "
-                   "0x46 span %d counts, shaft span %.3f°\n",
-                   k_sigma[k] / 100.0, m[k].sd_counts, HOLD_SPOTS, w[k].flips_per_s, m[k].flips_per_s,
-                   w[k].rms_ma, m[k].rms_ma, w[k].mean_ma, m[k].mean_ma, w[k].report_span,
-                   w[k].shaft_span_mdeg / 1000.0);
+        prv_defect(
+            "- D2 hold, position noise sigma %.2f count (measured sd of the reading %.2f), worst of %d "
+            "targets (mean): %.1f (%.1f) PWM sign flips/s, %d (%d) mA rms, mean current %d (%d) mA, "
+            "0x46 span %d counts, shaft span %.3f°\n",
+            k_sigma[k] / 100.0, m[k].sd_counts, HOLD_SPOTS, w[k].flips_per_s, m[k].flips_per_s, w[k].rms_ma,
+            m[k].rms_ma, w[k].mean_ma, m[k].mean_ma, w[k].report_span, w[k].shaft_span_mdeg / 1000.0);
     }
     for (unsigned k = 1; k < 3u; k++) {
         char what[96];
         (void)snprintf(what, sizeof what, "noise %.1f count: mean hold current, no load (worst of %d)",
                        k_sigma[k] / 100.0, HOLD_SPOTS);
-        prv_check(1, w[k].mean_ma < 30, what, "< 30 mA", "%d mA (mean of the %d: %d)", w[k].mean_ma, HOLD_SPOTS,
-                  m[k].mean_ma);
+        prv_check(1, w[k].mean_ma < 30, what, "< 30 mA", "%d mA (mean of the %d: %d)", w[k].mean_ma,
+                  HOLD_SPOTS, m[k].mean_ma);
         (void)snprintf(what, sizeof what, "noise %.1f count: PWM sign changes (worst)", k_sigma[k] / 100.0);
         prv_check(1, w[k].flips_per_s < 10.0, what, "< 10 /s", "%.1f /s (mean %.1f)", w[k].flips_per_s,
                   m[k].flips_per_s);
-        (void)snprintf(what, sizeof what, "noise %.1f count: 0x46 span while holding (worst)", k_sigma[k] / 100.0);
+        (void)snprintf(what, sizeof what, "noise %.1f count: 0x46 span while holding (worst)",
+                       k_sigma[k] / 100.0);
         prv_check(1, w[k].report_span <= 1, what, "<= 1 count", "%d counts", w[k].report_span);
     }
 }
@@ -733,9 +736,9 @@ static void prv_c2_steady(void)
         b->ext_unm = 0;
         br_run(b, 1500u, 0);
     }
-    prv_check(2, prv_abs(worst) <= 200, "steady-state error, loads 20..80 % of stall torque (worst)", "<= 0.2°",
-              "%.3f° (20 %%: %.3f°, 40 %%: %.3f°, 60 %%: %.3f°, 80 %%: %.3f°)", worst / 1000.0, err_at[0] / 1000.0,
-              err_at[1] / 1000.0, err_at[2] / 1000.0, err_at[3] / 1000.0);
+    prv_check(2, prv_abs(worst) <= 200, "steady-state error, loads 20..80 % of stall torque (worst)",
+              "<= 0.2°", "%.3f° (20 %%: %.3f°, 40 %%: %.3f°, 60 %%: %.3f°, 80 %%: %.3f°)", worst / 1000.0,
+              err_at[0] / 1000.0, err_at[1] / 1000.0, err_at[2] / 1000.0, err_at[3] / 1000.0);
 }
 
 /* Criterion 2: a 30 % load step, deflection and recovery. */
@@ -764,19 +767,19 @@ static void prv_c2_step(void)
     if (back) {
         (void)snprintf(took, sizeof took, "%u ms", last_out - from);
     }
-    prv_check(2, back && last_out - from <= 200u, "load step 30 %: back within 0.2° (and staying)", "<= 200 ms",
-              "%s", took);
+    prv_check(2, back && last_out - from <= 200u, "load step 30 %: back within 0.2° (and staying)",
+              "<= 200 ms", "%s", took);
 }
 
 /* ---- 3. point to point (and 6. honest status) -------------------------------- */
 
 static const prv_move_spec_t k_moves[] = {
-    {0x65u, -450, 450, 500},   /* 90° in 500 ms */
-    {0x65u, -450, -150, 300},  /* 30° in 300 ms */
-    {0x65u, 450, -450, 1000},  /* -90° in 1 s */
-    {0x66u, -450, 450, 0},     /* 90° fastest */
-    {0x66u, -450, -400, 0},    /* 5° fastest */
-    {0x66u, 450, 300, 120},    /* -15° at 120 °/s */
+    {0x65u, -450, 450, 500},  /* 90° in 500 ms */
+    {0x65u, -450, -150, 300}, /* 30° in 300 ms */
+    {0x65u, 450, -450, 1000}, /* -90° in 1 s */
+    {0x66u, -450, 450, 0},    /* 90° fastest */
+    {0x66u, -450, -400, 0},   /* 5° fastest */
+    {0x66u, 450, 300, 120},   /* -15° at 120 °/s */
 };
 #define MOVES_N (sizeof k_moves / sizeof k_moves[0])
 
@@ -822,10 +825,11 @@ static void prv_c3_overshoot(void)
         !prv_c3_set(3u, 0, 7400, true, &over3, &t3, "inertia3x")) {
         return;
     }
-    prv_check(3, over1 <= 300, "overshoot at rated inertia (6 moves, worst)", "<= 0.3°", "%.3f°", over1 / 1000.0);
+    prv_check(3, over1 <= 300, "overshoot at rated inertia (6 moves, worst)", "<= 0.3°", "%.3f°",
+              over1 / 1000.0);
     prv_check(3, over3 <= 1000, "overshoot at 3x inertia (worst)", "<= 1°", "%.3f°", over3 / 1000.0);
-    prv_check(3, t1 <= 20, "move in time (0x65): bit 7 clears at T (worst, rated inertia)", "within ±2 % of T",
-              "%.1f %% off", t1 / 10.0);
+    prv_check(3, t1 <= 20, "move in time (0x65): bit 7 clears at T (worst, rated inertia)",
+              "within ±2 % of T", "%.1f %% off", t1 / 10.0);
     /* loaded moves for criterion 6: 30 % of stall against, and a 6.0 V supply */
     (void)prv_c3_set(1u, 30, 7400, true, &o, &t, NULL);
     (void)prv_c3_set(1u, 0, 6000, true, &o, &t, NULL);
@@ -870,16 +874,19 @@ static void prv_c3_retarget(void)
     }
     char tgt[48];
     (void)snprintf(tgt, sizeof tgt, "<= stall current (%d mA)", s_stall_ma);
-    prv_check(3, rt.peak_ma <= s_stall_ma, "retarget +90° -> +60° at 250 ms: peak current", tgt, "%d mA", rt.peak_ma);
+    prv_check(3, rt.peak_ma <= s_stall_ma, "retarget +90° -> +60° at 250 ms: peak current", tgt, "%d mA",
+              rt.peak_ma);
     prv_check(3, prv_abs(rt.end_ms - 500) <= 50, "retarget: new time met (bit 7 clears 500 ms after it)",
               "within ±10 %", "%d ms (%+.1f %%)", rt.end_ms, (rt.end_ms - 500) / 5.0);
-    prv_check(3, rv.peak_ma <= s_stall_ma, "reversal +90° -> -30° at 250 ms: peak current", tgt, "%d mA", rv.peak_ma);
+    prv_check(3, rv.peak_ma <= s_stall_ma, "reversal +90° -> -30° at 250 ms: peak current", tgt, "%d mA",
+              rv.peak_ma);
     prv_check(3, prv_abs(rv.end_ms - 500) <= 50, "reversal: new time met", "within ±10 %", "%d ms (%+.1f %%)",
               rv.end_ms, (rv.end_ms - 500) / 5.0);
     prv_defect("- D1 retarget +90°/500 ms -> +60°/500 ms at 250 ms: overshoot %.3f°, peak current %d mA "
                "(stall %d mA), bit 7 cleared %d ms after the retarget (asked 500)\n",
                rt.over_mdeg / 1000.0, rt.peak_ma, s_stall_ma, rt.end_ms);
-    prv_defect("- D1' reversal +90° -> -30° at 250 ms: overshoot %.3f°, peak current %d mA, bit 7 cleared after %d ms\n",
+    prv_defect("- D1' reversal +90° -> -30° at 250 ms: overshoot %.3f°, peak current %d mA, bit 7 cleared "
+               "after %d ms\n",
                rv.over_mdeg / 1000.0, rv.peak_ma, rv.end_ms);
 }
 
@@ -887,7 +894,7 @@ static void prv_c3_retarget(void)
 
 typedef struct {
     int32_t vmin_mdps, vmax_mdps, want_mdps;
-    int32_t ripple_pm;     /* max |v - want| / want, per mille */
+    int32_t ripple_pm; /* max |v - want| / want, per mille */
     int32_t mean_ma, peak_ma;
     unsigned frames, dropped;
 } prv_stream_t;
@@ -979,14 +986,17 @@ static void prv_c4(void)
                   fs[i]->ripple_pm / 10.0, fs[i]->vmin_mdps / 1000.0, fs[i]->vmax_mdps / 1000.0,
                   fs[i]->want_mdps / 1000.0);
         (void)snprintf(what, sizeof what, "0x68 %s: current pulses over the steady current", k_name[i]);
-        prv_check(4, fs[i]->peak_ma * 2 <= fs[i]->mean_ma * 3, what, "<= 1.5x", "%.1fx (peak %d mA, mean %d mA)",
-                  (double)fs[i]->peak_ma / (fs[i]->mean_ma > 0 ? fs[i]->mean_ma : 1), fs[i]->peak_ma, fs[i]->mean_ma);
+        prv_check(4, fs[i]->peak_ma * 2 <= fs[i]->mean_ma * 3, what, "<= 1.5x",
+                  "%.1fx (peak %d mA, mean %d mA)",
+                  (double)fs[i]->peak_ma / (fs[i]->mean_ma > 0 ? fs[i]->mean_ma : 1), fs[i]->peak_ma,
+                  fs[i]->mean_ma);
     }
-    prv_defect("- D2b 0x68 stream 50 Hz ±5 ms, %u frames, %u dropped: shaft speed %.1f..%.1f °/s (stream %.1f), "
-               "current peak %d mA over a mean of %d mA (the same stream on time, none dropped: %.1f..%.1f °/s, "
-               "peak %d mA)\n",
-               f50.frames, f50.dropped, f50.vmin_mdps / 1000.0, f50.vmax_mdps / 1000.0, f50.want_mdps / 1000.0,
-               f50.peak_ma, f50.mean_ma, clean.vmin_mdps / 1000.0, clean.vmax_mdps / 1000.0, clean.peak_ma);
+    prv_defect(
+        "- D2b 0x68 stream 50 Hz ±5 ms, %u frames, %u dropped: shaft speed %.1f..%.1f °/s (stream %.1f), "
+        "current peak %d mA over a mean of %d mA (the same stream on time, none dropped: %.1f..%.1f °/s, "
+        "peak %d mA)\n",
+        f50.frames, f50.dropped, f50.vmin_mdps / 1000.0, f50.vmax_mdps / 1000.0, f50.want_mdps / 1000.0,
+        f50.peak_ma, f50.mean_ma, clean.vmin_mdps / 1000.0, clean.vmax_mdps / 1000.0, clean.peak_ma);
 }
 
 /* ---- 5. limits ------------------------------------------------------------------ */
@@ -1051,11 +1061,11 @@ static void prv_c5(void)
         i_max = s_rec[i].peak_ma > i_max ? s_rec[i].peak_ma : i_max;
     }
     prv_csv(5, "limits", 0u, s_n, 1u);
-    prv_check(5, longest <= 5u, "0x5C = 1000 mA: longest time above it by > 10 %, braking included", "<= 5 ms",
-              "%u ms (peak %d mA)", longest, i_max);
+    prv_check(5, longest <= 5u, "0x5C = 1000 mA: longest time above it by > 10 %, braking included",
+              "<= 5 ms", "%u ms (peak %d mA)", longest, i_max);
     prv_check(5, pwm_max <= C5_TORQUE, "0x5B = 700: largest PWM driven", "<= 700", "%d", pwm_max);
-    prv_check(5, v_max <= C5_SPEED * 1000, "0x5D = 180 °/s: fastest shaft (10 ms mean)", "<= 180 °/s", "%.1f °/s",
-              v_max / 1000.0);
+    prv_check(5, v_max <= C5_SPEED * 1000, "0x5D = 180 °/s: fastest shaft (10 ms mean)", "<= 180 °/s",
+              "%.1f °/s", v_max / 1000.0);
 }
 
 /* ---- 6. honest status ------------------------------------------------------------ */
@@ -1137,8 +1147,8 @@ static void prv_c7_day(void)
             prv_csv_point(7, "day", ms / 3600000u, worst / 10.0, 0.0);
         }
     }
-    prv_check(7, prv_abs(worst) < 1800, "turn count, 24 h at 360 °/s: encoder + km_turn_counter (worst)", "no drift",
-              "%.1f° after 24 h (86400 turns)", worst / 10.0);
+    prv_check(7, prv_abs(worst) < 1800, "turn count, 24 h at 360 °/s: encoder + km_turn_counter (worst)",
+              "no drift", "%.1f° after 24 h (86400 turns)", worst / 10.0);
 }
 
 typedef struct {
@@ -1205,15 +1215,17 @@ static void prv_c7_same_hold(void)
     }
     char got[160];
     if (first_bad < 0) {
-        (void)snprintf(got, sizeof got, "identical PWM, tick for tick, at every count up to %d turns", same_up_to);
+        (void)snprintf(got, sizeof got, "identical PWM, tick for tick, at every count up to %d turns",
+                       same_up_to);
     } else {
-        (void)snprintf(got, sizeof got,
-                       "identical up to %d turns; from %d turns the PWM differs in %u of 3000 ticks (by up to %d), "
-                       "mean |I| %d vs %d mA",
-                       same_up_to, first_bad, ndiff, max_diff, bad.mean_ma, h0.mean_ma);
+        (void)snprintf(
+            got, sizeof got,
+            "identical up to %d turns; from %d turns the PWM differs in %u of 3000 ticks (by up to %d), "
+            "mean |I| %d vs %d mA",
+            same_up_to, first_bad, ndiff, max_diff, bad.mean_ma, h0.mean_ma);
     }
-    prv_check(7, first_bad < 0, "hold at 0 .. 596500 turns (3 s each, same angle and noise)", "the same holding",
-              "%s", got);
+    prv_check(7, first_bad < 0, "hold at 0 .. 596500 turns (3 s each, same angle and noise)",
+              "the same holding", "%s", got);
 }
 
 /* Through the int32 wrap of 0x46 (+214748364.7°): 0x6F at 360 °/s from
@@ -1283,7 +1295,8 @@ static bool prv_c8_speed(int32_t dps, int32_t *worst_pm, const char *series)
 }
 
 /* A counted 0x70 run at 360 °/s, brake after; the stop's error (m°). */
-static bool prv_c8_run(uint8_t control, int32_t p1, int32_t expect_ddeg, int32_t *err_mdeg, const char *series)
+static bool prv_c8_run(uint8_t control, int32_t p1, int32_t expect_ddeg, int32_t *err_mdeg,
+                       const char *series)
 {
     br_t *b = &s_b;
     br_prepare(b, true);
@@ -1305,16 +1318,17 @@ static void prv_c8(void)
 {
     int32_t up, down, angle, turns;
     if (!prv_c8_speed(5, &up, "speed+5") || !prv_c8_speed(-5, &down, "speed-5") ||
-        !prv_c8_run(0x26u, 720, 7200, &angle, "angle720") || !prv_c8_run(0x36u, 25, 9000, &turns, "turns2.5")) {
+        !prv_c8_run(0x26u, 720, 7200, &angle, "angle720") ||
+        !prv_c8_run(0x36u, 25, 9000, &turns, "turns2.5")) {
         return;
     }
-    prv_check(8, up <= 200, "0x6F +5 °/s: 200 ms means from 1 s to 6 s (worst)", "within ±20 %", "%.1f %% off",
-              up / 10.0);
+    prv_check(8, up <= 200, "0x6F +5 °/s: 200 ms means from 1 s to 6 s (worst)", "within ±20 %",
+              "%.1f %% off", up / 10.0);
     prv_check(8, down <= 200, "0x6F -5 °/s (worst)", "within ±20 %", "%.1f %% off", down / 10.0);
-    prv_check(8, prv_abs(angle) <= 2000, "0x70 angle run 720° at 360 °/s, brake: stop", "within ±2°", "%+.2f°",
-              angle / 1000.0);
-    prv_check(8, prv_abs(turns) <= 2000, "0x70 turns run 2.5 turns at 360 °/s, brake: stop", "within ±2°", "%+.2f°",
-              turns / 1000.0);
+    prv_check(8, prv_abs(angle) <= 2000, "0x70 angle run 720° at 360 °/s, brake: stop", "within ±2°",
+              "%+.2f°", angle / 1000.0);
+    prv_check(8, prv_abs(turns) <= 2000, "0x70 turns run 2.5 turns at 360 °/s, brake: stop", "within ±2°",
+              "%+.2f°", turns / 1000.0);
 }
 
 /* ---- output --------------------------------------------------------------------- */
@@ -1355,8 +1369,8 @@ static void prv_print(void)
         printf("%-3u %-74s %-34s %s  [%s]\n", c->criterion, c->what, c->target, c->measured,
                c->meets ? "meets" : "MISSES");
     }
-    printf("\n%u of %u checks meet their target.\n\nThe issue's defects, measured on this plant:\n%s", prv_met(),
-           s_nchecks, s_defects);
+    printf("\n%u of %u checks meet their target.\n\nThe issue's defects, measured on this plant:\n%s",
+           prv_met(), s_nchecks, s_defects);
 }
 
 /* A table cell: '|' would end it, so it is escaped. */
@@ -1381,8 +1395,9 @@ static bool prv_markdown(const char *dir)
     if (f == NULL) {
         return false;
     }
-    fprintf(f, "Plant: `realistic` (stall %d mA, %.2f N·m measured on it at 7.4 V with its bus). "
-               "Multi-turn closed loop: %u h simulated. %u of %u checks meet their target.\n\n",
+    fprintf(f,
+            "Plant: `realistic` (stall %d mA, %.2f N·m measured on it at 7.4 V with its bus). "
+            "Multi-turn closed loop: %u h simulated. %u of %u checks meet their target.\n\n",
             s_stall_ma, s_stall_unm / 1e6, s_hours, prv_met(), s_nchecks);
     fprintf(f, "| # | criterion | check | target | measured | |\n|---|---|---|---|---|---|\n");
     for (unsigned i = 0; i < s_nchecks; i++) {
@@ -1415,8 +1430,8 @@ static void prv_cost(void)
             km_plant_step(&p, &in, TICK_US);
         }
         const double us = (double)(clock() - t0) / CLOCKS_PER_SEC; /* s per 1e6 steps = µs per step */
-        printf("%s: %.3f µs of host CPU per 1 ms step (sub-step %u µs)\n", k == 0u ? "ideal" : "realistic", us,
-               p.sub_us);
+        printf("%s: %.3f µs of host CPU per 1 ms step (sub-step %u µs)\n", k == 0u ? "ideal" : "realistic",
+               us, p.sub_us);
     }
 }
 
@@ -1445,11 +1460,15 @@ int main(int argc, char **argv)
         printf("BROKEN RUN: cannot write %s (or --hours 0)\n", path);
         return 1;
     }
-    fprintf(s_csv, "criterion,series,t_ms,target_deg,shaft_deg,report_deg,speed_dps,pwm,current_ma,peak_ma,running\n");
+    fprintf(
+        s_csv,
+        "criterion,series,t_ms,target_deg,shaft_deg,report_deg,speed_dps,pwm,current_ma,peak_ma,running\n");
     printf("Control quality (issue 20): the real control code and dispatcher on the realistic plant,\n"
-           "1 kHz tick, virtual time. Reproduce: %s [--hours H] [out-dir]  (tools/bench-control)\n\n", argv[0]);
+           "1 kHz tick, virtual time. Reproduce: %s [--hours H] [out-dir]  (tools/bench-control)\n\n",
+           argv[0]);
     prv_measure_stall();
-    printf("plant: stall %d mA, %.2f N.m (full PWM, 7.4 V, its 4-servo bus)\n\n", s_stall_ma, s_stall_unm / 1e6);
+    printf("plant: stall %d mA, %.2f N.m (full PWM, 7.4 V, its 4-servo bus)\n\n", s_stall_ma,
+           s_stall_unm / 1e6);
     prv_csv_point(0, "stall", 0, s_stall_ma, s_stall_unm / 1e6);
     prv_c1();
     prv_c2_steady();

@@ -1,4 +1,5 @@
-/* Parser benchmark: feeds a realistic bus mix (PROTOCOL.md §2: pings, reads,
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Parser benchmark: feeds a realistic bus mix (docs/protocol.md §2: pings, reads,
  * writes, 0x83 multi-ID writes, 0x04/0x84 sync writes, other servos'
  * responses, occasional garbage) of about 100k bytes through
  * km_parser_feed (byte by byte) and again through km_parser_feed_bytes (in
@@ -165,15 +166,13 @@ int main(void)
         i += used;
     }
     if (got_batch != want || q.stats.responses_skipped != s_responses) {
-        fprintf(stderr, "bench_parser: batch entry delivered %u frames, generated %u\n", got_batch,
-                want);
+        fprintf(stderr, "bench_parser: batch entry delivered %u frames, generated %u\n", got_batch, want);
         return 1;
     }
 
     printf("bytes fed: %u\nframes: %u (expected %u)\nresponses skipped: %u (expected %u)\n"
            "sizeof(km_parser_t): %u\n",
-           (unsigned)s_len, got, want, (unsigned)p.stats.responses_skipped, s_responses,
-           (unsigned)sizeof p);
+           (unsigned)s_len, got, want, (unsigned)p.stats.responses_skipped, s_responses, (unsigned)sizeof p);
     if (got != want || p.stats.frames_ok != want || p.stats.responses_skipped != s_responses) {
         fprintf(stderr, "bench_parser: delivered %u frames, generated %u\n", got, want);
         return 1;

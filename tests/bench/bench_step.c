@@ -1,4 +1,5 @@
-/* Step-response benchmark (PROTOCOL.md §5.4 0x65/0x66, §5.3 0x46/0x4D,
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Step-response benchmark (docs/protocol.md §5.4 0x65/0x66, §5.3 0x46/0x4D,
  * status bit 7): the real control code (control/, through
  * tests/support/km_plant_rig.h: 1 kHz tick, one-tick PWM delay) against the
  * simulated plant (sim/plant), for both products, small and large steps, a
@@ -42,12 +43,12 @@
 #include "../support/km_plant_rig.h"
 #include "km_profile.h"
 
-#define HOLD_MS 1500u          /* holding before the command: the integrator takes up the load */
-#define LOG_BEFORE_MS 100u     /* trace rows before the command */
-#define SS_AFTER_MS 1000u      /* steady-state error this long after bit 7 cleared */
-#define MAX_MS 6000u           /* a move that has not ended by then is a broken run */
-#define SETTLE_BAND_DDEG 5     /* +-0.5 deg */
-#define SHADOW_STEP_US 25u     /* peak-current sampling of the plant copy */
+#define HOLD_MS 1500u      /* holding before the command: the integrator takes up the load */
+#define LOG_BEFORE_MS 100u /* trace rows before the command */
+#define SS_AFTER_MS 1000u  /* steady-state error this long after bit 7 cleared */
+#define MAX_MS 6000u       /* a move that has not ended by then is a broken run */
+#define SETTLE_BAND_DDEG 5 /* +-0.5 deg */
+#define SHADOW_STEP_US 25u /* peak-current sampling of the plant copy */
 
 /* Heavy loads, one at a time so the table says which one costs what:
  * "inertia" adds a 0.01 kg.m^2 load (1 kg at 10 cm; the default reflected
@@ -56,7 +57,7 @@
  * docs/tuning.md sized the integrator for), from before the command. */
 #define HEAVY_J_GMM2 10000000u
 #define HEAVY_T_UNM 600000
-#define LOW_SUPPLY_MV 6000     /* a 2S pack near empty (nominal 7.4 V) */
+#define LOW_SUPPLY_MV 6000 /* a 2S pack near empty (nominal 7.4 V) */
 
 typedef enum { COND_LIGHT, COND_INERTIA, COND_TORQUE, COND_LOW_SUPPLY, COND_COUNT } prv_cond_t;
 
@@ -64,23 +65,23 @@ static const char *const k_cond_name[COND_COUNT] = {"light", "inertia", "torque"
 
 typedef struct {
     bool encoder;
-    int32_t from;              /* 0.1 deg */
-    int32_t step;              /* 0.1 deg */
+    int32_t from; /* 0.1 deg */
+    int32_t step; /* 0.1 deg */
     km_move_kind_t kind;
-    uint16_t param;            /* ms for 0x65, deg/s for 0x66 (0 = fastest) */
+    uint16_t param; /* ms for 0x65, deg/s for 0x66 (0 = fastest) */
     prv_cond_t cond;
     char name[40];
 } prv_scenario_t;
 
 typedef struct {
-    int32_t rise_ms, settle_ms, end_ms, rot_ms;   /* -1 = not reached */
-    int32_t overshoot_ddeg, overshoot_pm;         /* pm = per mille of |D| */
+    int32_t rise_ms, settle_ms, end_ms, rot_ms; /* -1 = not reached */
+    int32_t overshoot_ddeg, overshoot_pm;       /* pm = per mille of |D| */
     int32_t ss_err_ddeg;
     int32_t peak_ma, vmin_mv;
 } prv_figures_t;
 
 static kr_rig_t s_rig;
-static km_plant_config_t s_cfg; /* the plant keeps a pointer to it */
+static km_plant_config_t s_cfg;   /* the plant keeps a pointer to it */
 static int32_t s_pos[MAX_MS + 1]; /* 0x46 per tick after the command */
 static FILE *s_csv;
 static int s_broken;
@@ -117,9 +118,8 @@ static void prv_log(const kr_rig_t *r, const prv_scenario_t *sc, int32_t t_ms, i
     }
     const int32_t pwm = r->bridge.mode == KM_BRIDGE_PWM ? r->bridge.pwm : 0;
     fprintf(s_csv, "%d,%s,%d,%d,%d,%d,%d,%d,%d\n", t_ms, sc->name, target,
-            km_profile_pos_ddeg(&r->ctl.servo.profile), kr_pos(r),
-            km_plant_speed_dps(&r->plant), pwm, km_plant_current_ma(&r->plant),
-            km_plant_voltage_mv(&r->plant));
+            km_profile_pos_ddeg(&r->ctl.servo.profile), kr_pos(r), km_plant_speed_dps(&r->plant), pwm,
+            km_plant_current_ma(&r->plant), km_plant_voltage_mv(&r->plant));
 }
 
 /* Plant, params and load for the scenario; torque on and held. */
@@ -300,21 +300,25 @@ int main(int argc, char **argv)
         printf("BROKEN RUN: cannot write %s\n", path);
         return 1;
     }
-    fprintf(s_csv, "t_ms,scenario,target_ddeg,setpoint_ddeg,position_ddeg,speed_dps,pwm,current_ma,voltage_mv\n");
+    fprintf(s_csv,
+            "t_ms,scenario,target_ddeg,setpoint_ddeg,position_ddeg,speed_dps,pwm,current_ma,voltage_mv\n");
 
     static prv_scenario_t sc[64];
     const unsigned n = prv_scenarios(sc, sizeof sc / sizeof sc[0]);
 
-    printf("Step response: host (x86) runs of the fixed-point control code (control/, default gains)\n"
-           "on the simulated plant (sim/plant, 20 kg.cm class), 1 kHz tick, one-tick PWM delay.\n"
-           "Reproduce: %s [csv-dir]   (ctest -R bench_step -V)\n"
-           "t500 = 0x65 move in 500 ms; fast = 0x66 speed 0 (fastest: 0x5D = 360 deg/s, 4000 deg/s^2).\n"
-           "light = default load, 7.4 V; inertia = +0.01 kg.m^2 (total x2); torque = 0.6 N.m (30 %% of stall)\n"
-           "against the move; 6.0V = default load at a 6.0 V supply. pot starts at -45.0 deg, enc at 360.0 deg.\n"
-           "rise 10-90 %%; settle into +-0.5 deg from the command; end = bit 7 cleared; ss err 1 s after end.\n\n",
-           argv[0]);
-    printf("%-22s %6s %6s %13s %7s %6s %6s %9s %7s\n", "scenario", "rise", "settle", "overshoot",
-           "end", "0x4D", "ss err", "peak I", "Vmin");
+    printf(
+        "Step response: host (x86) runs of the fixed-point control code (control/, default gains)\n"
+        "on the simulated plant (sim/plant, 20 kg.cm class), 1 kHz tick, one-tick PWM delay.\n"
+        "Reproduce: %s [csv-dir]   (ctest -R bench_step -V)\n"
+        "t500 = 0x65 move in 500 ms; fast = 0x66 speed 0 (fastest: 0x5D = 360 deg/s, 4000 deg/s^2).\n"
+        "light = default load, 7.4 V; inertia = +0.01 kg.m^2 (total x2); torque = 0.6 N.m (30 %% of stall)\n"
+        "against the move; 6.0V = default load at a 6.0 V supply. pot starts at -45.0 deg, enc at 360.0 "
+        "deg.\n"
+        "rise 10-90 %%; settle into +-0.5 deg from the command; end = bit 7 cleared; ss err 1 s after "
+        "end.\n\n",
+        argv[0]);
+    printf("%-22s %6s %6s %13s %7s %6s %6s %9s %7s\n", "scenario", "rise", "settle", "overshoot", "end",
+           "0x4D", "ss err", "peak I", "Vmin");
     printf("%-22s %6s %6s %13s %7s %6s %6s %9s %7s\n", "", "ms", "ms", "deg (%)", "ms", "ms", "deg", "mA",
            "V");
     for (unsigned i = 0; i < n; i++) {

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Wear benchmark of the store on the NOR simulator: erases per 10,000
  * commits (single-register, multi-register, each after a reboot), erase
  * spread over pages, flash bytes programmed per commit, erases per
@@ -46,8 +47,7 @@ static void prv_mount(void)
     }
 }
 
-static void prv_run(const km_nor_sim_config_t *cfg, prv_mode_t mode, int maintain,
-                    prv_figures_t *fig)
+static void prv_run(const km_nor_sim_config_t *cfg, prv_mode_t mode, int maintain, prv_figures_t *fig)
 {
     km_nor_sim_init(&s_sim, cfg, &s_flash);
     (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
@@ -96,8 +96,7 @@ static void prv_run(const km_nor_sim_config_t *cfg, prv_mode_t mode, int maintai
             s_wrong = 1;
         }
     }
-    if (s_sim.count.illegal != 0u || s_sim.count.align_errors != 0u ||
-        s_sim.count.violations != 0u) {
+    if (s_sim.count.illegal != 0u || s_sim.count.align_errors != 0u || s_sim.count.violations != 0u) {
         printf("WRONG: illegal program issued\n");
         s_wrong = 1;
     }
@@ -149,14 +148,14 @@ int main(void)
         {"STM32G0 2 KiB/8 B x4", {2048u, 8u, 4u, 0xFFu}},
     };
     static const char *const modes[] = {"single-register", "4-register", "1-reg, reboot each"};
-    printf("store wear, %u commits per row, schema of %u persisted registers\n", COMMITS,
-           (unsigned)NKEYS);
+    printf("store wear, %u commits per row, schema of %u persisted registers\n", COMMITS, (unsigned)NKEYS);
     printf("erases = per %u commits; B/commit = flash bytes programmed per commit, snapshots\n"
            "included; per boot = erases per committing boot (rows with a reboot before each\n"
            "commit: every committing boot costs one erase, docs/store.md says why no store\n"
-           "can do with less under the simulator's fault model)\n", COMMITS);
-    printf("%-22s %-19s %-8s %7s %8s %8s %8s %8s  %s\n", "geometry", "commits", "maintain",
-           "erases", "page min", "page max", "B/commit", "per boot", "worst commit after the first");
+           "can do with less under the simulator's fault model)\n",
+           COMMITS);
+    printf("%-22s %-19s %-8s %7s %8s %8s %8s %8s  %s\n", "geometry", "commits", "maintain", "erases",
+           "page min", "page max", "B/commit", "per boot", "worst commit after the first");
     for (unsigned g = 0; g < sizeof geoms / sizeof geoms[0]; g++) {
         for (unsigned m = 0; m < 3; m++) {
             for (int maint = 0; maint < 2; maint++) {
@@ -167,10 +166,9 @@ int main(void)
                     (void)snprintf(per_boot, sizeof per_boot, "%5u.%02u", f.erases / f.boots,
                                    (f.erases % f.boots) * 100u / f.boots);
                 }
-                printf("%-22s %-19s %-8s %7u %8u %8u %5u.%02u %s  %u ops (%u erase)\n",
-                       geoms[g].name, modes[m], maint ? "idle" : "none", f.erases, f.min_page,
-                       f.max_page, f.bytes / COMMITS, (f.bytes % COMMITS) / (COMMITS / 100u),
-                       per_boot, f.worst_ops, f.worst_erases);
+                printf("%-22s %-19s %-8s %7u %8u %8u %5u.%02u %s  %u ops (%u erase)\n", geoms[g].name,
+                       modes[m], maint ? "idle" : "none", f.erases, f.min_page, f.max_page, f.bytes / COMMITS,
+                       (f.bytes % COMMITS) / (COMMITS / 100u), per_boot, f.worst_ops, f.worst_erases);
             }
         }
         printf("%-22s flash ops of a boot without a commit (blank / after 500 commits): %u / %u\n",

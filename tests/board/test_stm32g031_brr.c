@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* USART1 divider at the G031's 64 MHz: every baud the protocol allows
  * (register 0x10 x 100, products 9600..1000000) is within 2 %, and rates
  * that cannot be made are refused. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* STM32G031 sensor conversions against hand-computed values from the default
  * product calibration (board_config.c). */
 #include <setjmp.h>

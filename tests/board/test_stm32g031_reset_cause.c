@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* STM32G031 reset cause: RCC_CSR flags as the hardware sets them for each
  * kind of reset (RM0444 §5.1.2: every internal reset also pulls NRST, so
  * PINRSTF comes along), plus the board's .noinit fault record and RAM-kept

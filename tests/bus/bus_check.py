@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Whole servos on a bus, spoken to over bytes only (tests/bus.cmake runs it).
 
-  bus_check.py smoke --backend qemu      one servo: PROTOCOL.md §3 basics
+  bus_check.py smoke --backend qemu      one servo: docs/protocol.md §3 basics
   bus_check.py bus   --backend qemu      three servos: super ID, broadcast,
                                          other servos' responses on the wire
   bus_check.py encoder --backend host-sim  the encoder product (--product
@@ -486,7 +487,7 @@ def encoder(backend, opts):
         bus.close()
 
 
-# ---- protect: the protection supervisor over the bus (PROTOCOL.md §5.2) ----
+# ---- protect: the protection supervisor over the bus (docs/protocol.md §5.2) ----
 
 PROTECT_SCENARIO = os.path.join(HERE, "scenarios", "protect.txt")
 ST_VOLTAGE, ST_CURRENT, ST_TEMPERATURE, ST_STALL, ST_REFUSED = 0x01, 0x02, 0x04, 0x08, 0x40

@@ -1,6 +1,7 @@
+# SPDX-License-Identifier: Apache-2.0
 """The bad-input catalog: bad checksums, truncated frames, bad lengths,
 unknown commands, wrong-length writes, noise between frames, invalid IDs.
-Each input has a defined outcome (PROTOCOL.md §2, §4, §7 and its Decisions);
+Each input has a defined outcome (docs/protocol.md §2, §4, §7 and its Decisions);
 after each, the servo must still answer a clean frame."""
 import time
 

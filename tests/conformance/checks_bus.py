@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """§1/§3 several servos on one bus: super ID (slots, answer order), broadcast,
 sync write / execute interleaving, the other servos' answers on the wire."""
 import spec

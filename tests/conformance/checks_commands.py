@@ -1,9 +1,10 @@
+# SPDX-License-Identifier: Apache-2.0
 """§2 frames and §3 commands, one servo at a time (multi-servo ones: checks_bus)."""
 import spec
 from ctx import Fail, Skip, check, expect, hexs
 from wire import fr
 
-# §2 "Worked frames", copied from PROTOCOL.md: the master's encoder must
+# §2 "Worked frames", copied from docs/protocol.md: the master's encoder must
 # produce them byte for byte, or every other check would test the wrong thing.
 WORKED = [
     ("ping ID 1", lambda: fr.ping(1), "F9 FF 01 02 01 FB"),

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Sustained load: --load N mixed request frames on every servo under test
 (pings, reads, writes, super-ID pings and reads, sync write rounds, 0x83),
 every answer checked against a model of what the master wrote; 0 errors.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """§5 registers: answer types and lengths, read-only / write-only / reserved
 outcomes, writes at and past the edges of each range the spec gives.
 Defaults of a fresh servo are checked through the resets (checks_restart)."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """§3/§5.1 across a restart (write 0x02 E1 E2 E3 E4): ID change, baud
 change, persistence of user data (P) and the live registers' defaults, the
 user-data resets of 0x03 (levels 1 and 2) and the defaults they restore."""

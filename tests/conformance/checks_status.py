@@ -1,4 +1,5 @@
-"""§4 status byte: bits 5 and 6 set and cleared (PROTOCOL.md §4, and the life
+# SPDX-License-Identifier: Apache-2.0
+"""§4 status byte: bits 5 and 6 set and cleared (docs/protocol.md §4, and the life
 cycle docs/protocol-decisions.md gives them where §4's "cleared on the next
 command" is open), bit 7 while a rotation runs, bits 0..4 clean on a servo
 without a fault."""

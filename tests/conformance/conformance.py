@@ -1,5 +1,6 @@
 #!/usr/bin/python3
-"""KINGMAX serial servo protocol v5.2.0 conformance suite (PROTOCOL.md).
+# SPDX-License-Identifier: Apache-2.0
+"""KINGMAX serial servo protocol v5.2.0 conformance suite (docs/protocol.md).
 
     conformance.py --bus tcp:127.0.0.1:7000@115200 --ids 1,2,3
     conformance.py --bus serial:/dev/ttyUSB0@115200 --ids 1,2,3
@@ -11,7 +12,7 @@
     conformance.py ... --load 100000           the full load run (default 100000)
 
 Talks to servos over the bus alone, so it runs unchanged against real
-hardware. Expectations come from /work/shared/spec/PROTOCOL.md (spec.py);
+hardware. Expectations come from docs/protocol.md (spec.py);
 checks named "decision:..." test a point the spec leaves open and
 docs/protocol-decisions.md settles. Output: one line per check, "PASS name",
 "FAIL name: why" or "SKIP name: why" (a check that cannot be observed on this

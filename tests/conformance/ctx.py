@@ -1,8 +1,9 @@
+# SPDX-License-Identifier: Apache-2.0
 """The check registry and the master-side helpers every check uses.
 
 A check is a function ctx -> None registered with @check(name, basis, doc):
 it raises Fail(why) or Skip(why), or returns (PASS). basis is the
-PROTOCOL.md section it tests, or "decision: <heading>" when the spec is open
+docs/protocol.md section it tests, or "decision: <heading>" when the spec is open
 and docs/protocol-decisions.md settles it (the name then starts with
 "decision:"). Helpers talk frames through wire.py and never assume the
 servo's answers: every expectation is the caller's, from the spec.

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """Run the conformance suite on an emulated bus (what CTest runs).
 
     run_on_bus.py --backend host-sim|qemu [--ids 1,2,3] [--bus-baud N]

@@ -1,6 +1,7 @@
-"""The suite's oracle: PROTOCOL.md §4 and §5 written out as data.
+# SPDX-License-Identifier: Apache-2.0
+"""The suite's oracle: docs/protocol.md §4 and §5 written out as data.
 
-Typed by hand from /work/shared/spec/PROTOCOL.md (never from the firmware's
+Typed by hand from docs/protocol.md (never from the firmware's
 tables or docs/registers.*): address, name, access, the answer lengths a read
 may give, signedness, the default where the spec gives one (None where it
 says "—", product-dependent) and whether it is persisted user data.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Request and answers on one bus, for the conformance suite, on host/kmx.
 
 Frames and transports are kmx's (kmx.frame, kmx.transport.open_transport);

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Adds a register to a copy of protocol/ the way docs/architecture.md
 # "Adding a register" says, touching nothing else: copies every file of
 # protocol/ into DEST unchanged, then appends one row to each .def file

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The one hook of the register tests/extend adds (rows.def): a write of an
  * i16 adds it to the value kept, within the register's range; a sum
  * outside it is a bad value (bit 6) and changes nothing. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Issue 19: a register can be added by touching only the .def files and
  * one hook (docs/architecture.md "Adding a register"). This test is built
  * against a copy of protocol/ to which tests/extend/add_register.cmake

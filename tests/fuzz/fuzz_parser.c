@@ -1,4 +1,5 @@
-/* libFuzzer target for the frame parser (PROTOCOL.md §2 frames, §7 gap).
+/* SPDX-License-Identifier: Apache-2.0 */
+/* libFuzzer target for the frame parser (docs/protocol.md §2 frames, §7 gap).
  *
  * Input: byte 0 sets gap_ticks (0..15), byte 1 the start tick near the
  * uint32_t wrap; then (byte, control) pairs. The control byte's top bits
@@ -37,9 +38,9 @@
 
 #define HISTORY_MAX 8192u
 
-static uint8_t s_hist[HISTORY_MAX];   /* bytes fed */
-static uint32_t s_run[HISTORY_MAX];   /* run number of each byte (cut by gap/overrun) */
-static uint32_t s_tick[HISTORY_MAX];  /* tick each byte was fed at */
+static uint8_t s_hist[HISTORY_MAX];  /* bytes fed */
+static uint32_t s_run[HISTORY_MAX];  /* run number of each byte (cut by gap/overrun) */
+static uint32_t s_tick[HISTORY_MAX]; /* tick each byte was fed at */
 static size_t s_hist_len;
 static km_parser_stats_t s_prev;
 static uint32_t s_delivered;
@@ -57,8 +58,13 @@ static uint32_t s_hash_batch;
 static uint32_t prv_hash(uint32_t h, uint8_t id, uint8_t cmd, uint8_t len, const uint8_t *body,
                          uint32_t end_tick)
 {
-    const uint8_t head[7] = {id, cmd, len, (uint8_t)end_tick, (uint8_t)(end_tick >> 8),
-                             (uint8_t)(end_tick >> 16), (uint8_t)(end_tick >> 24)};
+    const uint8_t head[7] = {id,
+                             cmd,
+                             len,
+                             (uint8_t)end_tick,
+                             (uint8_t)(end_tick >> 8),
+                             (uint8_t)(end_tick >> 16),
+                             (uint8_t)(end_tick >> 24)};
     for (size_t i = 0; i < sizeof head; i++) {
         h = (h ^ head[i]) * 16777619u; /* FNV-1a */
     }

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A main() for a fuzz target without libFuzzer: runs LLVMFuzzerTestOneInput
  * once on every file named, or on every file in each directory named, so
  * plain host builds (and the ASan build) replay the committed corpus and

@@ -1,8 +1,9 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* libFuzzer target for the servo as the firmware wires it: bytes on a wire
  * into the real main loop (firmware/app/km_app.c: RX queue, parser,
  * checksum hand-off, dispatcher, answer timer, store on the NOR simulator,
  * restarts), over the fake board of tests/support/km_fake_hal.h in virtual
- * time (PROTOCOL.md §2-§5).
+ * time (docs/protocol.md §2-§5).
  *
  * Input: byte 0 picks the servo's starting ID (low bits: 0 or 1, so the §2
  * worked frames of the seed corpus address it) and the UART delivery floor

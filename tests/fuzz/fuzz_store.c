@@ -1,6 +1,7 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* libFuzzer target for the user-data store as the firmware boots on it:
  * firmware/store mounted through the app's path (km_app_userdata_mount(),
- * the product's schema of persisted registers, PROTOCOL.md §5) on the NOR
+ * the product's schema of persisted registers, docs/protocol.md §5) on the NOR
  * simulator, over flash images the input builds, breaks and rewrites; the
  * values then go into the register file (km_servo_init) and every register
  * is read back with a §2 read frame (km_servo_handle).
@@ -100,7 +101,7 @@ static const km_nor_sim_config_t s_geoms[4] = {
 static km_nor_sim_t s_sim;
 static km_flash_t s_flash;
 static const km_product_t *s_product;
-static uint8_t s_addrs[KM_USERDATA_MAX];  /* persisted registers, table order */
+static uint8_t s_addrs[KM_USERDATA_MAX]; /* persisted registers, table order */
 static uint8_t s_count;
 static uint32_t s_model[KM_USERDATA_MAX]; /* what the next mount must load ... */
 static bool s_model_valid;                /* ... when this is true */
@@ -154,13 +155,12 @@ static void prv_read_all(km_servo_t *servo)
         prv_check(reply.bytes[0] == KM_HDR0 && reply.bytes[1] == KM_HDR1_RESPONSE);
         prv_check(reply.bytes[2] == id && reply.bytes[3] == reply.len - 4u);
         prv_check(reply.bytes[4] == 0x02u && reply.bytes[5] == r->addr);
-        prv_check(reply.bytes[reply.len - 1u] ==
-                  km_checksum(&reply.bytes[2], (uint32_t)reply.len - 3u));
+        prv_check(reply.bytes[reply.len - 1u] == km_checksum(&reply.bytes[2], (uint32_t)reply.len - 3u));
         const uint8_t size = km_reg_fixed_size((km_layout_t)r->layout);
         if (r->persisted && size != 0u) {
             prv_check(reply.len - 7u == size);
-            prv_check(prv_value_ok((km_reg_index_t)i, &reply.bytes[6], size,
-                                   km_get_le(&reply.bytes[6], size)));
+            prv_check(
+                prv_value_ok((km_reg_index_t)i, &reply.bytes[6], size, km_get_le(&reply.bytes[6], size)));
         }
     }
 }

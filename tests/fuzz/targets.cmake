@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Shared by tests/fuzz/CMakeLists.txt (libFuzzer builds) and
 # tests/fuzz_replay.cmake (replay of the committed inputs in every host build).
 include_guard(GLOBAL)

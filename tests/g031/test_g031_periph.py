@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Unit tests of the virtual G031's peripheral models against RM0444
 behaviour (sim/g031/g031_periph.py), without a CPU."""
 import os

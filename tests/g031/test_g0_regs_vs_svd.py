@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """boards/stm32g031/g0_regs.h against ST's description of the STM32G031
 (sim/g031/g031_regmap.py, generated from the CMSIS SVD): every base
 address, register offset, bit, shift, mask and field value the header

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """The virtual STM32G031 (sim/g031) running the shipped, unmodified images
 of the stm32g031 preset: boot to the main loop, bus answers with their
 bytes and delay (docs/protocol.md §2-§5), a stored ID across a system

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Check a firmware image's linker map for what the bar forbids: a heap
 (malloc and friends, _sbrk) or stdio pulled in by accident. Fails, with the
 build advice, if the map is missing."""

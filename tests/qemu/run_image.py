@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Run one test image in QEMU's microbit machine with semihosting and exit
 with the guest's exit code (SYS_EXIT_EXTENDED). A missing image is a
 failure that says how to build it, never a silent skip.

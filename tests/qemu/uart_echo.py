@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """UART smoke test for qemu-microbit: runs km-uart-echo-qemu-microbit.elf with
 UART0 on a TCP socket and checks RX interrupt + TX + one-shot timer:
 banner at boot (boot time = connect -> first byte), then each byte sent

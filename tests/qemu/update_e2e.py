@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """Firmware update end to end on QEMU (docs/update.md, issue 12): three
 emulated servos that boot through the bootloader (km-servo-boot-qemu-microbit.elf:
 the bootloader with the v1 application in its factory slot) on one

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """A bad image does not brick a servo (docs/update.md §3a, issue 18 item 1),
 on QEMU: two emulated servos (IDs 1 and 2) that boot through the bootloader
 (km-servo-boot-qemu-microbit.elf, v1 in its factory slot) on one

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The fake board behind tests/app/ and the fuzz_app target: every hal
  * contract over a discrete-event world in virtual time (see km_fake_hal.h). */
 #define _POSIX_C_SOURCE 200809L /* sigsetjmp, sigaction, alarm */
@@ -118,13 +119,13 @@ static bool prv_next_event(uint32_t *t)
 {
     bool any = false;
     uint32_t best = 0;
-#define KF_CONSIDER(x)                                               \
-    do {                                                             \
-        const uint32_t c_ = (x);                                     \
-        if (!any || (int32_t)(c_ - best) < 0) {                      \
-            best = c_;                                               \
-            any = true;                                              \
-        }                                                            \
+#define KF_CONSIDER(x)                          \
+    do {                                        \
+        const uint32_t c_ = (x);                \
+        if (!any || (int32_t)(c_ - best) < 0) { \
+            best = c_;                          \
+            any = true;                         \
+        }                                       \
     } while (0)
     if (kf_world.rx_head < kf_world.rx_n) {
         KF_CONSIDER(kf_world.rx[kf_world.rx_head].tick);
@@ -539,8 +540,9 @@ void kf_use_plant(int32_t pos_ddeg)
 static void prv_plant_read(km_sensors_t *out)
 {
     const km_plant_input_t in = {
-        .bridge = kf_world.motor_mode == 2 ? KM_PLANT_DRIVE
-                  : kf_world.motor_mode == 1 ? KM_PLANT_BRAKE : KM_PLANT_COAST,
+        .bridge = kf_world.motor_mode == 2   ? KM_PLANT_DRIVE
+                  : kf_world.motor_mode == 1 ? KM_PLANT_BRAKE
+                                             : KM_PLANT_COAST,
         .pwm = kf_world.motor_pwm,
         .ext_torque_unm = 0,
     };

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A fake board for driving the real application (firmware/app/km_app.c)
  * on the host: every hal contract over a small discrete-event world in
  * virtual time, so a test (or a fuzz target) sends bytes on a simulated
@@ -46,25 +47,25 @@ typedef struct {
 typedef struct {
     /* knobs a test may set after kf_power_on() */
     uint32_t cpu_ticks_per_call;
-    uint32_t gap_floor_us;       /* emulated bus floors, handed to km_app_set_bus_floors() */
-    uint32_t slot_floor_us;      /* at every kf_boot() */
+    uint32_t gap_floor_us;  /* emulated bus floors, handed to km_app_set_bus_floors() */
+    uint32_t slot_floor_us; /* at every kf_boot() */
     uint32_t unmakeable_baud;
     int32_t position, current_ma, voltage_mv, temperature_c10; /* sensors */
     uint8_t sensor_faults;
-    bool pot_product;            /* the board is the potentiometer product from the next kf_boot() */
+    bool pot_product; /* the board is the potentiometer product from the next kf_boot() */
 
     /* the world */
     uint32_t now;
     bool irq_masked;
-    uint32_t baud;               /* as opened by the app */
-    uint32_t opens;              /* km_hal_uart_init calls */
-    kf_byte_t rx[KF_RX_MAX];     /* bytes on the wire towards the servo */
+    uint32_t baud;           /* as opened by the app */
+    uint32_t opens;          /* km_hal_uart_init calls */
+    kf_byte_t rx[KF_RX_MAX]; /* bytes on the wire towards the servo */
     unsigned rx_head, rx_n;
     void (*rx_handler)(void *ctx, uint8_t byte, uint32_t tick, bool lost);
     void *rx_ctx;
-    kf_byte_t tx[KF_TX_MAX];     /* bytes the servo put on the wire */
+    kf_byte_t tx[KF_TX_MAX]; /* bytes the servo put on the wire */
     unsigned tx_n, tx_read;
-    const uint8_t *tx_buf;       /* the send under way */
+    const uint8_t *tx_buf; /* the send under way */
     uint16_t tx_len, tx_next;
     uint32_t tx_start;
     uint32_t tx_refused;
@@ -74,19 +75,19 @@ typedef struct {
     void *timer_ctx;
     uint32_t wdt_timeout_us, wdt_last;
     bool wdt_running;
-    uint32_t last_idle;          /* when the main loop last slept */
+    uint32_t last_idle; /* when the main loop last slept */
     bool spun;
-    km_reset_cause_t cause;      /* what km_hal_reset_cause() answers at the next boot */
+    km_reset_cause_t cause; /* what km_hal_reset_cause() answers at the next boot */
     unsigned boots, software_resets, watchdog_resets;
     uint32_t reads_at_boot, reads_at_wdt_start; /* flash reads then: boot order */
     int16_t motor_pwm;
-    int motor_mode;              /* 0 free, 1 brake, 2 drive */
-    unsigned motor_brakes;       /* km_hal_motor_brake() calls */
+    int motor_mode;        /* 0 free, 1 brake, 2 drive */
+    unsigned motor_brakes; /* km_hal_motor_brake() calls */
     km_nor_sim_t nor;
     km_flash_t flash;
-    bool use_plant;              /* sensors and motor are the plant's */
+    bool use_plant; /* sensors and motor are the plant's */
     km_plant_t plant;
-    uint32_t plant_last;         /* virtual time the plant was advanced to */
+    uint32_t plant_last; /* virtual time the plant was advanced to */
 } kf_world_t;
 
 extern kf_world_t kf_world;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Host fixture: control (control/km_control.h) stepped against the servo
  * plant (sim/plant) directly, no hal, at the 1 kHz control tick, with the
  * bridge command of one tick applied to the plant during the next one (a
@@ -23,11 +24,11 @@ typedef struct {
     km_plant_t plant;
     km_control_t ctl;
     km_control_params_t params;
-    km_plant_input_t in;   /* the command the plant runs during the next tick */
+    km_plant_input_t in; /* the command the plant runs during the next tick */
     km_live_t live;
     km_bridge_t bridge;
-    uint32_t t_ms;         /* ticks since kr_init */
-    bool encoder;          /* position from the multi-turn reading */
+    uint32_t t_ms; /* ticks since kr_init */
+    bool encoder;  /* position from the multi-turn reading */
 } kr_rig_t;
 
 static inline void kr_default_params(km_control_params_t *p)
@@ -68,8 +69,9 @@ static inline void kr_tick(kr_rig_t *r)
     km_sensors_t s;
     kr_sensors(r, &s);
     km_control_step(&r->ctl, &s, &r->params, KM_CONTROL_TICK_US, &r->live, &r->bridge);
-    r->in.bridge = r->bridge.mode == KM_BRIDGE_PWM ? KM_PLANT_DRIVE
-                   : r->bridge.mode == KM_BRIDGE_BRAKE ? KM_PLANT_BRAKE : KM_PLANT_COAST;
+    r->in.bridge = r->bridge.mode == KM_BRIDGE_PWM     ? KM_PLANT_DRIVE
+                   : r->bridge.mode == KM_BRIDGE_BRAKE ? KM_PLANT_BRAKE
+                                                       : KM_PLANT_COAST;
     r->in.pwm = r->bridge.mode == KM_BRIDGE_PWM ? r->bridge.pwm : 0;
     r->t_ms++;
 }
@@ -119,8 +121,8 @@ static inline bool kr_torque(kr_rig_t *r, uint8_t v)
 
 /* A move as the dispatcher's hooks decode one: `kind` KM_MOVE_*, `param`
  * the time (ms) or speed (deg/s), 0 = fastest; no PWM cap. */
-static inline bool kr_move_full(kr_rig_t *r, km_move_kind_t kind, bool relative, int16_t target, uint16_t param,
-                                uint16_t pwm_cap)
+static inline bool kr_move_full(kr_rig_t *r, km_move_kind_t kind, bool relative, int16_t target,
+                                uint16_t param, uint16_t pwm_cap)
 {
     km_request_t q;
     memset(&q, 0, sizeof q);
@@ -152,8 +154,8 @@ static inline bool kr_move_capped(kr_rig_t *r, int16_t target, uint16_t pwm_cap)
 }
 
 /* A motor run as the dispatcher's hooks decode 0x6E..0x70. */
-static inline bool kr_run_motor(kr_rig_t *r, km_run_mode_t mode, bool reverse, uint16_t value, km_run_until_t until,
-                                uint16_t amount, km_run_after_t after)
+static inline bool kr_run_motor(kr_rig_t *r, km_run_mode_t mode, bool reverse, uint16_t value,
+                                km_run_until_t until, uint16_t amount, km_run_after_t after)
 {
     km_request_t q;
     memset(&q, 0, sizeof q);

@@ -1,7 +1,8 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Shared helpers for the dispatcher tests (header-only: tests/support/ is on
  * the include path, nothing here is compiled on its own).
  *
- *  - two test products (potentiometer and encoder, PROTOCOL.md §6);
+ *  - two test products (potentiometer and encoder, docs/protocol.md §6);
  *  - a recording fake of km_servo_ops_t: every commit (addresses and values,
  *    accepted or refused), every restart and every typed request; it can be
  *    told to refuse the next commit;
@@ -97,12 +98,12 @@ typedef struct {
 
 typedef struct {
     kt_commit_t commits[KT_MAX_COMMITS];
-    unsigned n_commits;      /* every call, accepted or not */
+    unsigned n_commits; /* every call, accepted or not */
     unsigned restarts;
     km_request_t requests[KT_MAX_REQUESTS];
     unsigned n_requests;
     bool fail_next_commit;
-    bool refuse_requests;    /* control answers "refused" (recorded all the same) */
+    bool refuse_requests; /* control answers "refused" (recorded all the same) */
 } kt_fake_t;
 
 static inline bool kt_fake_commit(void *ctx, const uint8_t *addrs, const uint32_t *values, uint8_t n)
@@ -159,9 +160,12 @@ static inline bool kt_commit_has(const kt_commit_t *c, uint8_t addr)
 
 static inline int kt_nibble(char c)
 {
-    if (c >= '0' && c <= '9') return c - '0';
-    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-    if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+    if (c >= '0' && c <= '9')
+        return c - '0';
+    if (c >= 'a' && c <= 'f')
+        return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F')
+        return c - 'A' + 10;
     return -1;
 }
 
@@ -353,7 +357,8 @@ static inline void kt_persisted_set(kt_fx_t *fx, uint8_t addr, uint32_t v)
 {
     unsigned k = 0;
     for (unsigned j = 0; j < KM_REG_COUNT; j++) {
-        if (!km_reg_table[j].persisted) continue;
+        if (!km_reg_table[j].persisted)
+            continue;
         if (km_reg_table[j].addr == addr) {
             fx->persisted[k] = v;
             return;
@@ -394,7 +399,8 @@ static inline void kt_reply_is_status(const kt_fx_t *fx, uint8_t id, uint8_t sta
 }
 
 /* The last reply is a read answer for `addr` with these value bytes. */
-static inline void kt_reply_is_read(const kt_fx_t *fx, uint8_t id, uint8_t addr, const uint8_t *val, unsigned n)
+static inline void kt_reply_is_read(const kt_fx_t *fx, uint8_t id, uint8_t addr, const uint8_t *val,
+                                    unsigned n)
 {
     uint8_t body[32];
     uint8_t want[40];
@@ -451,7 +457,7 @@ typedef struct {
     bool sync_full;
     uint8_t sync_addr, sync_len;
     uint8_t sync_data[8];
-    uint8_t unreported;       /* bits 5/6 no status answer has carried yet */
+    uint8_t unreported; /* bits 5/6 no status answer has carried yet */
     bool restarting;
     uint8_t userdata_source, reset_cause;
     unsigned n_commits, restarts, n_requests;
@@ -508,7 +514,7 @@ static inline void kt_assert_unchanged(const kt_fx_t *fx, const kt_snap_t *befor
     assert_int_equal(now.n_requests, before->n_requests);
 }
 
-/* ---- §3 super-ID slot rule, as PROTOCOL.md / docs state it ----------------- */
+/* ---- §3 super-ID slot rule, as docs/protocol.md / docs state it ----------------- */
 
 /* ceil(((answer_bytes + 2) x 10 bits) x 1e6 / baud) us */
 static inline uint32_t kt_slot_us(unsigned answer_bytes, uint32_t baud)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Test rig for the firmware update (docs/update.md): a NOR simulator split
  * into an application region (the first pages, the only ones the update's
  * km_flash_t reaches) and user-data store pages above it, and images built
@@ -20,9 +21,9 @@
 
 typedef struct {
     km_nor_sim_t sim;
-    km_flash_t whole;      /* every page of the simulator */
-    km_flash_t region;     /* the application region: pages [0, region_pages) */
-    km_flash_t store;      /* the store: the pages above */
+    km_flash_t whole;  /* every page of the simulator */
+    km_flash_t region; /* the application region: pages [0, region_pages) */
+    km_flash_t store;  /* the store: the pages above */
     uint32_t region_pages;
     km_image_target_t target;
 } rig_t;
@@ -30,7 +31,7 @@ typedef struct {
 typedef struct {
     uint32_t length;
     uint32_t version;
-    uint8_t bytes[RIG_MAX_IMAGE + KM_UPDATE_BLOCK];  /* padded with 0xFF to whole blocks */
+    uint8_t bytes[RIG_MAX_IMAGE + KM_UPDATE_BLOCK]; /* padded with 0xFF to whole blocks */
 } rig_image_t;
 
 /* A window onto the simulator: page p of the window is page first + p.
@@ -82,9 +83,12 @@ static inline void rig_bind(rig_t *r)
     s_rig_win_region.pages = r->region_pages;
     s_rig_win_store.first = r->region_pages;
     s_rig_win_store.pages = r->whole.page_count - r->region_pages;
-    r->region = (km_flash_t){.page_size = r->whole.page_size, .prog_size = r->whole.prog_size,
-                             .page_count = r->region_pages, .erase = rig_win_erase,
-                             .program = rig_win_program, .read = rig_win_read,
+    r->region = (km_flash_t){.page_size = r->whole.page_size,
+                             .prog_size = r->whole.prog_size,
+                             .page_count = r->region_pages,
+                             .erase = rig_win_erase,
+                             .program = rig_win_program,
+                             .read = rig_win_read,
                              .ctx = &s_rig_win_region};
     r->store = r->region;
     r->store.page_count = r->whole.page_count - r->region_pages;
@@ -104,7 +108,7 @@ static inline void rig_put32(uint8_t *p, uint32_t v)
 /* A simulator of `pages` pages, the first region_pages of them the
  * application region, with a real controller's rules. */
 static inline void rig_init(rig_t *r, uint32_t page_size, uint32_t cell, uint32_t pages,
-                     uint32_t region_pages, uint8_t fill)
+                            uint32_t region_pages, uint8_t fill)
 {
     const km_nor_sim_config_t cfg = {page_size, cell, pages, fill};
     memset(r, 0, sizeof *r);
@@ -117,7 +121,7 @@ static inline void rig_init(rig_t *r, uint32_t page_size, uint32_t cell, uint32_
 
 /* An image of `length` bytes whose body is a seeded xorshift stream. */
 static inline void rig_make_image(rig_image_t *im, uint32_t length, uint32_t version, uint32_t model,
-                           uint32_t seed)
+                                  uint32_t seed)
 {
     memset(im->bytes, 0xFF, sizeof im->bytes);
     im->length = length;

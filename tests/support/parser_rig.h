@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Test rig for the frame parser: feeds byte strings with ticks, collects the
  * delivered frames and events, and builds command frames from parts. Shared
  * by the parser unit and property tests; header-only so each test stays one
@@ -16,9 +17,9 @@
 typedef struct {
     km_parser_t p;
     km_frame_t frames[RIG_MAX_FRAMES];
-    unsigned n;              /* frames delivered so far */
+    unsigned n; /* frames delivered so far */
     unsigned checksum_events;
-    uint32_t tick;           /* tick of the next byte */
+    uint32_t tick; /* tick of the next byte */
 } rig_t;
 
 static inline void rig_init(rig_t *r, uint32_t gap, uint32_t tick0)
@@ -67,8 +68,7 @@ static inline void rig_poll(rig_t *r, uint32_t now)
 }
 
 /* Writes F9 FF id len cmd body.. checksum; returns the frame size. */
-static inline size_t rig_command(uint8_t *out, uint8_t id, uint8_t cmd,
-                                 const uint8_t *body, size_t body_len)
+static inline size_t rig_command(uint8_t *out, uint8_t id, uint8_t cmd, const uint8_t *body, size_t body_len)
 {
     out[0] = 0xF9;
     out[1] = 0xFF;

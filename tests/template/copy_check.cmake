@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # A new board is boards/template copied, nothing else (tests/template_board.cmake):
 #   cmake -DSOURCE=<repo> -DSCRATCH=<dir> -DBOARD=<new name> -P copy_check.cmake
 # Copies the source tree (without build trees and .git) to SCRATCH/src,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Links the template board against a call to every hal function, so a
  * contract function the template forgets is a build error, not a surprise
  * for the next porter. Built only; running it proves nothing. */

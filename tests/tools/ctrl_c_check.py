@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """Ctrl-C at random moments of tools/servo-bus's start-up must never leave a
 servo process (QEMU or host-sim) behind (issue 11 item 4).
 

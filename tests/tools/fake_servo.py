@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """A stand-in for the host-sim servo program, for testing tools/servo-bus
 without QEMU or the firmware. It speaks the host-sim command-line contract:
 
     fake_servo.py --listen 127.0.0.1:PORT --flash FILE [--baud N] [--report-baud]
 
 listens on PORT for one bus connection at a time, keeps its ID in FILE
-(blank or missing file = fresh servo = ID 0), and answers per PROTOCOL.md
+(blank or missing file = fresh servo = ID 0), and answers per docs/protocol.md
 §2/§3: ping (own ID or super ID), read of 0x01 (status, random) and 0x0F (ID),
 write of 0x0F (ID; no answer at response level 0). Frames with a bad checksum
 are ignored. Test knobs, from the environment:

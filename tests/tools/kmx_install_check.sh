@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # host/ installs as the project says (host/README.md): Debian's python3, a
 # venv that sees Debian's packages, `pip install --no-build-isolation
 # --no-index -e host/` (no network), then the installed `kmx` command runs

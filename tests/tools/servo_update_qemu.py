@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """tools/servo-update on two QEMU servos that boot through the bootloader
 (km-servo-boot-qemu-microbit.elf: the bootloader with v1 in its factory
 slot; docs/update.md §6), issue 18 item 6:

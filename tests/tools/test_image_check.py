@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Tests of tools/image-check on small Cortex-M0+ images built here with
 arm-none-eabi-gcc: each failure the checks exist for (a heap, recursion, an
 indirect call nobody described, a stack over its reserve, an interrupt path

@@ -1,4 +1,5 @@
-"""kmbus.py against the worked frames of PROTOCOL.md §2, and the stream parser
+# SPDX-License-Identifier: Apache-2.0
+"""kmbus.py against the worked frames of docs/protocol.md §2, and the stream parser
 against split, corrupted and interleaved input."""
 import os
 import sys

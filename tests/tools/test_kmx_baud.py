@@ -1,5 +1,6 @@
+# SPDX-License-Identifier: Apache-2.0
 """Baud on the emulated bus (docs/protocol-decisions.md "Baud on the
-emulated bus"; PROTOCOL.md §1 8N1, §3 baud change, §5.1 0x10) and the kmx
+emulated bus"; docs/protocol.md §1 8N1, §3 baud change, §5.1 0x10) and the kmx
 commands built on it: the mismatch model tools/kmwire.py, host-sim --baud,
 servo-bus as an RFC 2217 serial port, kmx set-baud, scan --all-bauds and
 rescue on two real host-sim servos, and each refusal's one-line message.

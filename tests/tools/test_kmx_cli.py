@@ -1,9 +1,10 @@
+# SPDX-License-Identifier: Apache-2.0
 """The kmx command (tools/kmx -> host/kmx/cli.py) against a real host-sim
 servo over TCP and over a pseudo-terminal, and on the 3-servo host-sim bus:
 scan, ping, get, set, dump, torque, move, monitor, set-id, fault-log, plot, the --help of
 each subcommand, and each error's one-line message and exit code
 (never a traceback). Register names and units: docs/registers.json
-(PROTOCOL.md §5). About 12 s."""
+(docs/protocol.md §5). About 12 s."""
 import contextlib
 import io
 import os
@@ -97,7 +98,7 @@ class KmxOverTcp(unittest.TestCase):
     def test_dump(self):
         out = self.ok("dump", "0").splitlines()
         self.assertRegex(out[0], r"^adr\s+name\s+value\s+meaning$")
-        self.assertEqual(len(out), 1 + 47)  # every register of PROTOCOL.md §5 this firmware has
+        self.assertEqual(len(out), 1 + 47)  # every register of docs/protocol.md §5 this firmware has
         rows = {re.split(r"\s{2,}", line)[1]: re.split(r"\s{2,}", line)[2] for line in out[1:]}
         self.assertEqual(rows["voltage"], "7.400 V")
         self.assertEqual(rows["temp_limits"], "60 °C, 5 °C")

@@ -1,4 +1,5 @@
-"""One servo per ID (PROTOCOL.md §1; §5.1 0x01's random byte; issue 18
+# SPDX-License-Identifier: Apache-2.0
+"""One servo per ID (docs/protocol.md §1; §5.1 0x01's random byte; issue 18
 item 7): every path that writes an ID (kmx set ID id N, set ID 0x0F N,
 set-id, set ID userdata_reset 2, and the Bus API's write, sync_write and
 Registers.set) refuses an ID another servo answers on, and an ID two servos

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """kmx with pyserial's URLs for the bus (rfc2217://HOST:PORT, socket://HOST:PORT)
 and Ctrl-C anywhere in kmx (issue 18 item 8): one line, `kmx: interrupted`,
 status 130, never a traceback, also while an RFC 2217 port closes (pyserial

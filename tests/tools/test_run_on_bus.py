@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tests/conformance/run_on_bus.py (what CTest's conformance entries run)
 runs every check it names (issue 18 item 9): on a SCHED_FIFO bus in one
 pass at the bus baud, --slow checks included; on a plain bus the --slow

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tools/servo-bus against tests/tools/fake_servo.py (a stand-in for the
 host-sim program, speaking its command-line contract): provisioning of IDs,
 the shared-bus relay, missing images, child death and stopping, and the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tools/servo-bus's scheduling (issue 18 item 11): SCHED_FIFO by default
 where the host allows it (servos at 10, the hub at 20), plain with
 --no-realtime (also under a real-time parent) and where the host does not

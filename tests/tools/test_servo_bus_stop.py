@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tools/servo-bus starts and stops cleanly (issue 11 item 4): Ctrl-C at
 random moments of start-up leaves no servo process behind, checked by PID
 (tests/tools/ctrl_c_check.py: 20 runs on host-sim and 20 on QEMU when its

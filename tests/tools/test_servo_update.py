@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tools/servo-update's checks before it touches a servo (issue 18 item 6):
 every bad input (image missing or unreadable, not an image, damaged; --ids
 1,x and other bad ID lists; a bad bus spec; neither --ids nor --rescue) is

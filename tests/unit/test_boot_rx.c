@@ -1,6 +1,7 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The bootloader's frame decoder (firmware/update/km_boot_rx.c,
  * docs/update.md §1) hands out exactly the frames the application's parser
- * (protocol/km_parser.c, PROTOCOL.md §2, §7) does: the §2 worked frames,
+ * (protocol/km_parser.c, docs/protocol.md §2, §7) does: the §2 worked frames,
  * a frame right after garbage, a response skipped whole, a gap cutting a
  * partial frame, and 20,000 random streams of good, corrupted and cut
  * frames, responses, noise and gaps compared frame by frame with the
@@ -102,13 +103,13 @@ static unsigned prv_run(const uint8_t *bytes, unsigned n, got_t *out)
     return got;
 }
 
-/* PROTOCOL.md §2 worked frames, back to back: each handed out once. */
+/* docs/protocol.md §2 worked frames, back to back: each handed out once. */
 static void test_worked_frames(void **state)
 {
     (void)state;
-    static const uint8_t k[] = {0xF9, 0xFF, 0x01, 0x02, 0x01, 0xFB,              /* ping 1 */
-                                0xF9, 0xFF, 0x01, 0x03, 0x02, 0x0B, 0xEE,        /* read 0x0B */
-                                0xF9, 0xFF, 0xFE, 0x03, 0x78, 0x05, 0x81};       /* VERIFY bcast */
+    static const uint8_t k[] = {0xF9, 0xFF, 0x01, 0x02, 0x01, 0xFB,        /* ping 1 */
+                                0xF9, 0xFF, 0x01, 0x03, 0x02, 0x0B, 0xEE,  /* read 0x0B */
+                                0xF9, 0xFF, 0xFE, 0x03, 0x78, 0x05, 0x81}; /* VERIFY bcast */
     got_t g[4];
     prv_reset();
     assert_int_equal(prv_run(k, sizeof k, g), 3);
@@ -124,10 +125,10 @@ static void test_worked_frames(void **state)
 static void test_garbage_response_checksum(void **state)
 {
     (void)state;
-    static const uint8_t k[] = {0xF9, 0xFF, 0x01, 0x20, /* claims 36 bytes */
-                                0xF9, 0xFF, 0x02, 0x02, 0x01, 0xFA, /* ping 2 inside it */
+    static const uint8_t k[] = {0xF9, 0xFF, 0x01, 0x20,                   /* claims 36 bytes */
+                                0xF9, 0xFF, 0x02, 0x02, 0x01, 0xFA,       /* ping 2 inside it */
                                 0xF9, 0xF5, 0x01, 0x03, 0x00, 0x02, 0xF9, /* a response */
-                                0xF9, 0xFF, 0x03, 0x02, 0x01, 0x00}; /* ping 3, bad sum */
+                                0xF9, 0xFF, 0x03, 0x02, 0x01, 0x00};      /* ping 3, bad sum */
     got_t g[4];
     prv_reset();
     /* Nothing while the first candidate waits for its 36 bytes ... */

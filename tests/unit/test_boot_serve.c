@@ -1,7 +1,8 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* What the bootloader answers in update mode (docs/update.md §3, §4;
  * firmware/update/km_boot_serve.c): ping, reads of 0x01 and 0x0C, the
  * standard restart, 0x78 through the state machine, bit 5 for everything
- * else (PROTOCOL.md §4), its own ID and broadcast only. */
+ * else (docs/protocol.md §4), its own ID and broadcast only. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -121,15 +122,15 @@ static void test_start_gives_new_tries(void **state)
         assert_int_equal(km_boot_decide(&s_sh, true), KM_BOOT_RUN);
     }
     assert_int_equal(km_boot_decide(&s_sh, true), KM_BOOT_STAY_GAVE_UP);
-    prv_frame("F9 FF 07 02 01 F5");                  /* ping */
-    prv_frame("F9 FF 07 05 78 04 00 00 77");          /* STATUS */
-    prv_frame("F9 FF 07 07 78 01 B1 B2 B3 B4 AE");    /* ENTER: ends a session */
-    prv_frame("F9 FF 07 07 78 07 E1 E2 E3 E5 E7");    /* START, bad magic */
-    prv_frame("F9 FF FE 07 03 02 E1 E2 E3 E4 6B");    /* the standard restart */
+    prv_frame("F9 FF 07 02 01 F5");                /* ping */
+    prv_frame("F9 FF 07 05 78 04 00 00 77");       /* STATUS */
+    prv_frame("F9 FF 07 07 78 01 B1 B2 B3 B4 AE"); /* ENTER: ends a session */
+    prv_frame("F9 FF 07 07 78 07 E1 E2 E3 E5 E7"); /* START, bad magic */
+    prv_frame("F9 FF FE 07 03 02 E1 E2 E3 E4 6B"); /* the standard restart */
     assert_int_equal(s_rep.action, KM_BOOT_ACT_RESTART);
     assert_int_equal(km_boot_attempts(&s_sh), KM_BOOT_TRIAL_MAX);
     assert_int_equal(km_boot_decide(&s_sh, true), KM_BOOT_STAY_GAVE_UP);
-    prv_frame("F9 FF FE 07 78 07 E1 E2 E3 E4 F1");    /* START, broadcast */
+    prv_frame("F9 FF FE 07 78 07 E1 E2 E3 E4 F1"); /* START, broadcast */
     assert_int_equal(s_rep.action, KM_BOOT_ACT_RESTART);
     assert_int_equal(km_boot_attempts(&s_sh), 0);
     assert_int_equal(km_boot_decide(&s_sh, true), KM_BOOT_RUN);

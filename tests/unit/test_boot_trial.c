@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The trial of an image (docs/update.md §3a, firmware/update/km_boot_trial.c)
  * and the entry check (§3, km_boot_entry in km_boot_check.c): the
  * bootloader's decision over the words it shares with the application, at
@@ -186,8 +187,11 @@ static km_image_header_t s_h;
 static void prv_table(uint32_t length, uint32_t sp, uint32_t pc)
 {
     rig_init(&s_r, 2048u, 8u, 4u, 2u, 0xFFu);
-    s_h = (km_image_header_t){.magic = KM_IMAGE_MAGIC, .model = KM_MODEL_STM32G031,
-                              .length = length, .vectors = KM_IMAGE_VECTORS, .base = RIG_BASE};
+    s_h = (km_image_header_t){.magic = KM_IMAGE_MAGIC,
+                              .model = KM_MODEL_STM32G031,
+                              .length = length,
+                              .vectors = KM_IMAGE_VECTORS,
+                              .base = RIG_BASE};
     uint8_t w[8];
     rig_put32(w, sp);
     rig_put32(w + 4, pc);
@@ -264,8 +268,11 @@ static void test_entry_read_error(void **state)
 {
     (void)state;
     rig_init(&s_r, 2048u, 8u, 4u, 2u, 0xFFu);
-    s_h = (km_image_header_t){.magic = KM_IMAGE_MAGIC, .model = KM_MODEL_STM32G031,
-                              .length = 0x600u, .vectors = KM_IMAGE_VECTORS, .base = RIG_BASE};
+    s_h = (km_image_header_t){.magic = KM_IMAGE_MAGIC,
+                              .model = KM_MODEL_STM32G031,
+                              .length = 0x600u,
+                              .vectors = KM_IMAGE_VECTORS,
+                              .base = RIG_BASE};
     uint8_t w[8];
     rig_put32(w, PRV_RAM_HI);
     rig_put32(w + 4, RIG_BASE + 0x1C1u);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Power-cut and reset runner for the trial of an image (docs/update.md §3a,
  * §7). A servo is a flash region (the NOR simulator), the words its
  * bootloader and application share in RAM, and an application that is
@@ -67,9 +68,9 @@ static uint8_t s_store_snapshot[KM_NOR_SIM_MAX_BYTES];
 static uint32_t s_rng;
 
 /* What the life so far requires of the next boot. */
-static uint32_t s_unconfirmed;   /* trial starts in a row since the last new-tries point */
-static bool s_expect_run;        /* a confirmed start was reset, RAM kept */
-static bool s_expect_asked;      /* ENTER, RAM kept */
+static uint32_t s_unconfirmed; /* trial starts in a row since the last new-tries point */
+static bool s_expect_run;      /* a confirmed start was reset, RAM kept */
+static bool s_expect_asked;    /* ENTER, RAM kept */
 
 static unsigned long s_boots, s_runs[KINDS], s_stays[4], s_power_cuts, s_resets, s_flash_cuts;
 static unsigned long s_updates, s_confirms, s_settled_running, s_settled_update, s_max_in_row;
@@ -210,8 +211,8 @@ static int prv_boot(void)
 /* One broadcast frame through the bootloader's dispatcher. */
 static void prv_frame(uint8_t cmd, const uint8_t *body, uint8_t n)
 {
-    const km_frame_view_t v = {.id = KM_ID_BROADCAST, .cmd = cmd, .body_len = n, .body = body,
-                               .end_tick = 0u};
+    const km_frame_view_t v = {
+        .id = KM_ID_BROADCAST, .cmd = cmd, .body_len = n, .body = body, .end_tick = 0u};
     km_boot_reply_t r;
     km_boot_serve(&s_serve, &v, &r);
 }
@@ -436,8 +437,7 @@ static void test_trial_survives_cuts_and_resets(void **state)
     prv_make(KIND_CRASH, 1700u, 33u);
     printf("trial runner (docs/update.md section 3a): %u scenarios x %u steps per geometry, "
            "images good %u B, hang %u B, crash %u B, KM_BOOT_TRIAL_MAX %u\n",
-           PRV_SCENARIOS, PRV_STEPS, s_img[0].length, s_img[1].length, s_img[2].length,
-           KM_BOOT_TRIAL_MAX);
+           PRV_SCENARIOS, PRV_STEPS, s_img[0].length, s_img[1].length, s_img[2].length, KM_BOOT_TRIAL_MAX);
     for (size_t g = 0; g < sizeof s_geoms / sizeof s_geoms[0]; g++) {
         s_where = s_geoms[g].name;
         for (uint32_t seed = 1; seed <= PRV_SCENARIOS; seed++) {
@@ -446,12 +446,12 @@ static void test_trial_survives_cuts_and_resets(void **state)
     }
     printf("boots %lu: started good %lu, hang %lu, crash %lu; update mode: no image %lu, asked %lu, "
            "gave up %lu\n",
-           s_boots, s_runs[KIND_GOOD], s_runs[KIND_HANG], s_runs[KIND_CRASH],
-           s_stays[KM_BOOT_STAY_NO_IMAGE], s_stays[KM_BOOT_STAY_ASKED], s_stays[KM_BOOT_STAY_GAVE_UP]);
+           s_boots, s_runs[KIND_GOOD], s_runs[KIND_HANG], s_runs[KIND_CRASH], s_stays[KM_BOOT_STAY_NO_IMAGE],
+           s_stays[KM_BOOT_STAY_ASKED], s_stays[KM_BOOT_STAY_GAVE_UP]);
     printf("power cuts %lu, resets %lu (flash operations cut %lu), updates %lu, confirmed starts %lu;\n"
            "most unconfirmed starts in a row %lu; settled: running the good image %lu, update mode %lu\n",
-           s_power_cuts, s_resets, s_flash_cuts, s_updates, s_confirms, s_max_in_row,
-           s_settled_running, s_settled_update);
+           s_power_cuts, s_resets, s_flash_cuts, s_updates, s_confirms, s_max_in_row, s_settled_running,
+           s_settled_update);
     printf("invariant failures: (a) image %lu, (b) tries %lu, (c) restart/ENTER %lu, (d) flash %lu, "
            "(e) settle %lu\n",
            s_fail[0], s_fail[1], s_fail[2], s_fail[3], s_fail[4]);

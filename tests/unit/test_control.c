@@ -1,6 +1,7 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* control/km_control.c, the tick without the plant (the plant-backed
  * motion tests are tests/unit/test_control_servo.c):
- * PROTOCOL.md §5.1 zero offsets 0x16 + 0x17 and direction (0x11 bit 2),
+ * docs/protocol.md §5.1 zero offsets 0x16 + 0x17 and direction (0x11 bit 2),
  * §5.1 0x11 bits 0/1 power-on and idle output, §5.4 0x64 torque switch to
  * bridge mode, §5.3 live registers (speed over a 20 ms window, current,
  * voltage, temperature, 0x35 hardware faults). */
@@ -76,9 +77,16 @@ static void torque_switch(uint8_t v, const km_control_params_t *cfg)
 static void test_s5_1_position_is_sensor_plus_both_zero_offsets(void **state)
 {
     (void)state;
-    static const struct { int32_t sensor; int16_t zo1, zo2; int32_t want; } t[] = {
-        {100, 37, -20, 117}, {0, 0, 0, 0}, {-900, -12, 0, -912},
-        {1350, 0, 300, 1650}, {-32768, -32768, -32768, -98304}, /* no 16-bit wrap */
+    static const struct {
+        int32_t sensor;
+        int16_t zo1, zo2;
+        int32_t want;
+    } t[] = {
+        {100, 37, -20, 117},
+        {0, 0, 0, 0},
+        {-900, -12, 0, -912},
+        {1350, 0, 300, 1650},
+        {-32768, -32768, -32768, -98304}, /* no 16-bit wrap */
         {123456, 5, 5, 123466},
     };
     for (unsigned i = 0; i < sizeof t / sizeof t[0]; i++) {
@@ -140,13 +148,17 @@ static void test_s5_4_torque_switch_bridge_mode(void **state)
         for (unsigned i = 0; i < sizeof order; i++) {
             torque_switch(order[i], &cfg);
             km_bridge_mode_t want = idle;
-            if (order[i] == 0) want = KM_BRIDGE_FREE;
-            if (order[i] == 1) want = KM_BRIDGE_BRAKE;
-            if (order[i] == 2) want = KM_BRIDGE_PWM;
+            if (order[i] == 0)
+                want = KM_BRIDGE_FREE;
+            if (order[i] == 1)
+                want = KM_BRIDGE_BRAKE;
+            if (order[i] == 2)
+                want = KM_BRIDGE_PWM;
             const km_sensors_t in = sensors_at(0);
             const km_live_t live = step(&in, &cfg, 1000);
             if (c.bridge.mode != want) {
-                fail_msg("0x11 = 0x%02X, 0x64 = %u: bridge %d, want %d", config, order[i], c.bridge.mode, want);
+                fail_msg("0x11 = 0x%02X, 0x64 = %u: bridge %d, want %d", config, order[i], c.bridge.mode,
+                         want);
             }
             assert_int_equal(live.pwm, 0); /* holding where it is: no error, no PWM */
             assert_false(live.running);
@@ -219,8 +231,8 @@ static void test_s5_3_speed_over_20ms_window(void **state)
     km_control_init(&c, &cfg);
     int32_t pos = 500;
     const km_sensors_t first = sensors_at(pos);
-    assert_int_equal(step(&first, &cfg, 1000).speed, 0); /* the first sample only sets the origin */
-    assert_int_equal(ramp(&pos, 1, 19, 1000, &cfg).speed, 0); /* 19 ms: window not full */
+    assert_int_equal(step(&first, &cfg, 1000).speed, 0);       /* the first sample only sets the origin */
+    assert_int_equal(ramp(&pos, 1, 19, 1000, &cfg).speed, 0);  /* 19 ms: window not full */
     assert_int_equal(ramp(&pos, 1, 1, 1000, &cfg).speed, 100); /* 2 deg in 20 ms */
     /* the next window: -0.5 deg per ms = -500 deg/s; held until it completes */
     assert_int_equal(ramp(&pos, -5, 19, 1000, &cfg).speed, 100);
@@ -260,8 +272,12 @@ static void test_s5_3_live_fields_from_sensors(void **state)
     (void)state;
     const km_control_params_t cfg = cfg_of(0, 0, 0x02, 3);
     km_control_init(&c, &cfg);
-    static const struct { int32_t cur, mv, c10; uint8_t faults; int32_t want_c; } t[] = {
-        {1500, 12100, 415, 0x00, 41}, {-800, 7400, 419, 0x20, 41}, {0, 0, 0, 0xFF, 0},
+    static const struct {
+        int32_t cur, mv, c10;
+        uint8_t faults;
+        int32_t want_c;
+    } t[] = {
+        {1500, 12100, 415, 0x00, 41},   {-800, 7400, 419, 0x20, 41}, {0, 0, 0, 0xFF, 0},
         {3000, 25000, 1000, 0x81, 100}, {12, 5000, -15, 0x04, -1},
     };
     uint8_t latched = 0;
@@ -337,7 +353,8 @@ static void test_protection_events_reported_once(void **state)
     assert_true(live.protecting && live.torque_forced);
     assert_int_equal(live.torque_switch, KM_TORQUE_PROTECTED);
     in.voltage_mv = 7400;
-    assert_int_equal(run_until(&in, &cfg, &live, has_event, 5000), 5001u); /* held: released only by command */
+    assert_int_equal(run_until(&in, &cfg, &live, has_event, 5000),
+                     5001u); /* held: released only by command */
     assert_true(live.protecting && live.torque_forced);
     km_request_t clear;
     memset(&clear, 0, sizeof clear);

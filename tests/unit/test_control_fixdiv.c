@@ -1,9 +1,10 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The control tick's divide-free arithmetic (issue 8: the Cortex-M0 has no
  * divide instruction) against C's own: control/km_fixdiv.h's reciprocal
  * quotients, and the profile and speed estimator rewritten with them, step
  * for step against the division-based code they replaced (kept here as the
  * reference). Equal results, not bounded errors: every case must match
- * exactly. The motion they produce is PROTOCOL.md §5.4's (0x65..0x68). */
+ * exactly. The motion they produce is docs/protocol.md §5.4's (0x65..0x68). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -31,8 +32,12 @@ static uint32_t rnd(void)
 static void test_reciprocals_are_exact_for_all_uint32(void **state)
 {
     (void)state;
-    static const struct { uint32_t m, d, s; } c[] = {
-        {KM_FIXDIV_M10, 10u, 3u}, {KM_FIXDIV_M1000, 1000u, 6u}, {KM_FIXDIV_M5, 5u, 2u},
+    static const struct {
+        uint32_t m, d, s;
+    } c[] = {
+        {KM_FIXDIV_M10, 10u, 3u},
+        {KM_FIXDIV_M1000, 1000u, 6u},
+        {KM_FIXDIV_M5, 5u, 2u},
         {KM_FIXDIV_M100, 100u, 6u},
     };
     for (unsigned i = 0; i < sizeof c / sizeof c[0]; i++) {
@@ -46,8 +51,8 @@ static void test_reciprocals_are_exact_for_all_uint32(void **state)
 static void test_umulhi_matches_64_bit_product(void **state)
 {
     (void)state;
-    static const uint32_t edge[] = {0u, 1u, 0xFFFFu, 0x10000u, 0x7FFFFFFFu, 0x80000000u, 0xFFFFFFFFu,
-                                    KM_FIXDIV_M10, KM_FIXDIV_M1000};
+    static const uint32_t edge[] = {0u,          1u,          0xFFFFu,       0x10000u,       0x7FFFFFFFu,
+                                    0x80000000u, 0xFFFFFFFFu, KM_FIXDIV_M10, KM_FIXDIV_M1000};
     for (unsigned i = 0; i < sizeof edge / sizeof edge[0]; i++) {
         for (unsigned j = 0; j < sizeof edge / sizeof edge[0]; j++) {
             assert_int_equal(km_umulhi(edge[i], edge[j]), (uint32_t)(((uint64_t)edge[i] * edge[j]) >> 32));
@@ -63,8 +68,8 @@ static void check_sdiv(int32_t n)
 {
     if (km_sdiv10(n) != n / 10 || km_sdiv100(n) != n / 100 || km_sdiv1000(n) != n / 1000 ||
         km_sdiv2560(n) != n / 2560 || km_sdiv256000(n) != n / 256000) {
-        fail_msg("n = %d: %d %d %d %d %d", n, km_sdiv10(n), km_sdiv100(n), km_sdiv1000(n),
-                 km_sdiv2560(n), km_sdiv256000(n));
+        fail_msg("n = %d: %d %d %d %d %d", n, km_sdiv10(n), km_sdiv100(n), km_sdiv1000(n), km_sdiv2560(n),
+                 km_sdiv256000(n));
     }
 }
 
@@ -203,9 +208,8 @@ static void expect_same(const km_profile_t *a, const km_profile_t *b, unsigned r
 {
     if (a->pos != b->pos || a->vel != b->vel || a->pos_rem != b->pos_rem || a->vel_rem != b->vel_rem ||
         a->done != b->done) {
-        fail_msg("run %u tick %u: pos %d/%d vel %d/%d rem %d/%d vrem %d/%d done %d/%d", run, tick,
-                 a->pos, b->pos, a->vel, b->vel, a->pos_rem, b->pos_rem, a->vel_rem, b->vel_rem,
-                 a->done, b->done);
+        fail_msg("run %u tick %u: pos %d/%d vel %d/%d rem %d/%d vrem %d/%d done %d/%d", run, tick, a->pos,
+                 b->pos, a->vel, b->vel, a->pos_rem, b->pos_rem, a->vel_rem, b->vel_rem, a->done, b->done);
     }
     assert_int_equal(km_profile_vel_ddps(a), b->vel / 1000);
 }

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The control modules one by one, without the plant: the trajectory
  * generator (control/km_profile.c), the position loop, the output stage,
  * the speed estimators and the target clamp of servo mode. Units as in
@@ -49,9 +50,11 @@ static uint32_t run_profile(km_profile_t *p, int32_t from_u, int32_t accel, bool
 static void test_profile_move_trapezoid_and_triangle(void **state)
 {
     (void)state;
-    static const struct { int32_t from, to, vmax_dps, accel_dps2; } t[] = {
-        {0, 900, 90, 4000}, {0, -900, 360, 4000}, {100, 105, 360, 4000}, {0, 3600, 360, 1000},
-        {-1350, 1350, 720, 20000}, {0, 1, 1, 10},
+    static const struct {
+        int32_t from, to, vmax_dps, accel_dps2;
+    } t[] = {
+        {0, 900, 90, 4000},   {0, -900, 360, 4000},      {100, 105, 360, 4000},
+        {0, 3600, 360, 1000}, {-1350, 1350, 720, 20000}, {0, 1, 1, 10},
     };
     for (unsigned i = 0; i < sizeof t / sizeof t[0]; i++) {
         km_profile_t p;
@@ -65,7 +68,8 @@ static void test_profile_move_trapezoid_and_triangle(void **state)
         double want = d / v + v / a;
         if (d < v * v / a) {
             double x = d / a, s = x;
-            for (int k = 0; k < 40; k++) s = 0.5 * (s + x / s); /* sqrt, no libm */
+            for (int k = 0; k < 40; k++)
+                s = 0.5 * (s + x / s); /* sqrt, no libm */
             want = 2.0 * s;
         }
         want *= 1000.0;
@@ -80,10 +84,14 @@ static void test_profile_move_trapezoid_and_triangle(void **state)
 static void test_profile_move_time(void **state)
 {
     (void)state;
-    static const struct { int32_t to; uint32_t ms; int32_t vlim_dps; uint32_t want_lo, want_hi; } t[] = {
-        {450, 500, 360, 498, 503},  {-900, 1000, 360, 998, 1003}, {2, 50, 360, 48, 53},
-        {1200, 2000, 360, 1998, 2003},
-        {900, 200, 90, 1000, 1300}, /* needs 600 deg/s: 90 deg/s wins */
+    static const struct {
+        int32_t to;
+        uint32_t ms;
+        int32_t vlim_dps;
+        uint32_t want_lo, want_hi;
+    } t[] = {
+        {450, 500, 360, 498, 503},     {-900, 1000, 360, 998, 1003}, {2, 50, 360, 48, 53},
+        {1200, 2000, 360, 1998, 2003}, {900, 200, 90, 1000, 1300}, /* needs 600 deg/s: 90 deg/s wins */
     };
     for (unsigned i = 0; i < sizeof t / sizeof t[0]; i++) {
         km_profile_t p;
@@ -161,8 +169,12 @@ static void test_position_loop_terms_and_bounds(void **state)
     km_control_gains_t g = gains();
     km_position_loop_t l;
     km_position_loop_init(&l);
-    km_position_loop_in_t in = {.setpoint_u = 10000, .setpoint_ddps = 0, .position = 0, .speed_ddps = 0,
-                                .pwm_max = 1000, .integrate = false};
+    km_position_loop_in_t in = {.setpoint_u = 10000,
+                                .setpoint_ddps = 0,
+                                .position = 0,
+                                .speed_ddps = 0,
+                                .pwm_max = 1000,
+                                .integrate = false};
     /* kp only: 10 x 0.1 deg error at 10 PWM per 0.1 deg = 100 */
     assert_int_equal(km_position_loop_step(&l, &g, &in, 1000), g.kp_q8 * 10 / 256);
     in.setpoint_u = -10000;
@@ -309,8 +321,12 @@ static void test_extremes_stay_bounded(void **state)
     static const int32_t pos[] = {INT32_MIN, INT32_MAX, 0};
     for (unsigned i = 0; i < 3; i++) {
         for (unsigned j = 0; j < 3; j++) {
-            km_position_loop_in_t in = {.setpoint_u = pos[i], .setpoint_ddps = pos[j], .position = pos[j],
-                                        .speed_ddps = pos[i], .pwm_max = 1000, .integrate = true};
+            km_position_loop_in_t in = {.setpoint_u = pos[i],
+                                        .setpoint_ddps = pos[j],
+                                        .position = pos[j],
+                                        .speed_ddps = pos[i],
+                                        .pwm_max = 1000,
+                                        .integrate = true};
             const int32_t out = km_position_loop_step(&l, &g, &in, i == 0 ? 0xFFFFFFFFu : 1000u);
             assert_true(out >= -1000 && out <= 1000);
         }

@@ -1,4 +1,5 @@
-/* Motor mode on the simulated plant (PROTOCOL.md §5.4 0x6E..0x70, 0x5A,
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Motor mode on the simulated plant (docs/protocol.md §5.4 0x6E..0x70, 0x5A,
  * 0x4D, status bit 7; §6 variants): control stepped against km_plant_step
  * at the 1 kHz tick (tests/support/km_plant_rig.h), default plant (20
  * kg.cm class, 7.4 V) and default gains.
@@ -234,7 +235,8 @@ static void test_s5_4_0x70_angle_and_turns(void **state)
 {
     (void)state;
     rig_encoder();
-    assert_true(motor_run(KM_RUN_SPEED, false, 180, KM_UNTIL_ANGLE, 90, KM_AFTER_BRAKE)); /* 90 deg at 180 deg/s, brake */
+    assert_true(motor_run(KM_RUN_SPEED, false, 180, KM_UNTIL_ANGLE, 90,
+                          KM_AFTER_BRAKE)); /* 90 deg at 180 deg/s, brake */
     kr_run(&r, 1500);
     int32_t pos = km_plant_turns_ddeg(&r.plant);
     print_message("0x70 90 deg: stopped at %d x0.1 deg\n", (int)pos);
@@ -242,7 +244,8 @@ static void test_s5_4_0x70_angle_and_turns(void **state)
     assert_true(pos >= 900 && pos <= 900 + 60);
 
     rig_encoder();
-    assert_true(motor_run(KM_RUN_PWM, true, 800, KM_UNTIL_TURNS, 25, KM_AFTER_BRAKE)); /* 2.5 turns reverse at PWM 800, brake */
+    assert_true(motor_run(KM_RUN_PWM, true, 800, KM_UNTIL_TURNS, 25,
+                          KM_AFTER_BRAKE)); /* 2.5 turns reverse at PWM 800, brake */
     kr_run(&r, 6000);
     pos = km_plant_turns_ddeg(&r.plant);
     print_message("0x70 -2.5 turns: stopped at %d x0.1 deg\n", (int)pos);

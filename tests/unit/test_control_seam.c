@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The dispatcher's side of the servo <-> control seam (include/km/,
  * docs/architecture.md "Seams"):
  *  - km_servo_control_params() decodes the control registers into
@@ -29,7 +30,7 @@ static void test_params_decoded_in_engineering_units(void **state)
     /* product defaults */
     assert_int_equal(p.variant, KM_VARIANT_POTENTIOMETER);
     assert_false(p.reverse);
-    assert_true(p.idle_brake);          /* 0x11 = 0x02 */
+    assert_true(p.idle_brake); /* 0x11 = 0x02 */
     assert_false(p.power_on_brake);
     assert_int_equal(p.zero_offset1, 37);
     assert_int_equal(p.zero_offset2, 0);
@@ -70,8 +71,8 @@ static void test_params_decoded_in_engineering_units(void **state)
     assert_int_equal(p.gains.settle_ms, g.settle_ms);
 
     /* written values come through decoded */
-    kt_write_u8(&fx, 1, 0x11, 0x0D);          /* response level, direction, power-on brake */
-    const uint8_t zo2[2] = {0x9C, 0xFF};      /* -100 */
+    kt_write_u8(&fx, 1, 0x11, 0x0D);     /* response level, direction, power-on brake */
+    const uint8_t zo2[2] = {0x9C, 0xFF}; /* -100 */
     kt_write(&fx, 1, 0x17, zo2, 2);
     kt_write_u16(&fx, 1, 0x5B, 400);
     kt_write_u16(&fx, 1, 0x5D, 90);
@@ -109,23 +110,23 @@ static void test_params_gen_counts_applied_changes(void **state)
     kt_read(&fx, 1, 0x46);
     kt_ping(&fx, 1);
     assert_int_equal(km_servo_params_gen(&fx.s), g);
-    kt_write_u16(&fx, 1, 0x5B, 2000);              /* out of range: refused */
+    kt_write_u16(&fx, 1, 0x5B, 2000); /* out of range: refused */
     assert_int_equal(km_servo_params_gen(&fx.s), g);
     kt_write_u16(&fx, 1, 0x5B, 500);
     assert_true(km_servo_params_gen(&fx.s) != g);
     g = km_servo_params_gen(&fx.s);
-    kt_write_u16(&fx, 1, 0x13, 800);               /* persisted: after its commit */
+    kt_write_u16(&fx, 1, 0x13, 800); /* persisted: after its commit */
     assert_true(km_servo_params_gen(&fx.s) != g);
     g = km_servo_params_gen(&fx.s);
     const uint8_t move[4] = {0x84, 0x03, 0xE8, 0x03};
-    kt_write(&fx, 1, 0x65, move, 4);               /* 0x64 3 -> 2 */
+    kt_write(&fx, 1, 0x65, move, 4); /* 0x64 3 -> 2 */
     assert_true(km_servo_params_gen(&fx.s) != g);
     assert_int_equal(km_servo_reg(&fx.s, KM_REG_TORQUE_SWITCH), 2);
     g = km_servo_params_gen(&fx.s);
-    kt_write(&fx, 1, 0x65, move, 4);               /* already on: no register changes */
+    kt_write(&fx, 1, 0x65, move, 4); /* already on: no register changes */
     assert_int_equal(km_servo_params_gen(&fx.s), g);
     fx.fake.fail_next_commit = true;
-    kt_write_u16(&fx, 1, 0x13, 700);               /* the store failed: nothing applied */
+    kt_write_u16(&fx, 1, 0x13, 700); /* the store failed: nothing applied */
     assert_int_equal(km_servo_params_gen(&fx.s), g);
 }
 
@@ -138,7 +139,7 @@ static void test_refused_request_is_bit6_and_changes_nothing(void **state)
     fx.fake.refuse_requests = true;
     const uint8_t move[4] = {0x84, 0x03, 0xE8, 0x03};
     kt_write(&fx, 1, 0x65, move, 4);
-    assert_int_equal(fx.fake.n_requests, 1);       /* it was asked */
+    assert_int_equal(fx.fake.n_requests, 1);                        /* it was asked */
     assert_int_equal(km_servo_reg(&fx.s, KM_REG_TORQUE_SWITCH), 3); /* not turned on */
     kt_ping_is(&fx, 1, 0x40);
     kt_write_u8(&fx, 1, 0x64, 1);

@@ -1,4 +1,5 @@
-/* Servo mode on the simulated plant (PROTOCOL.md §5.4, §5.1, §5.3): control
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Servo mode on the simulated plant (docs/protocol.md §5.4, §5.1, §5.3): control
  * stepped against km_plant_step at the 1 kHz tick with a one-tick PWM delay
  * (tests/support/km_plant_rig.h), default plant (20 kg.cm class, 7.4 V) and
  * default gains (include/km/km_product.h, docs/tuning.md).
@@ -21,17 +22,17 @@
 
 #include "km_plant_rig.h"
 
-#define ARRIVE_DDEG 5   /* the default gains' arrive band */
-#define FINAL_DDEG 2    /* where it sits 1 s after arriving */
+#define ARRIVE_DDEG 5 /* the default gains' arrive band */
+#define FINAL_DDEG 2  /* where it sits 1 s after arriving */
 #define OVERSHOOT_DDEG 3
 
 static kr_rig_t r;
 
 typedef struct {
-    int32_t max_pos, min_pos;  /* reported position extremes */
-    int32_t max_abs_pwm;       /* |bridge PWM| */
-    int32_t max_abs_speed;     /* plant speed, m deg/s */
-    int32_t end_ms;            /* tick bit 7 cleared, -1 = still running */
+    int32_t max_pos, min_pos; /* reported position extremes */
+    int32_t max_abs_pwm;      /* |bridge PWM| */
+    int32_t max_abs_speed;    /* plant speed, m deg/s */
+    int32_t end_ms;           /* tick bit 7 cleared, -1 = still running */
     bool running_seen;
 } run_t;
 
@@ -101,11 +102,15 @@ static void test_s5_4_move_time_45deg_500ms(void **state)
 static void test_s5_4_move_table_overshoot_bound(void **state)
 {
     (void)state;
-    static const struct { km_move_kind_t kind; int32_t from, to; uint16_t param; } t[] = {
-        {KM_MOVE_TIME, 0, 450, 500},    {KM_MOVE_TIME, 0, -900, 1000}, {KM_MOVE_TIME, 0, 20, 100},
-        {KM_MOVE_TIME, -600, 600, 2000},{KM_MOVE_TIME, 100, 102, 50},  {KM_MOVE_TIME, 0, 1200, 0},
-        {KM_MOVE_SPEED, 0, 900, 90},    {KM_MOVE_SPEED, 0, -450, 300}, {KM_MOVE_SPEED, 300, -900, 0},
-        {KM_MOVE_SPEED, 0, 5, 10},      {KM_MOVE_SPEED, 0, 1200, 0},
+    static const struct {
+        km_move_kind_t kind;
+        int32_t from, to;
+        uint16_t param;
+    } t[] = {
+        {KM_MOVE_TIME, 0, 450, 500},     {KM_MOVE_TIME, 0, -900, 1000}, {KM_MOVE_TIME, 0, 20, 100},
+        {KM_MOVE_TIME, -600, 600, 2000}, {KM_MOVE_TIME, 100, 102, 50},  {KM_MOVE_TIME, 0, 1200, 0},
+        {KM_MOVE_SPEED, 0, 900, 90},     {KM_MOVE_SPEED, 0, -450, 300}, {KM_MOVE_SPEED, 300, -900, 0},
+        {KM_MOVE_SPEED, 0, 5, 10},       {KM_MOVE_SPEED, 0, 1200, 0},
     };
     for (unsigned i = 0; i < sizeof t / sizeof t[0]; i++) {
         on_at(t[i].from);
@@ -125,7 +130,7 @@ static void test_s5_4_move_table_overshoot_bound(void **state)
                 fail_msg("move %u: ended at %d ms, asked %u", i, w.end_ms, t[i].param);
             }
         } else {
-            const int32_t v = t[i].param ? t[i].param : 360;         /* deg/s, 0 = 0x5D */
+            const int32_t v = t[i].param ? t[i].param : 360;          /* deg/s, 0 = 0x5D */
             const int32_t bound = d * 100 / v + v * 1000 / 4000 + 60; /* ms */
             if (w.end_ms > bound) {
                 fail_msg("move %u: ended at %d ms, bound %d", i, w.end_ms, bound);
@@ -172,8 +177,9 @@ static void speed_limited_move(km_move_kind_t kind, int16_t target, uint16_t par
         max_47 = s47 > max_47 ? s47 : max_47;
         max_plant = v > max_plant ? v : max_plant;
     }
-    print_message("0x5D = 90, request kind %d: set-point max %d u/s, 0x47 max %d deg/s, shaft max %d m deg/s\n",
-                  kind, max_sp, max_47, max_plant);
+    print_message(
+        "0x5D = 90, request kind %d: set-point max %d u/s, 0x47 max %d deg/s, shaft max %d m deg/s\n", kind,
+        max_sp, max_47, max_plant);
     assert_true(max_sp <= 90 * KM_PROFILE_UPS_PER_DPS);
     assert_true(max_47 <= 94);
     assert_true(max_plant <= 103500);
@@ -185,9 +191,9 @@ static void test_s5_4_speed_limit_5d(void **state)
     (void)state;
     on_at(0);
     r.params.speed_limit_dps = 90;
-    speed_limited_move(KM_MOVE_SPEED, 900, 0);   /* fastest = 0x5D */
-    speed_limited_move(KM_MOVE_SPEED, 0, 300);   /* cut to 0x5D */
-    speed_limited_move(KM_MOVE_STREAM, 900, 0);  /* a far 0x68 too */
+    speed_limited_move(KM_MOVE_SPEED, 900, 0);      /* fastest = 0x5D */
+    speed_limited_move(KM_MOVE_SPEED, 0, 300);      /* cut to 0x5D */
+    speed_limited_move(KM_MOVE_STREAM, 900, 0);     /* a far 0x68 too */
     assert_true(kr_move(&r, KM_MOVE_TIME, 0, 200)); /* would need 600 deg/s */
     const run_t w = run_watch(3000);
     assert_true(w.end_ms >= 1000); /* 90 deg at 90 deg/s */
@@ -358,8 +364,8 @@ static void test_s5_3_deviation_and_offset_jump(void **state)
     kr_tick(&r);
     near(r.live.deviation, 50, FINAL_DDEG);
     kr_run(&r, 1000);
-    near(kr_pos(&r), -600, FINAL_DDEG);                            /* the target, in 0x46's frame */
-    near(km_plant_position_ddeg(&r.plant), -650, FINAL_DDEG);      /* the shaft moved 5 deg */
+    near(kr_pos(&r), -600, FINAL_DDEG);                       /* the target, in 0x46's frame */
+    near(km_plant_position_ddeg(&r.plant), -650, FINAL_DDEG); /* the shaft moved 5 deg */
     assert_true(kr_torque(&r, 0));
     kr_tick(&r);
     assert_int_equal(r.live.deviation, 0);
@@ -410,7 +416,8 @@ static void stream(uint32_t period_ms, int32_t step_ddeg, uint32_t n)
     print_message("stream %u ms x %d (%d m deg/s): shaft %d..%d m deg/s after 300 ms, lag %d x 0.1 deg\n",
                   period_ms, step_ddeg, want, vmin, vmax, tgt - kr_pos(&r));
     if (vmin < want - want / 20 || vmax > want + want / 20) {
-        fail_msg("stream %u ms x %d: speed %d..%d m deg/s, stream %d", period_ms, step_ddeg, vmin, vmax, want);
+        fail_msg("stream %u ms x %d: speed %d..%d m deg/s, stream %d", period_ms, step_ddeg, vmin, vmax,
+                 want);
     }
     /* the shaft is at most ~2 intervals behind the newest target */
     assert_true(tgt - kr_pos(&r) <= 2 * step_ddeg + 2);
@@ -422,14 +429,14 @@ static void stream(uint32_t period_ms, int32_t step_ddeg, uint32_t n)
 static void test_s5_4_interpolation_50hz(void **state)
 {
     (void)state;
-    stream(20, 18, 50);  /* 90 deg/s for 1 s */
-    stream(20, 9, 100);  /* 45 deg/s for 2 s */
+    stream(20, 18, 50); /* 90 deg/s for 1 s */
+    stream(20, 9, 100); /* 45 deg/s for 2 s */
 }
 
 static void test_s5_4_interpolation_100hz(void **state)
 {
     (void)state;
-    stream(10, 9, 100);  /* 90 deg/s for 1 s */
+    stream(10, 9, 100); /* 90 deg/s for 1 s */
 }
 
 int main(void)

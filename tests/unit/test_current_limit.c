@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* §5.4 0x5C (bounded by §5.1 0x14): the current limit, on its own and
  * against the plant through the control tick. */
 #include <setjmp.h>

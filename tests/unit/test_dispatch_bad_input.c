@@ -1,4 +1,5 @@
-/* The bad-input catalog: each bad frame gets its defined outcome (PROTOCOL.md
+/* SPDX-License-Identifier: Apache-2.0 */
+/* The bad-input catalog: each bad frame gets its defined outcome (docs/protocol.md
  * §3, §4, docs/protocol-decisions.md) AND changes nothing else: the register
  * file, the active baud, the sync buffer and the recorded commits, restarts
  * and requests are snapshot before and compared after. */
@@ -15,12 +16,12 @@
 #define ID 7
 static kt_fx_t fx;
 
-/* §5 addresses and access, written out from PROTOCOL.md (not from the .def). */
+/* §5 addresses and access, written out from docs/protocol.md (not from the .def). */
 typedef struct {
     uint8_t addr;
-    uint8_t access; /* 1 R, 2 W, 3 RW */
-    uint8_t len;    /* value bytes of a write (shortest if several) */
-    uint8_t len2;   /* longest valid write length (= len if one) */
+    uint8_t access;   /* 1 R, 2 W, 3 RW */
+    uint8_t len;      /* value bytes of a write (shortest if several) */
+    uint8_t len2;     /* longest valid write length (= len if one) */
     uint8_t valid[5]; /* a valid value of `len` bytes on the encoder product */
 } spec_reg_t;
 
@@ -268,16 +269,16 @@ static void test_s4_out_of_range_values(void **state)
     static const struct {
         uint8_t addr, n, v[3];
     } cases[] = {
-        {0x0F, 1, {251}},            /* IDs 0..250 */
-        {0x13, 2, {0xE9, 0x03}},     /* 1001 > PWM 1000 */
-        {0x64, 1, {4}},              /* 0x64: 0..3 */
-        {0x64, 1, {5}},              /* 5 is set by the servo, not writable */
-        {0x5A, 1, {3}},              /* 0x5A: 0..2 */
-        {0x03, 1, {0}},              /* 0x03: 1 or 2 */
+        {0x0F, 1, {251}},        /* IDs 0..250 */
+        {0x13, 2, {0xE9, 0x03}}, /* 1001 > PWM 1000 */
+        {0x64, 1, {4}},          /* 0x64: 0..3 */
+        {0x64, 1, {5}},          /* 5 is set by the servo, not writable */
+        {0x5A, 1, {3}},          /* 0x5A: 0..2 */
+        {0x03, 1, {0}},          /* 0x03: 1 or 2 */
         {0x03, 1, {3}},
-        {0x18, 1, {101}},            /* 0x18: -100..100 */
+        {0x18, 1, {101}}, /* 0x18: -100..100 */
         {0x18, 1, {(uint8_t)-101}},
-        {0x6E, 2, {0xE9, 0x03}},     /* 0x6E: -1000..1000 */
+        {0x6E, 2, {0xE9, 0x03}}, /* 0x6E: -1000..1000 */
     };
     for (unsigned i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         init_answering(kt_product_pot());
@@ -310,12 +311,9 @@ static void test_s3_sync_write_cleared_by_other_command(void **state)
     static const struct {
         uint8_t id, cmd, n, body[2];
     } others[] = {
-        {ID, 0x01, 0, {0}},
-        {ID, 0x02, 1, {0x13}},
-        {ID, 0x03, 2, {0x11, 0x02}},
-        {KM_ID_BROADCAST, 0x03, 2, {0x11, 0x02}},
-        {KM_ID_SUPER, 0x01, 0, {0}},
-        {KM_ID_SUPER, 0x02, 1, {0x13}},
+        {ID, 0x01, 0, {0}},          {ID, 0x02, 1, {0x13}},
+        {ID, 0x03, 2, {0x11, 0x02}}, {KM_ID_BROADCAST, 0x03, 2, {0x11, 0x02}},
+        {KM_ID_SUPER, 0x01, 0, {0}}, {KM_ID_SUPER, 0x02, 1, {0x13}},
     };
     for (unsigned i = 0; i < sizeof others / sizeof others[0]; i++) {
         kt_init(&fx, kt_product_pot(), ID);

@@ -1,4 +1,5 @@
-/* PROTOCOL.md §3 commands and the §5 registers whose write or read is more
+/* SPDX-License-Identifier: Apache-2.0 */
+/* docs/protocol.md §3 commands and the §5 registers whose write or read is more
  * than storing a value: identity, ID and baud change, restart, user data
  * reset, torque switch, control mode, zero offsets, protections, live state,
  * encoder-only commands and store failures. */
@@ -171,29 +172,49 @@ static void test_s5_1_0x02_restart_broadcast(void **state)
     assert_int_equal(fx.fake.restarts, 1);
 }
 
-/* Expected defaults from PROTOCOL.md §5 ("—" = the product's value). */
+/* Expected defaults from docs/protocol.md §5 ("—" = the product's value). */
 static uint32_t spec_default(uint8_t addr, const km_product_t *p)
 {
     switch (addr) {
-    case 0x0F: return 0;
-    case 0x10: return 1152;
-    case 0x11: return 0x02;
-    case 0x12: return 200;
-    case 0x13: return 1000;
-    case 0x14: return p->max_current_ma;
-    case 0x15: return p->max_speed_dps;
-    case 0x16: return (uint16_t)p->zero_offset1;
-    case 0x17: return 0;
-    case 0x19: return (uint16_t)p->angle_min;
-    case 0x1A: return (uint16_t)p->angle_max;
-    case 0x32: return 0x0F;
-    case 0x33: return 0x00;
-    case 0x34: return 0x54;
-    case 0x3C: return (uint32_t)p->voltage_high_v | ((uint32_t)p->voltage_low_v << 8);
-    case 0x3D: return 60u | (5u << 8);
-    case 0x3E: return (uint32_t)p->current_threshold_ma | (20u << 16);
-    case 0x3F: return 600u | (20u << 16);
-    default: fail_msg("no default for 0x%02X", addr); return 0;
+    case 0x0F:
+        return 0;
+    case 0x10:
+        return 1152;
+    case 0x11:
+        return 0x02;
+    case 0x12:
+        return 200;
+    case 0x13:
+        return 1000;
+    case 0x14:
+        return p->max_current_ma;
+    case 0x15:
+        return p->max_speed_dps;
+    case 0x16:
+        return (uint16_t)p->zero_offset1;
+    case 0x17:
+        return 0;
+    case 0x19:
+        return (uint16_t)p->angle_min;
+    case 0x1A:
+        return (uint16_t)p->angle_max;
+    case 0x32:
+        return 0x0F;
+    case 0x33:
+        return 0x00;
+    case 0x34:
+        return 0x54;
+    case 0x3C:
+        return (uint32_t)p->voltage_high_v | ((uint32_t)p->voltage_low_v << 8);
+    case 0x3D:
+        return 60u | (5u << 8);
+    case 0x3E:
+        return (uint32_t)p->current_threshold_ma | (20u << 16);
+    case 0x3F:
+        return 600u | (20u << 16);
+    default:
+        fail_msg("no default for 0x%02X", addr);
+        return 0;
     }
 }
 
@@ -205,17 +226,35 @@ static const uint8_t persisted_addrs[] = {0x0F, 0x10, 0x11, 0x12, 0x13, 0x14, 0x
 static void init_changed(void)
 {
     kt_init(&fx, kt_product_pot(), ID);
-    static const struct { uint8_t addr; uint32_t v; } changed[] = {
-        {0x10, 10000}, {0x11, 0x0B}, {0x12, 300}, {0x13, 500}, {0x14, 1000}, {0x15, 300},
-        {0x16, 99}, {0x17, 55}, {0x19, 0xFC18 /* -1000 */}, {0x1A, 1000}, {0x32, 0x03},
-        {0x33, 0x01}, {0x34, 0x00}, {0x3C, 12u | (7u << 8)}, {0x3D, 70u | (10u << 8)},
-        {0x3E, 1000u | (5u << 16)}, {0x3F, 500u | (5u << 16)},
+    static const struct {
+        uint8_t addr;
+        uint32_t v;
+    } changed[] = {
+        {0x10, 10000},
+        {0x11, 0x0B},
+        {0x12, 300},
+        {0x13, 500},
+        {0x14, 1000},
+        {0x15, 300},
+        {0x16, 99},
+        {0x17, 55},
+        {0x19, 0xFC18 /* -1000 */},
+        {0x1A, 1000},
+        {0x32, 0x03},
+        {0x33, 0x01},
+        {0x34, 0x00},
+        {0x3C, 12u | (7u << 8)},
+        {0x3D, 70u | (10u << 8)},
+        {0x3E, 1000u | (5u << 16)},
+        {0x3F, 500u | (5u << 16)},
     };
     unsigned k = 0;
     for (unsigned j = 0; j < KM_REG_COUNT; j++) {
-        if (!km_reg_table[j].persisted) continue;
+        if (!km_reg_table[j].persisted)
+            continue;
         for (unsigned c = 0; c < sizeof changed / sizeof changed[0]; c++) {
-            if (changed[c].addr == km_reg_table[j].addr) fx.persisted[k] = changed[c].v;
+            if (changed[c].addr == km_reg_table[j].addr)
+                fx.persisted[k] = changed[c].v;
         }
         k++;
     }
@@ -519,12 +558,16 @@ static void test_s5_2_0x36_write_one_to_clear(void **state)
 static void read_pos(uint8_t addr, int32_t v)
 {
     km_live_t live = {0};
-    if (addr == 0x46) live.position = v; else live.deviation = v;
+    if (addr == 0x46)
+        live.position = v;
+    else
+        live.deviation = v;
     km_servo_set_live(&fx.s, &live);
     kt_read(&fx, ID, addr);
     uint8_t want[4];
     const unsigned n = (v >= -32768 && v <= 32767) ? 2u : 4u;
-    for (unsigned i = 0; i < n; i++) want[i] = (uint8_t)((uint32_t)v >> (8u * i));
+    for (unsigned i = 0; i < n; i++)
+        want[i] = (uint8_t)((uint32_t)v >> (8u * i));
     kt_reply_is_read(&fx, ID, addr, want, n);
 }
 
@@ -557,8 +600,10 @@ static void test_s5_3_live_reads(void **state)
     live.voltage = 12100;
     live.rotation_ms = 0x01020304u;
     km_servo_set_live(&fx.s, &live);
-    static const struct { uint8_t addr; int16_t v; } i16s[] = {
-        {0x47, -120}, {0x48, 1500}, {0x49, 999}, {0x4A, 41}, {0x4B, 12100}};
+    static const struct {
+        uint8_t addr;
+        int16_t v;
+    } i16s[] = {{0x47, -120}, {0x48, 1500}, {0x49, 999}, {0x4A, 41}, {0x4B, 12100}};
     for (unsigned i = 0; i < 5; i++) {
         kt_read(&fx, ID, i16s[i].addr);
         const uint8_t want[2] = {(uint8_t)i16s[i].v, (uint8_t)((uint16_t)i16s[i].v >> 8)};
@@ -573,7 +618,9 @@ static void test_s5_3_live_reads(void **state)
 static void test_s6_encoder_only_commands_refused_on_pot(void **state)
 {
     (void)state;
-    static const struct { uint8_t addr, n, v[5]; } cmds[] = {
+    static const struct {
+        uint8_t addr, n, v[5];
+    } cmds[] = {
         {0x6F, 2, {0x64, 0x00}},                   /* motor constant speed */
         {0x70, 5, {0x20, 0x5A, 0x00, 0x64, 0x00}}, /* p1 = angle */
         {0x70, 5, {0x30, 0x0A, 0x00, 0x64, 0x00}}, /* p1 = turns */
@@ -602,7 +649,7 @@ static void test_s6_encoder_only_commands_refused_on_pot(void **state)
     assert_int_equal(fx.fake.n_requests, 1);
     assert_int_equal(fx.fake.requests[0].kind, KM_REQ_MOTOR);
     assert_int_equal(fx.fake.requests[0].u.run.mode, KM_RUN_PWM); /* p2 kind 0 */
-    assert_false(fx.fake.requests[0].u.run.reverse);               /* bit 0 */
+    assert_false(fx.fake.requests[0].u.run.reverse);              /* bit 0 */
     assert_int_equal(fx.fake.requests[0].u.run.value, 500);
     assert_int_equal(fx.fake.requests[0].u.run.until, KM_UNTIL_TIME); /* p1 kind 1 */
     assert_int_equal(fx.fake.requests[0].u.run.amount, 20);
@@ -805,7 +852,8 @@ static void test_s5_init_without_store_all_defaults(void **state)
         for (unsigned i = 0; i < sizeof persisted_addrs; i++) {
             const uint8_t a = persisted_addrs[i];
             if (reg_by_addr(a) != spec_default(a, p)) {
-                fail_msg("0x%02X = 0x%X, want 0x%X", a, (unsigned)reg_by_addr(a), (unsigned)spec_default(a, p));
+                fail_msg("0x%02X = 0x%X, want 0x%X", a, (unsigned)reg_by_addr(a),
+                         (unsigned)spec_default(a, p));
             }
         }
         assert_int_equal(reg_by_addr(0x5B), 1000);
@@ -839,8 +887,13 @@ static void test_s5_init_without_store_all_defaults(void **state)
 static void test_limits_runtime_not_above_maximum(void **state)
 {
     (void)state;
-    static const struct { uint8_t max_addr, lim_addr; uint16_t m; } c[] = {
-        {0x13, 0x5B, 500}, {0x14, 0x5C, 1500}, {0x15, 0x5D, 500},
+    static const struct {
+        uint8_t max_addr, lim_addr;
+        uint16_t m;
+    } c[] = {
+        {0x13, 0x5B, 500},
+        {0x14, 0x5C, 1500},
+        {0x15, 0x5D, 500},
     };
     for (unsigned i = 0; i < 3; i++) {
         kt_init(&fx, kt_product_pot(), ID);
@@ -959,9 +1012,12 @@ static void test_limits_angle_window_both_write_orders(void **state)
 static void test_limits_angle_stored_contradicting_at_init(void **state)
 {
     (void)state;
-    static const struct { int16_t lo, hi; bool kept; } c[] = {
-        {1000, 500, false}, {500, 500, false}, {-1, -2, false},
-        {0, -500, true}, {-500, 0, true}, {0, 0, true}, {-1000, 1000, true}, {1349, 1350, true},
+    static const struct {
+        int16_t lo, hi;
+        bool kept;
+    } c[] = {
+        {1000, 500, false}, {500, 500, false}, {-1, -2, false},     {0, -500, true},
+        {-500, 0, true},    {0, 0, true},      {-1000, 1000, true}, {1349, 1350, true},
     };
     const km_product_t *p = kt_product_pot();
     for (unsigned i = 0; i < sizeof c / sizeof c[0]; i++) {
@@ -1076,17 +1132,17 @@ static void test_s5_2_less_motion_passes_with_fault_latched(void **state)
     } cmds[] = {
         {0x6E, 2, {0x00, 0x00}, true},
         {0x6F, 2, {0x00, 0x00}, true},
-        {0x70, 5, {0x80, 0x00, 0x00, 0x00, 0x00}, true},             /* stop, free after */
-        {0x70, 5, {0x82, 0x00, 0x00, 0x00, 0x00}, true},             /* stop, brake after */
-        {0x70, 5, {0x91, 0x32, 0x00, 0x20, 0x03}, true},             /* stop bit wins over its fields */
-        {0x70, 5, {0x00, 0x00, 0x00, 0x00, 0x00}, true},             /* run on at PWM 0 */
-        {0x70, 5, {0x10, 0x00, 0x00, 0xF4, 0x01}, true},             /* a run of 0 s */
+        {0x70, 5, {0x80, 0x00, 0x00, 0x00, 0x00}, true}, /* stop, free after */
+        {0x70, 5, {0x82, 0x00, 0x00, 0x00, 0x00}, true}, /* stop, brake after */
+        {0x70, 5, {0x91, 0x32, 0x00, 0x20, 0x03}, true}, /* stop bit wins over its fields */
+        {0x70, 5, {0x00, 0x00, 0x00, 0x00, 0x00}, true}, /* run on at PWM 0 */
+        {0x70, 5, {0x10, 0x00, 0x00, 0xF4, 0x01}, true}, /* a run of 0 s */
         {0x64, 1, {0x00}, true},
         {0x64, 1, {0x01}, true},
         {0x6E, 2, {0x01, 0x00}, false},
-        {0x6E, 2, {0x0C, 0xFE}, false},                              /* -500 */
+        {0x6E, 2, {0x0C, 0xFE}, false}, /* -500 */
         {0x6F, 2, {0x1E, 0x00}, false},
-        {0x70, 5, {0x10, 0x05, 0x00, 0xF4, 0x01}, false},            /* 0.5 s at PWM 500 */
+        {0x70, 5, {0x10, 0x05, 0x00, 0xF4, 0x01}, false}, /* 0.5 s at PWM 500 */
         {0x65, 4, {0x00, 0x00, 0xE8, 0x03}, false},
         {0x64, 1, {0x02}, false},
     };
@@ -1121,17 +1177,17 @@ static void test_s5_2_less_motion_passes_with_fault_latched(void **state)
 static void check_dead_after_restart(void)
 {
     static const char *later[] = {
-        "F9 FF 01 05 03 13 F4 01 EE",     /* write 0x13 = 500 */
-        "F9 FF 01 02 01 FB",              /* ping */
-        "F9 FF FD 02 01 FF",              /* super ping */
-        "F9 FF 01 03 02 01 F8",           /* read 0x01 */
-        "F9 FF 01 03 02 20 D9",           /* read of a reserved address */
-        "F9 FF 01 04 04 64 02 90",        /* 0x04 torque on */
-        "F9 FF FE 02 84 7B",              /* 0x84 */
-        "F9 FF 01 02 84 78",              /* 0x84, own ID */
-        "F9 FF FE 06 83 64 01 01 02 10",  /* 0x83 listing us */
-        "F9 FF 01 03 7F 01 7B",           /* extension read */
-        "F9 FF 01 03 82 13 66",           /* unknown command */
+        "F9 FF 01 05 03 13 F4 01 EE",       /* write 0x13 = 500 */
+        "F9 FF 01 02 01 FB",                /* ping */
+        "F9 FF FD 02 01 FF",                /* super ping */
+        "F9 FF 01 03 02 01 F8",             /* read 0x01 */
+        "F9 FF 01 03 02 20 D9",             /* read of a reserved address */
+        "F9 FF 01 04 04 64 02 90",          /* 0x04 torque on */
+        "F9 FF FE 02 84 7B",                /* 0x84 */
+        "F9 FF 01 02 84 78",                /* 0x84, own ID */
+        "F9 FF FE 06 83 64 01 01 02 10",    /* 0x83 listing us */
+        "F9 FF 01 03 7F 01 7B",             /* extension read */
+        "F9 FF 01 03 82 13 66",             /* unknown command */
         "F9 FF 01 07 03 02 E1 E2 E3 E4 68", /* another restart */
     };
     assert_true(fx.s.restarting);

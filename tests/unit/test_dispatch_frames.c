@@ -1,4 +1,5 @@
-/* Every worked frame of PROTOCOL.md §2 through the dispatcher: the frames are
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Every worked frame of docs/protocol.md §2 through the dispatcher: the frames are
  * checksum-checked by kt_frame_from_hex(), and every answer is compared byte
  * for byte with the one printed in §2 (or built from the §2 rule). */
 #include <setjmp.h>
@@ -134,9 +135,9 @@ static void check_moves_579(uint16_t param)
         if (i == 5) {
             target = 0;
         } else if (i == 7) {
-            target = 90;   /* 5A 00 = 9.0° */
+            target = 90; /* 5A 00 = 9.0° */
         } else if (i == 9) {
-            target = -90;  /* A6 FF = -9.0° */
+            target = -90; /* A6 FF = -9.0° */
         } else {
             assert_int_equal(bus[i].fake.n_requests, 0);
             continue;

@@ -1,4 +1,5 @@
-/* Multi-ID read 0x82 (PROTOCOL.md §3 and §7 leave it "to be completed"; this
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Multi-ID read 0x82 (docs/protocol.md §3 and §7 leave it "to be completed"; this
  * firmware's definition: docs/protocol-decisions.md "Multi-ID read 0x82"):
  * the worked frames, the slot each listed servo answers in, and every bad
  * input's outcome, on a few servos side by side. */
@@ -90,7 +91,9 @@ static void test_mread_answer_is_the_read_answer(void **state)
             assert_memory_equal(bus[2].reply.bytes, twin.reply.bytes, twin.reply.len);
             assert_true(twin.reply.len > 6u); /* a value, not an error */
             /* the longest answer: value size + 7 (0x0A: 16 B of text) */
-            const unsigned longest = addr == 0x0A ? 23u : (addr == 0x46 || addr == 0x4C) ? 11u : twin.reply.len;
+            const unsigned longest = addr == 0x0A                     ? 23u
+                                     : (addr == 0x46 || addr == 0x4C) ? 11u
+                                                                      : twin.reply.len;
             assert_int_equal(bus[2].reply.delay_us, 200u + kt_slot_us(longest, 115200));
         }
     }
@@ -151,7 +154,7 @@ static void test_mread_and_super_slot_floor(void **state)
     assert_int_equal(bus[3].reply.delay_us, 200u + 3u * 3000u);
     kt_read(&bus[3], 3, 0x46);
     assert_int_equal(bus[3].reply.delay_us, 200u); /* own ID: no slot */
-    km_servo_set_active_baud(&bus[3].s, 9600u); /* 0x0A: 26042 us, above the floor */
+    km_servo_set_active_baud(&bus[3].s, 9600u);    /* 0x0A: 26042 us, above the floor */
     kt_read(&bus[3], KM_ID_SUPER, 0x0A);
     assert_int_equal(bus[3].reply.delay_us, 200u + 3u * kt_slot_us(23, 9600));
     km_servo_set_slot_floor_us(&bus[3].s, 0xFFFFFFFFu);

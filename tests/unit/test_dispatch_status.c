@@ -1,4 +1,5 @@
-/* PROTOCOL.md §4 status byte, §3 answer rules (response level, own /
+/* SPDX-License-Identifier: Apache-2.0 */
+/* docs/protocol.md §4 status byte, §3 answer rules (response level, own /
  * broadcast / super ID) and the super-ID answer slots. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -11,7 +12,7 @@
 #define ID 7
 static kt_fx_t fx;
 
-static void make_failed(void)  /* bit 6: an out-of-range write (§4) */
+static void make_failed(void) /* bit 6: an out-of-range write (§4) */
 {
     kt_write_u8(&fx, ID, 0x64, 9);
     assert_int_equal(km_servo_status(&fx.s), KM_ST_FAILED);
@@ -140,7 +141,7 @@ static void test_s4_own_answer_carries_own_bits_only(void **state)
 {
     (void)state;
     kt_init(&fx, kt_product_pot(), ID);
-    make_failed(); /* response level 0: unanswered, bit 6 unreported */
+    make_failed();                    /* response level 0: unanswered, bit 6 unreported */
     kt_write_u8(&fx, ID, 0x11, 0x0A); /* level 1: this write answers, for itself */
     kt_reply_is_status(&fx, ID, 0);
     kt_write_u16(&fx, ID, 0x13, 1001); /* fails: its own answer says so */
@@ -292,9 +293,12 @@ static void check_super_read(uint8_t addr, unsigned longest_value, uint32_t baud
         kt_init(&fx, kt_product_pot(), ids[i]);
         if (baud != 115200u || delay != 200u) { /* via the store: baud applies at init */
             for (unsigned k = 0, j = 0; j < KM_REG_COUNT; j++) {
-                if (!km_reg_table[j].persisted) continue;
-                if (km_reg_table[j].addr == 0x10) fx.persisted[k] = baud / 100u;
-                if (km_reg_table[j].addr == 0x12) fx.persisted[k] = delay;
+                if (!km_reg_table[j].persisted)
+                    continue;
+                if (km_reg_table[j].addr == 0x10)
+                    fx.persisted[k] = baud / 100u;
+                if (km_reg_table[j].addr == 0x12)
+                    fx.persisted[k] = delay;
                 k++;
             }
             km_servo_init(&fx.s, kt_product_pot(), fx.persisted, 1, &fx.ops);
@@ -334,18 +338,18 @@ static void test_s3_super_id_slots_other_registers_and_baud(void **state)
 /* How a command deals with the unreported bits (docs/protocol-decisions.md
  * "One life cycle for bits 5 and 6", rules 3..6). */
 typedef enum {
-    LC_ALL,      /* rule 3: answers unreported | own in its status byte, clears them */
-    LC_OWN,      /* rule 4: a short response with its own bits; unreported stay */
-    LC_VALUE,    /* rule 4: a value answer (no status byte); unreported stay */
-    LC_NONE,     /* rule 5: no answer, its own bits join the unreported ones */
-    LC_IGNORED,  /* rule 6: no answer, nothing changes (own must be 0) */
+    LC_ALL,     /* rule 3: answers unreported | own in its status byte, clears them */
+    LC_OWN,     /* rule 4: a short response with its own bits; unreported stay */
+    LC_VALUE,   /* rule 4: a value answer (no status byte); unreported stay */
+    LC_NONE,    /* rule 5: no answer, its own bits join the unreported ones */
+    LC_IGNORED, /* rule 6: no answer, nothing changes (own must be 0) */
 } lc_kind_t;
 
 typedef struct {
     const char *name;
-    uint8_t level;      /* response level (0x11 bit 3) when the command is sent */
-    const char *pre;    /* sent after the prior state, before the command (or NULL) */
-    const char *frame;  /* the command, whole, checksum checked by the helper */
+    uint8_t level;     /* response level (0x11 bit 3) when the command is sent */
+    const char *pre;   /* sent after the prior state, before the command (or NULL) */
+    const char *frame; /* the command, whole, checksum checked by the helper */
     lc_kind_t kind;
     uint8_t own;        /* the command's own bits 5/6 */
     const char *answer; /* LC_VALUE: the exact answer */
@@ -374,25 +378,32 @@ static const lc_case_t lc_cases[] = {
     {"write level 0 failed", 0, NULL, "F9 FF 01 05 03 13 E9 03 F7", LC_NONE, KM_ST_FAILED, NULL, false},
     {"write level 1 ok", 1, NULL, "F9 FF 01 05 03 13 F4 01 EE", LC_OWN, 0, NULL, false},
     {"write level 1 failed", 1, NULL, "F9 FF 01 05 03 13 E9 03 F7", LC_OWN, KM_ST_FAILED, NULL, false},
-    {"write level 1 reserved address", 1, NULL, "F9 FF 01 04 03 0D 00 EA", LC_OWN, KM_ST_EXCEPTION, NULL, false},
+    {"write level 1 reserved address", 1, NULL, "F9 FF 01 04 03 0D 00 EA", LC_OWN, KM_ST_EXCEPTION, NULL,
+     false},
     {"write broadcast ok", 1, NULL, "F9 FF FE 05 03 13 F4 01 F1", LC_NONE, 0, NULL, false},
     {"write broadcast failed", 1, NULL, "F9 FF FE 05 03 13 E9 03 FA", LC_NONE, KM_ST_FAILED, NULL, false},
     {"0x04 ok", 1, NULL, "F9 FF 01 04 04 64 02 90", LC_NONE, 0, NULL, false},
     {"0x04 bad address", 1, NULL, "F9 FF 01 04 04 20 01 D5", LC_NONE, KM_ST_EXCEPTION, NULL, false},
     {"0x84 empty", 1, NULL, "F9 FF FE 02 84 7B", LC_NONE, 0, NULL, false},
-    {"0x84 own ID, failing write", 1, "F9 FF 01 05 04 13 E9 03 F6", "F9 FF 01 02 84 78", LC_NONE, KM_ST_FAILED, NULL, false},
-    {"0x84 broadcast, failing write", 1, "F9 FF 01 05 04 13 E9 03 F6", "F9 FF FE 02 84 7B", LC_NONE, KM_ST_FAILED, NULL, false},
+    {"0x84 own ID, failing write", 1, "F9 FF 01 05 04 13 E9 03 F6", "F9 FF 01 02 84 78", LC_NONE,
+     KM_ST_FAILED, NULL, false},
+    {"0x84 broadcast, failing write", 1, "F9 FF 01 05 04 13 E9 03 F6", "F9 FF FE 02 84 7B", LC_NONE,
+     KM_ST_FAILED, NULL, false},
     {"0x83 listing us", 1, NULL, "F9 FF FE 06 83 64 01 01 02 10", LC_NONE, 0, NULL, false},
-    {"0x83 listing us, bad value", 1, NULL, "F9 FF FE 06 83 64 01 01 07 0B", LC_NONE, KM_ST_FAILED, NULL, false},
+    {"0x83 listing us, bad value", 1, NULL, "F9 FF FE 06 83 64 01 01 07 0B", LC_NONE, KM_ST_FAILED, NULL,
+     false},
     {"0x83 not listing us", 1, NULL, "F9 FF FE 06 83 64 01 02 02 0F", LC_IGNORED, 0, NULL, false},
-    {"0x83 unsupported address", 1, NULL, "F9 FF FE 06 83 13 01 01 05 5E", LC_NONE, KM_ST_EXCEPTION, NULL, false},
+    {"0x83 unsupported address", 1, NULL, "F9 FF FE 06 83 13 01 01 05 5E", LC_NONE, KM_ST_EXCEPTION, NULL,
+     false},
     {"0x83 malformed k", 1, NULL, "F9 FF FE 07 83 64 02 01 02 00 0E", LC_NONE, KM_ST_FAILED, NULL, false},
     {"0x83 to own ID", 1, NULL, "F9 FF 01 06 83 64 01 01 02 0D", LC_NONE, KM_ST_EXCEPTION, NULL, false},
     {"0x82 listing us", 0, NULL, "F9 FF FE 04 82 13 01 67", LC_VALUE, 0, "F9 F5 01 05 02 13 E8 03 F9", false},
     {"0x82 listing us, 0x01", 0, NULL, "F9 FF FE 04 82 01 01 79", LC_ALL, 0, NULL, true},
-    {"0x82 listing us, reserved address", 0, NULL, "F9 FF FE 04 82 0D 01 6D", LC_OWN, KM_ST_EXCEPTION, NULL, false},
+    {"0x82 listing us, reserved address", 0, NULL, "F9 FF FE 04 82 0D 01 6D", LC_OWN, KM_ST_EXCEPTION, NULL,
+     false},
     {"0x82 not listing us", 0, NULL, "F9 FF FE 04 82 13 02 66", LC_IGNORED, 0, NULL, false},
-    {"0x82 not listing us, reserved address", 0, NULL, "F9 FF FE 04 82 0D 02 6C", LC_NONE, KM_ST_EXCEPTION, NULL, false},
+    {"0x82 not listing us, reserved address", 0, NULL, "F9 FF FE 04 82 0D 02 6C", LC_NONE, KM_ST_EXCEPTION,
+     NULL, false},
     {"0x82 no IDs", 0, NULL, "F9 FF FE 03 82 13 69", LC_NONE, KM_ST_EXCEPTION, NULL, false},
     {"0x82 to own ID", 0, NULL, "F9 FF 01 04 82 13 01 64", LC_NONE, KM_ST_EXCEPTION, NULL, false},
     {"0x82 to super ID", 0, NULL, "F9 FF FD 04 82 13 01 68", LC_IGNORED, 0, NULL, false},

@@ -1,4 +1,5 @@
-/* PROTOCOL.md §3 sync write (0x04/0x84) and multi-ID write (0x83) beyond the
+/* SPDX-License-Identifier: Apache-2.0 */
+/* docs/protocol.md §3 sync write (0x04/0x84) and multi-ID write (0x83) beyond the
  * §2 worked frames: value checks at execute time, who clears the buffer,
  * which servos' status bits a 0x83 touches. */
 #include <setjmp.h>
@@ -24,7 +25,7 @@ static void test_s3_sync_write_value_checked_at_execute(void **state)
     assert_int_equal(km_servo_status(&fx.s), 0);
     kt_snap_t sn;
     kt_snap(&fx, &sn);
-    sn.sync_full = false; /* executing empties the buffer */
+    sn.sync_full = false;          /* executing empties the buffer */
     sn.unreported |= KM_ST_FAILED; /* 0x84 has no answer: the next ping reports it */
     kt_send_hex(&fx, "F9 FF FE 02 84 7B");
     kt_assert_unchanged(&fx, &sn);
@@ -132,9 +133,15 @@ static void test_s3_multi_id_status_bits_and_addresses(void **state)
         kt_ping_is(&bus[i], i, want);
         kt_ping_is(&bus[i], i, 0);
     }
-    static const struct { uint8_t addr; km_request_kind_t kind; uint8_t how; } allowed[] = {
-        {0x66, KM_REQ_MOVE, KM_MOVE_SPEED}, {0x68, KM_REQ_MOVE, KM_MOVE_STREAM},
-        {0x6E, KM_REQ_MOTOR, KM_RUN_PWM}, {0x6F, KM_REQ_MOTOR, KM_RUN_SPEED},
+    static const struct {
+        uint8_t addr;
+        km_request_kind_t kind;
+        uint8_t how;
+    } allowed[] = {
+        {0x66, KM_REQ_MOVE, KM_MOVE_SPEED},
+        {0x68, KM_REQ_MOVE, KM_MOVE_STREAM},
+        {0x6E, KM_REQ_MOTOR, KM_RUN_PWM},
+        {0x6F, KM_REQ_MOTOR, KM_RUN_SPEED},
     };
     for (unsigned a = 0; a < 4; a++) {
         kt_init(&bus[3], kt_product_enc(), 3);

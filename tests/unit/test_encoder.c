@@ -1,4 +1,5 @@
-/* Encoder tests: every response frame worked in PROTOCOL.md §2, byte for byte. */
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Encoder tests: every response frame worked in docs/protocol.md §2, byte for byte. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* firmware/app/km_fault_log.c: the ring of the last 16 protection and
  * self-test events, kept across a reset (RAM that the reset leaves), never
  * across damage: power-up garbage and a log torn mid-update start empty;
@@ -103,14 +104,14 @@ static void test_torn_update_is_not_kept(void **state)
     (void)km_fault_log_boot(&log);
     const km_fault_entry_t e = entry(5, KM_FAULT_EV_TRIP, 0x04);
     km_fault_log_add(&log, &e);
-    log.check = ~log.check;                      /* as km_fault_log_add leaves it mid-way */
+    log.check = ~log.check; /* as km_fault_log_add leaves it mid-way */
     log.entries[1].t_ms = 77;
     assert_false(km_fault_log_boot(&log));
     assert_int_equal(log.held, 0);
     memset(&log, 0, sizeof log);
     (void)km_fault_log_boot(&log);
     km_fault_log_add(&log, &e);
-    log.entries[0].bits ^= 1u;                   /* one flipped bit */
+    log.entries[0].bits ^= 1u; /* one flipped bit */
     assert_false(km_fault_log_boot(&log));
 }
 
@@ -130,8 +131,8 @@ static void test_wire_forms(void **state)
     km_fault_entry_t got;
     assert_true(km_fault_log_get(&log, 0, &got));
     assert_int_equal(km_fault_log_entry_bytes(&got, b), KM_FAULT_ENTRY_SIZE);
-    const uint8_t want[] = {0x04, 0x03, 0x02, 0x01, 1, 0x09, 0, 0, 0x18, 0x15, 0x2E, 0xFB,
-                            0x64, 0x02, 0xEF, 0xF1, 0xFF, 0xFF};
+    const uint8_t want[] = {0x04, 0x03, 0x02, 0x01, 1,    0x09, 0,    0,    0x18,
+                            0x15, 0x2E, 0xFB, 0x64, 0x02, 0xEF, 0xF1, 0xFF, 0xFF};
     assert_memory_equal(b, want, sizeof want);
 }
 
@@ -160,8 +161,12 @@ static void test_record_from_control_events(void **state)
     live.events.hw_found = 0x20;
     km_fault_log_record(&log, &live);
     assert_int_equal(log.total, 4);
-    static const struct { uint8_t kind, bits; } want[4] = {
-        {KM_FAULT_EV_HW, 0x20}, {KM_FAULT_EV_RELEASE, 0x08}, {KM_FAULT_EV_CLEAR, 0x01}, {KM_FAULT_EV_TRIP, 0x04}};
+    static const struct {
+        uint8_t kind, bits;
+    } want[4] = {{KM_FAULT_EV_HW, 0x20},
+                 {KM_FAULT_EV_RELEASE, 0x08},
+                 {KM_FAULT_EV_CLEAR, 0x01},
+                 {KM_FAULT_EV_TRIP, 0x04}};
     for (uint8_t n = 0; n < 4; n++) { /* newest first */
         km_fault_entry_t e;
         assert_true(km_fault_log_get(&log, n, &e));

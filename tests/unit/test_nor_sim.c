@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* NOR simulator tests: the controller rules it must enforce, and each power
  * cut outcome leaving what it claims, for every supported geometry; weak
  * cells (a cut program or erase that reads differently at each read), the
@@ -127,8 +128,7 @@ static void test_qemu_zero_fill_needs_erase(void **state)
 }
 
 /* Programs one cell with the cut armed on it and returns what reads show. */
-static km_flash_result_t prv_cut_program(km_nor_prog_outcome_t o, const uint8_t *target,
-                                         uint8_t *seen)
+static km_flash_result_t prv_cut_program(km_nor_prog_outcome_t o, const uint8_t *target, uint8_t *seen)
 {
     assert_true(km_nor_sim_init(&s_sim, &s_geoms[0], &s_flash));
     km_nor_sim_seed(&s_sim, 1234u + (uint32_t)o);
@@ -211,8 +211,8 @@ static void test_cut_counts_ops_across_program_and_erase(void **state)
 }
 
 /* Fills page 0 with a pattern, cuts its erase with outcome o. */
-static void prv_cut_erase(km_nor_erase_outcome_t o, unsigned *erased, unsigned *old,
-                          unsigned *other, unsigned *ecc)
+static void prv_cut_erase(km_nor_erase_outcome_t o, unsigned *erased, unsigned *old, unsigned *other,
+                          unsigned *ecc)
 {
     assert_true(km_nor_sim_init(&s_sim, &s_geoms[1], &s_flash));
     km_nor_sim_seed(&s_sim, 99u + (uint32_t)o);

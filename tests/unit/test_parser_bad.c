@@ -1,6 +1,7 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Frame parser tests, part 2: the bad-input catalog. Each case states its
  * defined outcome (no frame, which counter) and checks that a good frame
- * right after it still arrives (PROTOCOL.md §2 frames, §4 checksum
+ * right after it still arrives (docs/protocol.md §2 frames, §4 checksum
  * decision, §7 gap). */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -40,10 +41,9 @@ static void test_s2_wrong_header_bytes(void **state)
 {
     (void)state;
     static const uint8_t cases[][4] = {
-        {0xFF, 0xF9, 0x00, 0x00}, /* swapped header */
-        {0xF9, 0x00, 0x01, 0x02}, /* F9 then not FF/F5 */
-        {0xF9, 0xFE, 0x01, 0x02},
-        {0xF9, 0xF9, 0xF9, 0xF9}, /* repeated F9: each fails against the next */
+        {0xFF, 0xF9, 0x00, 0x00},                           /* swapped header */
+        {0xF9, 0x00, 0x01, 0x02},                           /* F9 then not FF/F5 */
+        {0xF9, 0xFE, 0x01, 0x02}, {0xF9, 0xF9, 0xF9, 0xF9}, /* repeated F9: each fails against the next */
         {0xFF, 0xFF, 0xFF, 0xFF},
     };
     for (unsigned i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -224,10 +224,10 @@ static void test_s2_two_hidden_frames_one_per_call(void **state)
 {
     (void)state;
     static const uint8_t stream[] = {
-        0xF9, 0xFF, 0x01, 0x0E,                   /* candidate: needs 18 bytes */
-        0xF9, 0xFF, 0x01, 0x02, 0x01, 0xFB,       /* ping 1 */
-        0xF9, 0xFF, 0x02, 0x02, 0x01, 0xFA,       /* ping 2 */
-        0x00, 0x00,                               /* candidate's bad checksum */
+        0xF9, 0xFF, 0x01, 0x0E,             /* candidate: needs 18 bytes */
+        0xF9, 0xFF, 0x01, 0x02, 0x01, 0xFB, /* ping 1 */
+        0xF9, 0xFF, 0x02, 0x02, 0x01, 0xFA, /* ping 2 */
+        0x00, 0x00,                         /* candidate's bad checksum */
     };
     for (unsigned by_poll = 0; by_poll < 2; by_poll++) {
         rig_t r;
@@ -267,13 +267,13 @@ static void test_s7_no_frame_across_two_cuts_while_pending(void **state)
     rig_command(ping9, 9, 0x01, NULL, 0);
     rig_t r;
     rig_init(&r, GAP, 0u);
-    rig_feed(&r, stream, n, 1u);    /* hands out ping 1 */
-    rig_feed(&r, ping9, 5, 1u);     /* pings 2..6; ping 9 lacks its checksum */
+    rig_feed(&r, stream, n, 1u); /* hands out ping 1 */
+    rig_feed(&r, ping9, 5, 1u);  /* pings 2..6; ping 9 lacks its checksum */
     assert_int_equal(r.n, 6);
     km_parser_overrun(&r.p);
     rig_feed(&r, &ping9[5], 1, 1u); /* ping 7 */
     km_parser_overrun(&r.p);
-    rig_poll(&r, r.tick);           /* ping 8 */
+    rig_poll(&r, r.tick); /* ping 8 */
     rig_poll(&r, r.tick + GAP + 1u);
     assert_int_equal(r.n, 8);
     for (unsigned i = 0; i < 8; i++) {

@@ -1,8 +1,9 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Frame parser tests, part 4: the batch entry (km_parser_feed_bytes) is the
  * byte entry (km_parser_feed) run byte by byte, differentially.
  *
  * Two parsers get the same seeded streams: good and corrupted command
- * frames, other servos' responses (PROTOCOL.md §2), truncated frames, noise
+ * frames, other servos' responses (docs/protocol.md §2), truncated frames, noise
  * with F9 and F9 FF in it, ticks that stand still, step, or jump past the
  * gap (§7), overruns and polls. One parser is fed byte by byte, the other
  * in runs of random length. After every batch call the byte-fed parser has

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Frame parser tests, part 3: a seeded, deterministic property test.
  *
  * A stream mixes random good command frames with random garbage, valid and
@@ -9,7 +10,7 @@
  * A truncated frame is followed by a gap longer than gap_ticks.
  * Property: every good frame is delivered exactly once, in order, with its
  * fields intact, and each counter equals the number of pieces of its kind
- * (PROTOCOL.md §2 frames and responses, §7 gap). */
+ * (docs/protocol.md §2 frames and responses, §7 gap). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -98,8 +99,8 @@ static void piece_response(world_t *w, bool corrupt)
     }
     size_t n;
     do {
-        n = rig_command(buf, (uint8_t)(rnd() % (KM_ID_MAX + 1u)), corrupt ? rnd_not_f9() : rnd_byte(),
-                        body, len);
+        n = rig_command(buf, (uint8_t)(rnd() % (KM_ID_MAX + 1u)), corrupt ? rnd_not_f9() : rnd_byte(), body,
+                        len);
         buf[1] = 0xF5;
         buf[n - 1u] = km_checksum(&buf[2], (uint32_t)(n - 3u));
         if (corrupt) {
@@ -196,19 +197,36 @@ static void run_world(uint32_t seed)
     rig_init(&w.rig, GAP, rnd()); /* any start tick, wrap-around included */
     for (unsigned i = 0; i < PIECES; i++) {
         switch (rnd() % 10u) {
-        case 0: case 1: case 2: case 3: piece_good(&w); break;
-        case 4: piece_response(&w, false); break;
-        case 5: piece_response(&w, true); break;
-        case 6: piece_bad_checksum(&w); break;
-        case 7: piece_truncated(&w); break;
-        case 8: piece_bad_header(&w); break;
-        default: piece_garbage(&w); break;
+        case 0:
+        case 1:
+        case 2:
+        case 3:
+            piece_good(&w);
+            break;
+        case 4:
+            piece_response(&w, false);
+            break;
+        case 5:
+            piece_response(&w, true);
+            break;
+        case 6:
+            piece_bad_checksum(&w);
+            break;
+        case 7:
+            piece_truncated(&w);
+            break;
+        case 8:
+            piece_bad_header(&w);
+            break;
+        default:
+            piece_garbage(&w);
+            break;
         }
     }
     rig_poll(&w.rig, w.rig.tick + GAP + 1u);
     /* Every kind of piece really occurred. */
-    assert_true(w.n_want > 300u && w.n_resp > 0u && w.n_csum_cmd > 0u && w.n_trunc > 0u &&
-                w.n_framing > 0u && w.n_csum > w.n_csum_cmd);
+    assert_true(w.n_want > 300u && w.n_resp > 0u && w.n_csum_cmd > 0u && w.n_trunc > 0u && w.n_framing > 0u &&
+                w.n_csum > w.n_csum_cmd);
 
     assert_int_equal(w.rig.n, w.n_want);
     for (unsigned i = 0; i < w.n_want; i++) {

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Plant model tests: each checks one physical behaviour against the
  * parameters (not against numbers read back from the model), so a wrong
  * equation, unit or sign fails. Doubles are fine here: the host computes the
@@ -75,8 +76,8 @@ static void test_small_pwm_held_by_friction(void **state)
     assert_true(km_plant_init(&p, c));
     /* stall torque at duty d: d * V/(R+Rint) * Kt * ratio * eff; pick d whose
      * torque is half the Coulomb friction */
-    double t_full = c->supply_mv / (double)(c->motor_r_mohm + c->supply_r_mohm) *
-                    c->motor_ke_uv_s_rad * c->gear_ratio * c->gear_eff_pct / 100.0; /* µN·m */
+    double t_full = c->supply_mv / (double)(c->motor_r_mohm + c->supply_r_mohm) * c->motor_ke_uv_s_rad *
+                    c->gear_ratio * c->gear_eff_pct / 100.0; /* µN·m */
     int16_t pwm = (int16_t)(1000.0 * 0.5 * c->coulomb_unm / t_full);
     assert_true(pwm > 0);
     km_plant_input_t in = drive(pwm);
@@ -250,7 +251,7 @@ static void test_external_torque(void **state)
     /* above friction, coasting: back-driven in the torque's direction, speed
      * limited by viscous friction only: w = (T - Tc) / b */
     in.ext_torque_unm = -(int32_t)c.coulomb_unm * 2;
-    run_ms(&p, &in, 20000); /* J / b ~ 3 s: settled */
+    run_ms(&p, &in, 20000);                                       /* J / b ~ 3 s: settled */
     double want = -(double)c.coulomb_unm / c.viscous_unm_per_dps; /* °/s */
     if (want < -KM_PLANT_SPEED_MAX_MDPS / 1000.0) {
         want = -KM_PLANT_SPEED_MAX_MDPS / 1000.0;
@@ -309,9 +310,8 @@ static void test_long_runs_no_overflow(void **state)
 static bool same_state(const km_plant_t *x, const km_plant_t *y)
 {
     return x->pos_ddeg == y->pos_ddeg && x->pos_rem_ndeg == y->pos_rem_ndeg &&
-           x->speed_mdps == y->speed_mdps && x->current_ma == y->current_ma &&
-           x->supply_ma == y->supply_ma && x->bus_mv == y->bus_mv &&
-           x->temp_uc == y->temp_uc && x->carry_us == y->carry_us &&
+           x->speed_mdps == y->speed_mdps && x->current_ma == y->current_ma && x->supply_ma == y->supply_ma &&
+           x->bus_mv == y->bus_mv && x->temp_uc == y->temp_uc && x->carry_us == y->carry_us &&
            x->time_ms == y->time_ms && x->time_us_part == y->time_us_part;
 }
 
@@ -342,9 +342,12 @@ static void test_encoder_counts_within_one_turn(void **state)
     (void)state;
     km_plant_t p;
     assert_true(km_plant_init(&p, &km_plant_default_config));
-    const struct { int32_t ddeg; uint16_t counts; } rows[] = {
-        {0, 0}, {900, 1024}, {1800, 2048}, {3599, 4095}, {3600, 0},
-        {3700, 114}, {-100, 3982}, {-3600, 0}, {-36100, 3982},
+    const struct {
+        int32_t ddeg;
+        uint16_t counts;
+    } rows[] = {
+        {0, 0},      {900, 1024},  {1800, 2048}, {3599, 4095},   {3600, 0},
+        {3700, 114}, {-100, 3982}, {-3600, 0},   {-36100, 3982},
     };
     for (size_t i = 0; i < sizeof rows / sizeof rows[0]; i++) {
         km_plant_set_position_ddeg(&p, rows[i].ddeg);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The realistic plant (sim/plant/km_plant_real.c, docs/plant.md): each test
  * checks one physical behaviour against the parameters of
  * km_plant_realistic_params (not against numbers read back from the
@@ -18,7 +19,7 @@
 
 static const km_plant_input_t k_coast = {KM_PLANT_COAST, 0, 0};
 
-static km_plant_config_t s_cfg;   /* the plant keeps a pointer to its config */
+static km_plant_config_t s_cfg; /* the plant keeps a pointer to its config */
 static km_plant_real_t s_real;
 
 /* The realistic config with its own realism copy, to vary; `free` = no pot,
@@ -114,16 +115,16 @@ static void test_pot_reading_noise_and_quantisation(void **state)
         const double a = km_plant_pot_adc(&p);
         s1 += a;
         s2 += a * a;
-        const int32_t want_pos = (int32_t)((km_plant_pot_adc(&p) * 2 * c->pot_travel_ddeg + 2047) / 4095) -
-                                 c->pot_travel_ddeg;
+        const int32_t want_pos =
+            (int32_t)((km_plant_pot_adc(&p) * 2 * c->pot_travel_ddeg + 2047) / 4095) - c->pot_travel_ddeg;
         assert_int_equal(km_plant_position_ddeg(&p), want_pos);
     }
     const double mean = s1 / n;
     const double sd = sqrt(s2 / n - mean * mean);
     const double sigma = s_real.pot_noise_mlsb / 1000.0 / sqrt(1 << s_real.pot_oversample_log2);
     const double want_sd = sqrt(sigma * sigma + 1.0 / 12.0);
-    print_message("pot at 43.7 deg: ADC mean %.3f (true %.3f), sd %.3f (expected ~%.3f)\n", mean, want_adc, sd,
-                  want_sd);
+    print_message("pot at 43.7 deg: ADC mean %.3f (true %.3f), sd %.3f (expected ~%.3f)\n", mean, want_adc,
+                  sd, want_sd);
     assert_true(fabs(mean - want_adc) < 0.1);
     assert_true(sd > 0.8 * want_sd && sd < 1.25 * want_sd);
     assert_int_equal(km_plant_turns_ddeg(&p), 437); /* the shaft itself did not move */
@@ -211,7 +212,8 @@ static void test_speed_and_shared_supply(void **state)
         const double r_src = c->supply_r_mohm + n * s_real.bus_r_mohm; /* mΩ */
         const double i = km_plant_current_ma(&p);
         const double sag = c->supply_mv - km_plant_voltage_mv(&p);
-        print_message("%u servos on the bus: stall %.0f mA, sag %.0f mV (%.0f mΩ expected)\n", n, i, sag, r_src);
+        print_message("%u servos on the bus: stall %.0f mA, sag %.0f mV (%.0f mΩ expected)\n", n, i, sag,
+                      r_src);
         assert_true(fabs(sag / i * 1000.0 - r_src) < 0.02 * r_src + 3);
         assert_true(fabs(i - c->supply_mv * 1000.0 / (c->motor_r_mohm + r_src)) < 0.02 * i);
     }
@@ -259,7 +261,8 @@ static void test_winding_resistance_rises_with_temperature(void **state)
     run_ms(&p, &full, 2);
     const double r_hot = c->motor_r_mohm + s_real.winding_r_mohm * s_real.tempco_ppm * 1e-6 * 100.0;
     const double want = km_plant_voltage_mv(&p) / r_hot * 1000.0;
-    print_message("stall at +100 degC: %d mA (%.0f expected with %.0f mΩ)\n", km_plant_current_ma(&p), want, r_hot);
+    print_message("stall at +100 degC: %d mA (%.0f expected with %.0f mΩ)\n", km_plant_current_ma(&p), want,
+                  r_hot);
     assert_true(fabs(km_plant_current_ma(&p) - want) < 0.01 * want + 2);
 }
 
@@ -272,9 +275,11 @@ static void test_lifting_torque_follows_forward_efficiency(void **state)
     km_plant_config_t *c = real_config(true);
     km_plant_t p;
     const double eff = c->gear_eff_pct / 100.0;
-    const double r_total = c->motor_r_mohm + c->supply_r_mohm + s_real.bus_servos * s_real.bus_r_mohm; /* mΩ */
-    const double tm = ke_out() * c->supply_mv / r_total; /* N·m at stall */
-    const double t_max = eff * (tm - (c->coulomb_unm + s_real.stribeck_unm) * 1e-6) - s_real.out_coulomb_unm * 1e-6;
+    const double r_total =
+        c->motor_r_mohm + c->supply_r_mohm + s_real.bus_servos * s_real.bus_r_mohm; /* mΩ */
+    const double tm = ke_out() * c->supply_mv / r_total;                            /* N·m at stall */
+    const double t_max =
+        eff * (tm - (c->coulomb_unm + s_real.stribeck_unm) * 1e-6) - s_real.out_coulomb_unm * 1e-6;
     int32_t moved[2];
     for (int k = 0; k < 2; k++) {
         const int32_t t_test = (int32_t)(t_max * 1e6 * (k == 0 ? 0.96 : 1.04));
@@ -282,11 +287,12 @@ static void test_lifting_torque_follows_forward_efficiency(void **state)
         const km_plant_input_t in = {KM_PLANT_DRIVE, 1000, -t_test};
         run_ms(&p, &in, 500);
         moved[k] = km_plant_turns_ddeg(&p);
-        print_message("opposing %.3f N.m (limit %.3f): shaft at %.1f deg\n", t_test / 1e6, t_max, moved[k] / 10.0);
+        print_message("opposing %.3f N.m (limit %.3f): shaft at %.1f deg\n", t_test / 1e6, t_max,
+                      moved[k] / 10.0);
     }
     const int32_t lifts = moved[0], fails = moved[1];
-    assert_true(lifts > 20);  /* 4 % below the limit it turns */
-    assert_true(fails < 5);   /* 4 % above it does not (it only takes up the play) */
+    assert_true(lifts > 20); /* 4 % below the limit it turns */
+    assert_true(fails < 5);  /* 4 % above it does not (it only takes up the play) */
 }
 
 /* Stribeck: while turning, the friction the motor overcomes is
@@ -335,7 +341,8 @@ static void test_back_driving_needs_the_backward_efficiency(void **state)
     km_plant_config_t *c = real_config(true);
     km_plant_t p;
     assert_true(km_plant_init(&p, c));
-    const double want = s_real.out_coulomb_unm + (c->coulomb_unm + s_real.stribeck_unm) / (s_real.eff_back_pct / 100.0);
+    const double want =
+        s_real.out_coulomb_unm + (c->coulomb_unm + s_real.stribeck_unm) / (s_real.eff_back_pct / 100.0);
     int32_t t = 0;
     int32_t moved_at = -1;
     for (int ms = 0; ms < 12000 && moved_at < 0; ms++) {
@@ -389,9 +396,11 @@ static void test_gravity_pulls_the_arm_down(void **state)
     assert_true(km_plant_init(&p, c));
     run_ms(&p, &k_coast, 3000);
     const double pos = km_plant_turns_ddeg(&p) / 10.0;
-    const double hold = s_real.out_coulomb_unm + (c->coulomb_unm + s_real.stribeck_unm) / (s_real.eff_back_pct / 100.0);
+    const double hold =
+        s_real.out_coulomb_unm + (c->coulomb_unm + s_real.stribeck_unm) / (s_real.eff_back_pct / 100.0);
     const double band = asin(hold / s_real.gravity_unm) * 180.0 / PI;
-    print_message("arm from horizontal: rests at %.1f deg (down at -90, friction band %.1f deg)\n", pos, band);
+    print_message("arm from horizontal: rests at %.1f deg (down at -90, friction band %.1f deg)\n", pos,
+                  band);
     assert_true(pos < -90.0 + band + 1.0 && pos > -90.0 - band - 1.0);
     assert_int_equal(km_plant_speed_mdps(&p), 0);
 }

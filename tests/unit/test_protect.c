@@ -1,4 +1,5 @@
-/* control/km_protect.c on its own, without the plant: PROTOCOL.md §5.2
+/* SPDX-License-Identifier: Apache-2.0 */
+/* control/km_protect.c on its own, without the plant: docs/protocol.md §5.2
  * (0x32 enable, 0x33 release mode, 0x34 action, 0x36 flags and clear,
  * 0x3C-0x3F thresholds and times) and §4 status bits 0-3, at 1 ms ticks
  * with inputs as functions of time (no plant, no control tick). */

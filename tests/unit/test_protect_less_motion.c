@@ -1,7 +1,8 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A request for less motion is always accepted (issue 18 item 4;
  * docs/protocol-decisions.md "Protections"): through the whole control tick
  * on the plant (km_control_step via the plant rig), while a protection acts
- * (PROTOCOL.md §5.2 0x34, §5.4 0x64 = 5) and while a hardware fault is
+ * (docs/protocol.md §5.2 0x34, §5.4 0x64 = 5) and while a hardware fault is
  * latched (§5.2 0x35, §4 bit 4). Less motion: 0x64 = 0/1, 0x6E = 0,
  * 0x6F = 0, 0x70 with its stop bit (bit 7) or with nothing to run. Each is
  * accepted (no status bit 6), the output never drives because of it, and
@@ -25,16 +26,30 @@ typedef struct {
 } less_t;
 
 /* The requests as the dispatcher's hooks decode the frames named. */
-#define REQ_TS(v) {.kind = KM_REQ_TORQUE, .u = {.torque = (v)}}
-#define REQ_RUN(m_, rev_, v_, until_, amount_, after_)                                                      \
-    {.kind = KM_REQ_MOTOR,                                                                                  \
-     .u = {.run = {.mode = (m_), .reverse = (rev_), .value = (v_), .until = (until_), .amount = (amount_),     \
-                   .after = (after_)}}}
+#define REQ_TS(v)                                    \
+    {                                                \
+        .kind = KM_REQ_TORQUE, .u = {.torque = (v) } \
+    }
+#define REQ_RUN(m_, rev_, v_, until_, amount_, after_) \
+    {                                                  \
+        .kind = KM_REQ_MOTOR, .u = {                   \
+            .run = {.mode = (m_),                      \
+                    .reverse = (rev_),                 \
+                    .value = (v_),                     \
+                    .until = (until_),                 \
+                    .amount = (amount_),               \
+                    .after = (after_)}                 \
+        }                                              \
+    }
 /* 0x6E (PWM) or 0x6F (speed) = v: run on, the idle output at 0. */
-#define REQ_MOTOR(m, v) REQ_RUN((m), (v) < 0, (uint16_t)((v) < 0 ? -(v) : (v)), KM_UNTIL_NONE, 0, KM_AFTER_IDLE)
-#define REQ_MOVE(k_, rel_, t_, ts_)                                                                     \
-    {.kind = KM_REQ_MOVE,                                                                                   \
-     .u = {.move = {.kind = (k_), .relative = (rel_), .target = (t_), .time_or_speed = (ts_), .pwm_cap = 1000}}}
+#define REQ_MOTOR(m, v) \
+    REQ_RUN((m), (v) < 0, (uint16_t)((v) < 0 ? -(v) : (v)), KM_UNTIL_NONE, 0, KM_AFTER_IDLE)
+#define REQ_MOVE(k_, rel_, t_, ts_)                                                                          \
+    {                                                                                                        \
+        .kind = KM_REQ_MOVE, .u =                                                                            \
+        {.move = {.kind = (k_), .relative = (rel_), .target = (t_), .time_or_speed = (ts_), .pwm_cap = 1000} \
+        }                                                                                                    \
+    }
 
 static const less_t k_less[] = {
     {"0x64 = 0", REQ_TS(0)},
@@ -43,7 +58,8 @@ static const less_t k_less[] = {
     {"0x6F = 0", REQ_MOTOR(KM_RUN_SPEED, 0)},
     {"0x70 stop, free after", REQ_RUN(KM_RUN_STOP, false, 0, KM_UNTIL_NONE, 0, KM_AFTER_FREE)},
     {"0x70 stop, brake after", REQ_RUN(KM_RUN_STOP, false, 0, KM_UNTIL_NONE, 0, KM_AFTER_BRAKE)},
-    {"0x70 stop with a run in its fields", REQ_RUN(KM_RUN_STOP, true, 800, KM_UNTIL_TIME, 50, KM_AFTER_BRAKE)},
+    {"0x70 stop with a run in its fields",
+     REQ_RUN(KM_RUN_STOP, true, 800, KM_UNTIL_TIME, 50, KM_AFTER_BRAKE)},
     {"0x70 run on at PWM 0", REQ_RUN(KM_RUN_PWM, false, 0, KM_UNTIL_NONE, 0, KM_AFTER_FREE)},
     {"0x70 run for 0 s at PWM 500", REQ_RUN(KM_RUN_PWM, false, 500, KM_UNTIL_TIME, 0, KM_AFTER_FREE)},
 };
@@ -58,7 +74,7 @@ static void more_motion_refused(kr_rig_t *r)
         REQ_MOTOR(KM_RUN_PWM, 500),
         REQ_MOTOR(KM_RUN_PWM, -1),
         REQ_MOTOR(KM_RUN_SPEED, 30),
-        REQ_RUN(KM_RUN_PWM, false, 500, KM_UNTIL_TIME, 5, KM_AFTER_FREE), /* 0x70 0x10, 0.5 s at 500 */
+        REQ_RUN(KM_RUN_PWM, false, 500, KM_UNTIL_TIME, 5, KM_AFTER_FREE),  /* 0x70 0x10, 0.5 s at 500 */
         REQ_RUN(KM_RUN_SPEED, false, 90, KM_UNTIL_NONE, 0, KM_AFTER_FREE), /* 0x70 0x04, 90 deg/s */
         REQ_MOVE(KM_MOVE_TIME, false, 300, 500),
         REQ_MOVE(KM_MOVE_SPEED, false, -300, 0),
@@ -152,13 +168,13 @@ static void test_s5_2_less_motion_ends_a_protection_hold(void **state)
         kr_rig_t r;
         kr_init(&r);
         protections_on(&r);
-        r.params.prot_state = 0x58;          /* current: 10 = hold */
+        r.params.prot_state = 0x58; /* current: 10 = hold */
         r.params.current_trip_ma = 300;
-        r.params.current_time_100ms = 2;     /* 200 ms */
+        r.params.current_time_100ms = 2; /* 200 ms */
         kr_run(&r, 50);
         assert_true(kr_torque(&r, 2));
         kr_run(&r, 100);
-        r.in.ext_torque_unm = -1000000;      /* 1 N.m against the hold: ~1.3 A */
+        r.in.ext_torque_unm = -1000000; /* 1 N.m against the hold: ~1.3 A */
         uint32_t ms = 0;
         while (!r.live.protecting && ms < 2000u) {
             kr_tick(&r);

@@ -1,4 +1,5 @@
-/* PROTOCOL.md §5 register by register, driven from km_reg_table: every
+/* SPDX-License-Identifier: Apache-2.0 */
+/* docs/protocol.md §5 register by register, driven from km_reg_table: every
  * default reads back, every stored RW register takes its range edges and
  * refuses the values just outside with nothing changed, cross-field rules.
  * Expected defaults and ranges are written here from §5 and the product
@@ -19,32 +20,83 @@ static kt_fx_t fx;
 static bool spec_default(uint8_t addr, const km_product_t *p, uint32_t *out)
 {
     switch (addr) {
-    case 0x0F: *out = ID; return true; /* the fixture stores its ID; 0 by default (§5.1) */
-    case 0x10: *out = 1152; return true;
-    case 0x11: *out = 0x02; return true;
-    case 0x12: *out = 200; return true;
-    case 0x13: *out = 1000; return true;
-    case 0x14: *out = p->max_current_ma; return true;
-    case 0x15: *out = p->max_speed_dps; return true;
-    case 0x16: *out = (uint16_t)p->zero_offset1; return true;
-    case 0x17: *out = 0; return true;
-    case 0x19: *out = (uint16_t)p->angle_min; return true;
-    case 0x1A: *out = (uint16_t)p->angle_max; return true;
-    case 0x32: *out = 0x0F; return true;
-    case 0x33: *out = 0x00; return true;
-    case 0x34: *out = 0x54; return true;
-    case 0x35: *out = 0; return true;
-    case 0x36: *out = 0; return true;
-    case 0x3C: *out = (uint32_t)p->voltage_high_v | ((uint32_t)p->voltage_low_v << 8); return true;
-    case 0x3D: *out = 60u | (5u << 8); return true;
-    case 0x3E: *out = (uint32_t)p->current_threshold_ma | (20u << 16); return true;
-    case 0x3F: *out = 600u | (20u << 16); return true;
-    case 0x5A: *out = 0; return true;
-    case 0x5B: *out = 1000; return true;
-    case 0x5C: *out = p->max_current_ma; return true;
-    case 0x5D: *out = p->max_speed_dps; return true;
-    case 0x64: *out = 3; return true;
-    default: return false;
+    case 0x0F:
+        *out = ID;
+        return true; /* the fixture stores its ID; 0 by default (§5.1) */
+    case 0x10:
+        *out = 1152;
+        return true;
+    case 0x11:
+        *out = 0x02;
+        return true;
+    case 0x12:
+        *out = 200;
+        return true;
+    case 0x13:
+        *out = 1000;
+        return true;
+    case 0x14:
+        *out = p->max_current_ma;
+        return true;
+    case 0x15:
+        *out = p->max_speed_dps;
+        return true;
+    case 0x16:
+        *out = (uint16_t)p->zero_offset1;
+        return true;
+    case 0x17:
+        *out = 0;
+        return true;
+    case 0x19:
+        *out = (uint16_t)p->angle_min;
+        return true;
+    case 0x1A:
+        *out = (uint16_t)p->angle_max;
+        return true;
+    case 0x32:
+        *out = 0x0F;
+        return true;
+    case 0x33:
+        *out = 0x00;
+        return true;
+    case 0x34:
+        *out = 0x54;
+        return true;
+    case 0x35:
+        *out = 0;
+        return true;
+    case 0x36:
+        *out = 0;
+        return true;
+    case 0x3C:
+        *out = (uint32_t)p->voltage_high_v | ((uint32_t)p->voltage_low_v << 8);
+        return true;
+    case 0x3D:
+        *out = 60u | (5u << 8);
+        return true;
+    case 0x3E:
+        *out = (uint32_t)p->current_threshold_ma | (20u << 16);
+        return true;
+    case 0x3F:
+        *out = 600u | (20u << 16);
+        return true;
+    case 0x5A:
+        *out = 0;
+        return true;
+    case 0x5B:
+        *out = 1000;
+        return true;
+    case 0x5C:
+        *out = p->max_current_ma;
+        return true;
+    case 0x5D:
+        *out = p->max_speed_dps;
+        return true;
+    case 0x64:
+        *out = 3;
+        return true;
+    default:
+        return false;
     }
 }
 
@@ -58,20 +110,48 @@ typedef struct {
 static bool spec_range(uint8_t addr, const km_product_t *p, range_t *r)
 {
     switch (addr) {
-    case 0x0F: *r = (range_t){1, false, 0, 250}; return true;
-    case 0x10: *r = (range_t){2, false, p->baud_min_100, p->baud_max_100}; return true;
-    case 0x12: *r = (range_t){2, false, 0, 65535}; return true;
-    case 0x13: *r = (range_t){2, false, 0, 1000}; return true;
-    case 0x14: *r = (range_t){2, false, 0, p->current_max_ma}; return true;
-    case 0x15: *r = (range_t){2, false, 0, p->speed_max_dps}; return true;
-    case 0x17: *r = (range_t){2, true, -p->zero_offset2_max, p->zero_offset2_max}; return true;
-    case 0x19: case 0x1A: *r = (range_t){2, true, p->travel_min, p->travel_max}; return true;
-    case 0x5A: *r = (range_t){1, false, 0, 2}; return true;
-    case 0x5B: *r = (range_t){2, false, 0, 1000}; return true;
-    case 0x5C: *r = (range_t){2, false, 0, p->current_max_ma}; return true;
-    case 0x5D: *r = (range_t){2, false, 0, p->speed_max_dps}; return true;
-    case 0x64: *r = (range_t){1, false, 0, 3}; return true;
-    default: return false;
+    case 0x0F:
+        *r = (range_t){1, false, 0, 250};
+        return true;
+    case 0x10:
+        *r = (range_t){2, false, p->baud_min_100, p->baud_max_100};
+        return true;
+    case 0x12:
+        *r = (range_t){2, false, 0, 65535};
+        return true;
+    case 0x13:
+        *r = (range_t){2, false, 0, 1000};
+        return true;
+    case 0x14:
+        *r = (range_t){2, false, 0, p->current_max_ma};
+        return true;
+    case 0x15:
+        *r = (range_t){2, false, 0, p->speed_max_dps};
+        return true;
+    case 0x17:
+        *r = (range_t){2, true, -p->zero_offset2_max, p->zero_offset2_max};
+        return true;
+    case 0x19:
+    case 0x1A:
+        *r = (range_t){2, true, p->travel_min, p->travel_max};
+        return true;
+    case 0x5A:
+        *r = (range_t){1, false, 0, 2};
+        return true;
+    case 0x5B:
+        *r = (range_t){2, false, 0, 1000};
+        return true;
+    case 0x5C:
+        *r = (range_t){2, false, 0, p->current_max_ma};
+        return true;
+    case 0x5D:
+        *r = (range_t){2, false, 0, p->speed_max_dps};
+        return true;
+    case 0x64:
+        *r = (range_t){1, false, 0, 3};
+        return true;
+    default:
+        return false;
     }
 }
 
@@ -80,8 +160,14 @@ static bool spec_range(uint8_t addr, const km_product_t *p, range_t *r)
 static bool spec_bits(uint8_t addr, uint8_t *mask)
 {
     switch (addr) {
-    case 0x11: case 0x32: case 0x33: case 0x36: *mask = 0x0F; return true;
-    default: return false;
+    case 0x11:
+    case 0x32:
+    case 0x33:
+    case 0x36:
+        *mask = 0x0F;
+        return true;
+    default:
+        return false;
     }
 }
 
@@ -147,7 +233,8 @@ static void put(uint8_t *b, int32_t v, uint8_t size)
 
 static int32_t as_value(uint32_t raw, const range_t *r)
 {
-    if (!r->is_signed) return (int32_t)raw;
+    if (!r->is_signed)
+        return (int32_t)raw;
     return r->size == 1 ? (int8_t)raw : (int16_t)raw;
 }
 
@@ -159,11 +246,20 @@ static void init_for(const km_product_t *p, uint8_t a)
 {
     kt_init(&fx, p, ID);
     switch (a) {
-    case 0x19: kt_persisted_set(&fx, 0x1A, 0); break;
-    case 0x1A: kt_persisted_set(&fx, 0x19, 0); break;
-    case 0x5C: kt_persisted_set(&fx, 0x14, p->current_max_ma); break;
-    case 0x5D: kt_persisted_set(&fx, 0x15, p->speed_max_dps); break;
-    default: return;
+    case 0x19:
+        kt_persisted_set(&fx, 0x1A, 0);
+        break;
+    case 0x1A:
+        kt_persisted_set(&fx, 0x19, 0);
+        break;
+    case 0x5C:
+        kt_persisted_set(&fx, 0x14, p->current_max_ma);
+        break;
+    case 0x5D:
+        kt_persisted_set(&fx, 0x15, p->speed_max_dps);
+        break;
+    default:
+        return;
     }
     kt_reinit(&fx, p);
 }
@@ -284,9 +380,12 @@ static void test_s5_2_0x3C_voltage_thresholds(void **state)
 {
     (void)state;
     const uint8_t vmax = kt_product_pot()->voltage_max_v;
-    const struct { uint8_t h, l; bool ok; } c[] = {
-        {vmax, (uint8_t)(vmax - 1), true}, {1, 0, true}, {12, 6, true},
-        {10, 10, false}, {5, 10, false}, {(uint8_t)(vmax + 1), 5, false}, {0, 0, false},
+    const struct {
+        uint8_t h, l;
+        bool ok;
+    } c[] = {
+        {vmax, (uint8_t)(vmax - 1), true}, {1, 0, true},  {12, 6, true}, {10, 10, false}, {5, 10, false},
+        {(uint8_t)(vmax + 1), 5, false},   {0, 0, false},
     };
     for (unsigned i = 0; i < sizeof c / sizeof c[0]; i++) {
         const uint8_t b[2] = {c[i].h, c[i].l};
@@ -298,7 +397,10 @@ static void test_s5_2_0x3C_voltage_thresholds(void **state)
 static void test_s5_2_0x3D_temperature_thresholds(void **state)
 {
     (void)state;
-    const struct { uint8_t t, h; bool ok; } c[] = {
+    const struct {
+        uint8_t t, h;
+        bool ok;
+    } c[] = {
         {60, 59, true}, {255, 254, true}, {1, 0, true}, {60, 60, false}, {0, 0, false}, {50, 200, false},
     };
     for (unsigned i = 0; i < sizeof c / sizeof c[0]; i++) {
@@ -312,10 +414,15 @@ static void test_s5_2_0x3E_0x3F_thresholds_and_detection_time(void **state)
 {
     (void)state;
     const uint16_t cmax = kt_product_pot()->current_max_ma;
-    const struct { uint8_t a; uint16_t v; uint8_t t; bool ok; } c[] = {
-        {0x3E, cmax, 1, true}, {0x3E, 0, 255, true}, {0x3E, (uint16_t)(cmax + 1), 20, false},
-        {0x3E, 1000, 0, false},
-        {0x3F, 1000, 1, true}, {0x3F, 0, 20, true}, {0x3F, 1001, 1, false}, {0x3F, 600, 0, false},
+    const struct {
+        uint8_t a;
+        uint16_t v;
+        uint8_t t;
+        bool ok;
+    } c[] = {
+        {0x3E, cmax, 1, true},  {0x3E, 0, 255, true},  {0x3E, (uint16_t)(cmax + 1), 20, false},
+        {0x3E, 1000, 0, false}, {0x3F, 1000, 1, true}, {0x3F, 0, 20, true},
+        {0x3F, 1001, 1, false}, {0x3F, 600, 0, false},
     };
     for (unsigned i = 0; i < sizeof c / sizeof c[0]; i++) {
         const uint8_t b[3] = {(uint8_t)c[i].v, (uint8_t)(c[i].v >> 8), c[i].t};
@@ -387,17 +494,27 @@ static void test_s5_2_0x36_reserved_bits_masked_request(void **state)
 static void test_s5_persisted_values_checked_at_init(void **state)
 {
     (void)state;
-    static const struct { uint8_t addr; uint32_t bad; uint32_t want; } c[] = {
-        {0x10, 0, 1152}, {0x10, 10001, 1152}, {0x13, 5000, 1000}, {0x0F, 251, 0},
-        {0x11, 0xF2, 0x02}, {0x3D, 60u | (60u << 8), 60u | (5u << 8)},
+    static const struct {
+        uint8_t addr;
+        uint32_t bad;
+        uint32_t want;
+    } c[] = {
+        {0x10, 0, 1152},
+        {0x10, 10001, 1152},
+        {0x13, 5000, 1000},
+        {0x0F, 251, 0},
+        {0x11, 0xF2, 0x02},
+        {0x3D, 60u | (60u << 8), 60u | (5u << 8)},
         {0x13, 0x10000u | 500u, 1000}, /* garbage above the wire bytes */
     };
     for (unsigned i = 0; i < sizeof c / sizeof c[0]; i++) {
         kt_init(&fx, kt_product_pot(), ID);
         unsigned k = 0;
         for (unsigned j = 0; j < KM_REG_COUNT; j++) {
-            if (!km_reg_table[j].persisted) continue;
-            if (km_reg_table[j].addr == c[i].addr) fx.persisted[k] = c[i].bad;
+            if (!km_reg_table[j].persisted)
+                continue;
+            if (km_reg_table[j].addr == c[i].addr)
+                fx.persisted[k] = c[i].bad;
             k++;
         }
         km_servo_init(&fx.s, kt_product_pot(), fx.persisted, 1, &fx.ops);
@@ -427,10 +544,20 @@ static void test_s5_behaviour_columns_match_access(void **state)
         }
         uint8_t want = 0;
         switch (r->addr) {
-        case 0x64: want = KM_K(1); break;
-        case 0x65: case 0x66: want = KM_K(2) | KM_K(4); break;
-        case 0x68: case 0x6E: case 0x6F: want = KM_K(2); break;
-        default: break;
+        case 0x64:
+            want = KM_K(1);
+            break;
+        case 0x65:
+        case 0x66:
+            want = KM_K(2) | KM_K(4);
+            break;
+        case 0x68:
+        case 0x6E:
+        case 0x6F:
+            want = KM_K(2);
+            break;
+        default:
+            break;
         }
         assert_int_equal(r->multi, want);
         assert_true(r->multi == 0u || (r->access & KM_W));

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* RX queue tests: order, ticks, full-queue loss marking, index wrap, and
  * the batch side (peek a run in place, release part of it). */
 #include <setjmp.h>

@@ -1,4 +1,5 @@
-/* control/km_selftest.c against the plant's injectable faults (PROTOCOL.md
+/* SPDX-License-Identifier: Apache-2.0 */
+/* control/km_selftest.c against the plant's injectable faults (docs/protocol.md
  * §5.2 0x35, status bit 4): each sensor fault found by the power-on
  * samples, none on a sound plant (a shaft resting on its end stop
  * included), one noisy sample never a fault, an open motor lead found when
@@ -88,17 +89,30 @@ static void test_s5_2_position_fault_only_beyond_the_mechanics(void **state)
         int32_t pos;
         uint8_t want;
     } rows[] = {
-        {0, 0}, {1350, 0}, {-1350, 0}, {1500, 0}, {-1500, 0}, {1575, 0}, {-1575, 0},
-        {1576, KM_HW_POSITION}, {-1576, KM_HW_POSITION}, {1650, KM_HW_POSITION}, {-1650, KM_HW_POSITION},
-        {INT16_MIN, KM_HW_POSITION}, {INT16_MAX, KM_HW_POSITION},
+        {0, 0},
+        {1350, 0},
+        {-1350, 0},
+        {1500, 0},
+        {-1500, 0},
+        {1575, 0},
+        {-1575, 0},
+        {1576, KM_HW_POSITION},
+        {-1576, KM_HW_POSITION},
+        {1650, KM_HW_POSITION},
+        {-1650, KM_HW_POSITION},
+        {INT16_MIN, KM_HW_POSITION},
+        {INT16_MAX, KM_HW_POSITION},
     };
     for (size_t k = 0; k < sizeof rows / sizeof rows[0]; k++) {
         km_selftest_t t;
         km_selftest_init(&t);
         km_control_params_t p;
         kr_default_params(&p);
-        km_sensors_t s = {.position = rows[k].pos, .current_ma = 0, .voltage_mv = 7400,
-                          .temperature_c10 = 250, .faults = 0};
+        km_sensors_t s = {.position = rows[k].pos,
+                          .current_ma = 0,
+                          .voltage_mv = 7400,
+                          .temperature_c10 = 250,
+                          .faults = 0};
         for (unsigned i = 0; i < KM_SELFTEST_SAMPLES; i++) {
             (void)km_selftest_step(&t, &s, &p, 0, true, TICK_US);
         }
@@ -149,7 +163,8 @@ static void test_encoder_no_rail_check(void **state)
     km_control_params_t p;
     kr_default_params(&p);
     p.variant = KM_VARIANT_ENCODER;
-    km_sensors_t s = {.position = 1350, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250, .faults = 0};
+    km_sensors_t s = {
+        .position = 1350, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250, .faults = 0};
     for (unsigned i = 0; i < KM_SELFTEST_SAMPLES; i++) {
         (void)km_selftest_step(&t, &s, &p, 0, true, TICK_US);
     }
@@ -168,8 +183,8 @@ static void test_noise_majority_rule(void **state)
         km_control_params_t p;
         kr_default_params(&p);
         for (unsigned i = 0; i < KM_SELFTEST_SAMPLES; i++) {
-            km_sensors_t s = {.position = 0, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250,
-                              .faults = 0};
+            km_sensors_t s = {
+                .position = 0, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250, .faults = 0};
             if (i < bad_counts[k]) {
                 s.current_ma = -900;
                 s.temperature_c10 = 2000;
@@ -227,8 +242,8 @@ static void test_current_offset_only_with_bridge_free(void **state)
         km_selftest_init(&t);
         km_control_params_t p;
         kr_default_params(&p);
-        km_sensors_t s = {.position = 0, .current_ma = 900, .voltage_mv = 7400, .temperature_c10 = 250,
-                          .faults = 0};
+        km_sensors_t s = {
+            .position = 0, .current_ma = 900, .voltage_mv = 7400, .temperature_c10 = 250, .faults = 0};
         for (unsigned i = 0; i < KM_SELFTEST_SAMPLES; i++) {
             const bool free_ = i < rows[k].free_samples;
             (void)km_selftest_step(&t, &s, &p, free_ ? 0 : 700, free_, 1000u);
@@ -245,8 +260,8 @@ static void test_hal_flags_taken(void **state)
     km_selftest_init(&t);
     km_control_params_t p;
     kr_default_params(&p);
-    km_sensors_t s = {.position = 0, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250,
-                      .faults = KM_HW_OTHER};
+    km_sensors_t s = {
+        .position = 0, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250, .faults = KM_HW_OTHER};
     assert_int_equal(km_selftest_step(&t, &s, &p, 0, true, TICK_US), KM_HW_OTHER);
     s.faults = 0;
     assert_int_equal(km_selftest_step(&t, &s, &p, 0, true, TICK_US), KM_HW_OTHER); /* latched */
@@ -261,8 +276,8 @@ static uint32_t run_time_fault_at(const km_sensors_t *s, uint32_t ms, uint8_t bi
     km_selftest_init(&t);
     km_control_params_t p;
     kr_default_params(&p);
-    const km_sensors_t sound = {.position = 0, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250,
-                                .faults = 0};
+    const km_sensors_t sound = {
+        .position = 0, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250, .faults = 0};
     for (unsigned i = 0; i < KM_SELFTEST_SAMPLES + 1000u; i++) {
         assert_int_equal(km_selftest_step(&t, &sound, &p, 0, true, TICK_US), 0);
     }
@@ -283,14 +298,14 @@ static void test_s5_2_ntc_failing_while_running_is_temperature_fault(void **stat
     (void)state;
     const int32_t bad[] = {-400, -301, 1501, 2000};
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
-        const km_sensors_t s = {.position = 0, .current_ma = 0, .voltage_mv = 7400,
-                                .temperature_c10 = bad[k], .faults = 0};
+        const km_sensors_t s = {
+            .position = 0, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = bad[k], .faults = 0};
         assert_int_equal(run_time_fault_at(&s, 2000, KM_HW_TEMPERATURE), 500);
     }
     const int32_t sound[] = {-300, 1500, 900};
     for (size_t k = 0; k < sizeof sound / sizeof sound[0]; k++) {
-        const km_sensors_t s = {.position = 0, .current_ma = 0, .voltage_mv = 7400,
-                                .temperature_c10 = sound[k], .faults = 0};
+        const km_sensors_t s = {
+            .position = 0, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = sound[k], .faults = 0};
         assert_int_equal(run_time_fault_at(&s, 5000, 0xFFu), 0);
     }
 }
@@ -304,15 +319,16 @@ static void test_s5_2_pot_opening_while_running_is_position_fault(void **state)
     (void)state;
     const int32_t rail[] = {1650, -1650, 1576};
     for (size_t k = 0; k < sizeof rail / sizeof rail[0]; k++) {
-        const km_sensors_t s = {.position = rail[k], .current_ma = 0, .voltage_mv = 7400,
-                                .temperature_c10 = 250, .faults = 0};
+        const km_sensors_t s = {
+            .position = rail[k], .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250, .faults = 0};
         assert_int_equal(run_time_fault_at(&s, 2000, KM_HW_POSITION), 20);
     }
     km_selftest_t t;
     km_selftest_init(&t);
     km_control_params_t p;
     kr_default_params(&p);
-    km_sensors_t s = {.position = 0, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250, .faults = 0};
+    km_sensors_t s = {
+        .position = 0, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250, .faults = 0};
     for (uint32_t ms = 0; ms < 10000u; ms++) {
         s.position = ms % 3u == 0u ? 1650 : 1500;
         (void)km_selftest_step(&t, &s, &p, 0, true, TICK_US);
@@ -329,8 +345,8 @@ static void test_run_time_debounce(void **state)
     (void)state;
     km_control_params_t p;
     kr_default_params(&p);
-    const km_sensors_t sound = {.position = 0, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250,
-                                .faults = 0};
+    const km_sensors_t sound = {
+        .position = 0, .current_ma = 0, .voltage_mv = 7400, .temperature_c10 = 250, .faults = 0};
     km_sensors_t open = sound;
     open.temperature_c10 = -400;
     const struct {

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Store tests: mount, commit, compaction, maintenance, reset, schema change
  * and failed flash operations, on each flash geometry of the NOR simulator. */
 #include <setjmp.h>
@@ -109,8 +110,7 @@ static void test_commit_persists_and_unchanged_is_free(void **state)
         assert_int_equal(prv_flash_ops(), ops);
         uint32_t vals[KM_STORE_MAX_KEYS];
         km_nor_sim_power_cycle(&s_sim);
-        assert_int_equal(km_store_mount(&s_store, &s_flash, &k_test_schema, vals),
-                         KM_STORE_MOUNT_LOADED);
+        assert_int_equal(km_store_mount(&s_store, &s_flash, &k_test_schema, vals), KM_STORE_MOUNT_LOADED);
         assert_int_equal(vals[0], 12u);
         assert_int_equal(vals[1], 10000u);
         assert_int_equal(vals[2], k_test_keys[2].def);
@@ -234,8 +234,7 @@ static void test_schema_change(void **state)
     const km_store_schema_t schema2 = {keys2, 3, 1u};
     km_nor_sim_power_cycle(&s_sim);
     uint32_t vals[KM_STORE_MAX_KEYS];
-    assert_int_equal(km_store_mount(&s_store, &s_flash, &schema2, vals),
-                     KM_STORE_MOUNT_MIGRATED);
+    assert_int_equal(km_store_mount(&s_store, &s_flash, &schema2, vals), KM_STORE_MOUNT_MIGRATED);
     assert_int_equal(vals[0], 3u);
     assert_int_equal(vals[1], 1152u);
     assert_int_equal(vals[2], 77u);
@@ -250,8 +249,7 @@ static void test_schema_change(void **state)
     /* A version bump drops the values. */
     const km_store_schema_t schema3 = {keys2, 3, 2u};
     km_nor_sim_power_cycle(&s_sim);
-    assert_int_equal(km_store_mount(&s_store, &s_flash, &schema3, vals),
-                     KM_STORE_MOUNT_DEFAULTS_SCHEMA);
+    assert_int_equal(km_store_mount(&s_store, &s_flash, &schema3, vals), KM_STORE_MOUNT_DEFAULTS_SCHEMA);
     assert_int_equal(vals[0], 0u);
     assert_int_equal(vals[2], 77u);
 }
@@ -299,8 +297,13 @@ static void test_failed_program_keeps_old_value(void **state)
         for (uint32_t at = 0; at < 4; at++) {
             assert_true(km_nor_sim_init(&s_sim, &s_geoms[1], &s_flash));
             prv_faulty_t ctx = {&s_flash, 0, 0xFFFFFFFFu, mode};
-            const km_flash_t faulty = {s_flash.page_size, s_flash.prog_size, s_flash.page_count,
-                                       prv_f_erase, prv_f_program, prv_f_read, &ctx};
+            const km_flash_t faulty = {s_flash.page_size,
+                                       s_flash.prog_size,
+                                       s_flash.page_count,
+                                       prv_f_erase,
+                                       prv_f_program,
+                                       prv_f_read,
+                                       &ctx};
             (void)km_store_mount(&s_store, &faulty, &k_test_schema, NULL);
             prv_commit1(0x0F, 5u);
             ctx.fail_at = ctx.n + at;
@@ -346,8 +349,8 @@ static void test_torn_unstable_snapshot_cannot_win_later(void **state)
         }
         const uint32_t snap_cells = 120u / 8u;
         km_nor_sim_seed(&s_sim, seed);
-        km_nor_sim_arm_cut(&s_sim, km_nor_sim_ops(&s_sim) + snap_cells - 1u,
-                           KM_NOR_PROG_TORN_UNSTABLE, KM_NOR_ERASE_DONE);
+        km_nor_sim_arm_cut(&s_sim, km_nor_sim_ops(&s_sim) + snap_cells - 1u, KM_NOR_PROG_TORN_UNSTABLE,
+                           KM_NOR_ERASE_DONE);
         assert_true(km_store_maintain(&s_store));
         assert_true(km_nor_sim_cut_fired(&s_sim));
         const uint32_t old_gen = s_store.gen;
@@ -403,7 +406,7 @@ static void prv_g0_real(unsigned pages)
 
 /* Ops of a compaction on the G0 layout: the erase, 15 snapshot cells, K. */
 #define G0_SNAP_CELLS 15u
-#define G0_OP_COMMIT_CELL G0_SNAP_CELLS        /* erase is op 0 */
+#define G0_OP_COMMIT_CELL G0_SNAP_CELLS /* erase is op 0 */
 #define G0_OP_K (G0_SNAP_CELLS + 1u)
 
 static void prv_commit_cut(uint8_t key, uint32_t value, uint32_t op, km_nor_prog_outcome_t p,
@@ -532,15 +535,13 @@ static void test_bad_geometry_is_refused(void **state)
     (void)state;
     const km_nor_sim_config_t tiny = {256u, 8u, 2u, 0xFFu};
     assert_true(km_nor_sim_init(&s_sim, &tiny, &s_flash));
-    assert_int_equal(km_store_mount(&s_store, &s_flash, &k_test_schema, NULL),
-                     KM_STORE_MOUNT_ERR_ARG);
+    assert_int_equal(km_store_mount(&s_store, &s_flash, &k_test_schema, NULL), KM_STORE_MOUNT_ERR_ARG);
     const uint8_t k = 0x0F;
     const uint32_t v = 1u;
     assert_int_equal(km_store_commit(&s_store, &k, &v, 1), KM_STORE_ERR_ARG);
     const km_nor_sim_config_t one = {2048u, 8u, 1u, 0xFFu};
     assert_true(km_nor_sim_init(&s_sim, &one, &s_flash));
-    assert_int_equal(km_store_mount(&s_store, &s_flash, &k_test_schema, NULL),
-                     KM_STORE_MOUNT_ERR_ARG);
+    assert_int_equal(km_store_mount(&s_store, &s_flash, &k_test_schema, NULL), KM_STORE_MOUNT_ERR_ARG);
 }
 
 /* A delta is read cell by cell and never past its end: the cell after the
@@ -576,8 +577,7 @@ static void test_delta_before_a_torn_ecc_cell_still_loads(void **state)
 static void test_torn_dense_delta_is_old_or_new(void **state)
 {
     (void)state;
-    static const km_nor_prog_outcome_t tears[] = {KM_NOR_PROG_TORN_MIXED,
-                                                  KM_NOR_PROG_TORN_UNSTABLE,
+    static const km_nor_prog_outcome_t tears[] = {KM_NOR_PROG_TORN_MIXED, KM_NOR_PROG_TORN_UNSTABLE,
                                                   KM_NOR_PROG_TORN_WEAK};
     unsigned seen_new = 0;
     for (unsigned t = 0; t < 3u; t++) {
@@ -635,10 +635,10 @@ static void test_dense_delta_sizes(void **state)
 {
     (void)state;
     /* cells programmed on G0 (8 B) / F0 (2 B) / nRF51 (4 B) */
-    static const uint32_t one16[GEOMS] = {1u, 4u, 2u};   /* 1+1+2+4 = 8 B */
-    static const uint32_t one24[GEOMS] = {2u, 5u, 3u};   /* 1+1+3+4 = 9 B */
-    static const uint32_t one32[GEOMS] = {2u, 5u, 3u};   /* 1+1+4+4 = 10 B */
-    static const uint32_t four16[GEOMS] = {3u, 9u, 5u};  /* 1+4*3+4 = 17 B */
+    static const uint32_t one16[GEOMS] = {1u, 4u, 2u};  /* 1+1+2+4 = 8 B */
+    static const uint32_t one24[GEOMS] = {2u, 5u, 3u};  /* 1+1+3+4 = 9 B */
+    static const uint32_t one32[GEOMS] = {2u, 5u, 3u};  /* 1+1+4+4 = 10 B */
+    static const uint32_t four16[GEOMS] = {3u, 9u, 5u}; /* 1+4*3+4 = 17 B */
     for (unsigned g = 0; g < GEOMS; g++) {
         assert_true(km_nor_sim_init(&s_sim, &s_geoms[g], &s_flash));
         (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
@@ -682,8 +682,7 @@ static void test_dense_delta_indices_follow_the_snapshot_keys(void **state)
     const km_store_schema_t schema2 = {keys2, 4, 1u};
     km_nor_sim_power_cycle(&s_sim);
     uint32_t vals[KM_STORE_MAX_KEYS];
-    assert_int_equal(km_store_mount(&s_store, &s_flash, &schema2, vals),
-                     KM_STORE_MOUNT_MIGRATED);
+    assert_int_equal(km_store_mount(&s_store, &s_flash, &schema2, vals), KM_STORE_MOUNT_MIGRATED);
     assert_int_equal(vals[0], 777u);
     assert_int_equal(vals[1], 77u);
     assert_int_equal(vals[2], 96u);
@@ -755,8 +754,13 @@ static void test_first_flash_op_of_a_committing_session_is_an_erase(void **state
     for (unsigned g = 0; g < GEOMS; g++) {
         assert_true(km_nor_sim_init(&s_sim, &s_geoms[g], &s_flash));
         prv_first_op_t rec = {&s_flash, 0};
-        const km_flash_t wrapped = {s_flash.page_size, s_flash.prog_size, s_flash.page_count,
-                                    prv_r_erase, prv_r_program, prv_r_read, &rec};
+        const km_flash_t wrapped = {s_flash.page_size,
+                                    s_flash.prog_size,
+                                    s_flash.page_count,
+                                    prv_r_erase,
+                                    prv_r_program,
+                                    prv_r_read,
+                                    &rec};
         for (uint32_t boot = 0; boot < 40u; boot++) {
             km_nor_sim_power_cycle(&s_sim);
             rec.first = 0;

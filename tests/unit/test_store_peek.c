@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* km_store_peek (firmware/store/km_store_peek.c, the bootloader's read of
  * ID and baud, docs/update.md §3) against km_store_mount (docs/store.md
  * "Mount"): on stores left by random sessions of random schemas (key lists
@@ -31,8 +32,7 @@ static uint32_t prv_rand(void)
 
 /* Session schemas: the servo's two keys among others, or one or none of them. */
 static const km_store_key_t k_a[] = {{0x0Fu, 0u}, {0x10u, 1152u}, {0x20u, 7u}, {0x21u, 9u}};
-static const km_store_key_t k_b[] = {{0x21u, 9u}, {0x10u, 1152u}, {0x30u, 1u}, {0x0Fu, 0u},
-                                     {0x31u, 2u}};
+static const km_store_key_t k_b[] = {{0x21u, 9u}, {0x10u, 1152u}, {0x30u, 1u}, {0x0Fu, 0u}, {0x31u, 2u}};
 static const km_store_key_t k_c[] = {{0x20u, 7u}, {0x0Fu, 0u}};
 static const km_store_key_t k_d[] = {{0x40u, 3u}, {0x41u, 4u}};
 static const km_store_schema_t k_schemas[] = {
@@ -115,8 +115,8 @@ static void test_peek_matches_mount(void **state)
             prv_compare();
         }
     }
-    printf("store peek vs mount: %u stores with values loaded, %u with defaults, all identical\n",
-           s_loaded, s_defaults);
+    printf("store peek vs mount: %u stores with values loaded, %u with defaults, all identical\n", s_loaded,
+           s_defaults);
     assert_true(s_loaded > 1000u);
     assert_true(s_defaults > 100u);
 }

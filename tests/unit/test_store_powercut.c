@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Power-cut runner for the store. For each scenario, each flash geometry,
  * every program and every erase the scenario issues is cut with every
  * outcome the NOR simulator models; the store is then rebooted, and the
@@ -65,34 +66,56 @@ typedef struct {
 
 typedef struct {
     const char *name;
-    uint8_t fill;       /* 0xFF shipped part, 0x00 QEMU nRF51 */
-    int prologue;       /* 0 none, 1 a few commits, 2 fill the page (the steps run in the
-                           same session, so they reach a page-full compaction),
-                           3 all keys set */
+    uint8_t fill; /* 0xFF shipped part, 0x00 QEMU nRF51 */
+    int prologue; /* 0 none, 1 a few commits, 2 fill the page (the steps run in the
+                     same session, so they reach a page-full compaction),
+                     3 all keys set */
     uint8_t nsteps;
     prv_step_t steps[4];
 } prv_scenario_t;
 
 static const prv_scenario_t s_scenarios[] = {
-    {"single writes", 0xFF, 1, 3,
-     {{STEP_COMMIT, 1, {0x12}, {301}}, {STEP_COMMIT, 1, {0x13}, {302}},
-      {STEP_COMMIT, 1, {0x12}, {303}}}},
-    {"multi-register writes", 0xFF, 1, 2,
+    {"single writes",
+     0xFF,
+     1,
+     3,
+     {{STEP_COMMIT, 1, {0x12}, {301}}, {STEP_COMMIT, 1, {0x13}, {302}}, {STEP_COMMIT, 1, {0x12}, {303}}}},
+    {"multi-register writes",
+     0xFF,
+     1,
+     2,
      {{STEP_COMMIT, 4, {0x3C, 0x3D, 0x3E, 0x3F}, {0x6478, 0x0A46, 0x1E0400, 0x0A0300}},
       {STEP_COMMIT, 2, {0x11, 0x12}, {0x0A, 999}}}},
-    {"writes spanning compaction", 0xFF, 2, 3,
-     {{STEP_COMMIT, 1, {0x13}, {401}}, {STEP_COMMIT, 3, {0x13, 0x14, 0x15}, {402, 403, 404}},
+    {"writes spanning compaction",
+     0xFF,
+     2,
+     3,
+     {{STEP_COMMIT, 1, {0x13}, {401}},
+      {STEP_COMMIT, 3, {0x13, 0x14, 0x15}, {402, 403, 404}},
       {STEP_COMMIT, 1, {0x0F}, {9}}}},
-    {"compaction by idle maintenance", 0xFF, 2, 4,
-     {{STEP_COMMIT, 1, {0x13}, {501}}, {STEP_MAINTAIN, 0, {0}, {0}},
-      {STEP_COMMIT, 2, {0x13, 0x34}, {502, 0x55}}, {STEP_MAINTAIN, 0, {0}, {0}}}},
-    {"user data reset", 0xFF, 3, 2,
+    {"compaction by idle maintenance",
+     0xFF,
+     2,
+     4,
+     {{STEP_COMMIT, 1, {0x13}, {501}},
+      {STEP_MAINTAIN, 0, {0}, {0}},
+      {STEP_COMMIT, 2, {0x13, 0x34}, {502, 0x55}},
+      {STEP_MAINTAIN, 0, {0}, {0}}}},
+    {"user data reset",
+     0xFF,
+     3,
+     2,
      {{STEP_RESET, 4, {0x0F, 0x10, 0x16, 0x17}, {0}}, {STEP_RESET, 1, {0x16}, {0}}}},
-    {"ID and baud change", 0xFF, 1, 2,
-     {{STEP_COMMIT, 1, {0x0F}, {42}}, {STEP_COMMIT, 1, {0x10}, {10000}}}},
-    {"first commit on blank flash", 0xFF, 0, 2,
+    {"ID and baud change", 0xFF, 1, 2, {{STEP_COMMIT, 1, {0x0F}, {42}}, {STEP_COMMIT, 1, {0x10}, {10000}}}},
+    {"first commit on blank flash",
+     0xFF,
+     0,
+     2,
      {{STEP_COMMIT, 1, {0x0F}, {3}}, {STEP_COMMIT, 2, {0x0F, 0x10}, {4, 5000}}}},
-    {"first commit on QEMU 0x00 flash", 0x00, 0, 2,
+    {"first commit on QEMU 0x00 flash",
+     0x00,
+     0,
+     2,
      {{STEP_COMMIT, 1, {0x0F}, {3}}, {STEP_COMMIT, 1, {0x12}, {250}}}},
 };
 
@@ -103,11 +126,11 @@ static const km_nor_sim_config_t s_geoms[] = {
     {2048u, 8u, 3u, 0xFFu}, /* STM32G031 as boards/stm32g031 ships it: three pages */
 };
 
-static km_nor_sim_t s_sim;   /* the flash under test; s_flash points at it */
-static km_nor_sim_t s_base;  /* image after the prologue */
+static km_nor_sim_t s_sim;      /* the flash under test; s_flash points at it */
+static km_nor_sim_t s_base;     /* image after the prologue */
 static km_store_t s_base_store; /* store after the prologue (its session goes on) */
-static bool s_base_keep;     /* the steps run in the prologue's session */
-static km_nor_sim_t s_post;  /* image after a first-level cut */
+static bool s_base_keep;        /* the steps run in the prologue's session */
+static km_nor_sim_t s_post;     /* image after a first-level cut */
 static km_flash_t s_flash;
 static km_store_t s_store;
 
@@ -126,8 +149,7 @@ static km_nor_weak_reads_t prv_opposite(km_nor_weak_reads_t w)
  * the ECC double-word rule on 8-byte cells (STM32G0). */
 static void prv_real_rules(km_nor_sim_t *sim)
 {
-    const km_nor_sim_rules_t rules = {.ecc_dword = (sim->cfg.prog_size == 8u),
-                                      .content_check = true};
+    const km_nor_sim_rules_t rules = {.ecc_dword = (sim->cfg.prog_size == 8u), .content_check = true};
     km_nor_sim_set_rules(sim, &rules);
 }
 
@@ -155,8 +177,9 @@ static void prv_fail(const char *what)
         s_fail_kind[what[1] - 'a']++;
     }
     if (s_failures < 20u) {
-        fprintf(stderr, "INVARIANT %s: scenario '%s' geom %u cut %u outcome %u / recovery cut %u outcome %u\n",
-                what, s_where_scn, s_where_geom, s_where_n, s_where_o, s_where_m, s_where_o2);
+        fprintf(stderr,
+                "INVARIANT %s: scenario '%s' geom %u cut %u outcome %u / recovery cut %u outcome %u\n", what,
+                s_where_scn, s_where_geom, s_where_n, s_where_o, s_where_m, s_where_o2);
     }
     s_failures++;
 }
@@ -251,8 +274,8 @@ static void prv_reboot_and_check(void)
     km_nor_sim_power_cycle(&s_sim);
     const uint32_t ops = s_sim.count.programs + s_sim.count.erases;
     const km_store_mount_t m = km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
-    if (m == KM_STORE_MOUNT_ERR_ARG || m == KM_STORE_MOUNT_DEFAULTS_SCHEMA ||
-        m == KM_STORE_MOUNT_MIGRATED || s_sim.count.programs + s_sim.count.erases != ops) {
+    if (m == KM_STORE_MOUNT_ERR_ARG || m == KM_STORE_MOUNT_DEFAULTS_SCHEMA || m == KM_STORE_MOUNT_MIGRATED ||
+        s_sim.count.programs + s_sim.count.erases != ops) {
         prv_fail("(b) mount fault or flash op at mount");
     }
     prv_state_t now;
@@ -426,8 +449,7 @@ static void prv_cut_recovery(void)
         bool erase = false;
         /* The reboot after this cut reads weak cells as P2 does, or, when
          * P1 was random, pinned one way or the other by cut point. */
-        static const km_nor_weak_reads_t k_rot[] = {KM_NOR_WEAK_HIGH, KM_NOR_WEAK_LOW,
-                                                    KM_NOR_WEAK_RANDOM};
+        static const km_nor_weak_reads_t k_rot[] = {KM_NOR_WEAK_HIGH, KM_NOR_WEAK_LOW, KM_NOR_WEAK_RANDOM};
         const km_nor_weak_reads_t q = (s_p1 != KM_NOR_WEAK_RANDOM) ? s_p2 : k_rot[m % 3u];
         for (unsigned o = 0; o < nout; o++) {
             s_sim = s_post;
@@ -492,9 +514,7 @@ static void prv_run_geometry(unsigned g)
                 if (draw != 0u && !prv_random_outcome(o, erase)) {
                     continue;
                 }
-                s_p1 = (draw == 0u) ? KM_NOR_WEAK_HIGH
-                       : (draw == 1u) ? KM_NOR_WEAK_LOW
-                                      : KM_NOR_WEAK_RANDOM;
+                s_p1 = (draw == 0u) ? KM_NOR_WEAK_HIGH : (draw == 1u) ? KM_NOR_WEAK_LOW : KM_NOR_WEAK_RANDOM;
                 if (!prv_random_outcome(o, erase)) {
                     s_p1 = KM_NOR_WEAK_RANDOM;
                 }
@@ -539,10 +559,9 @@ static void prv_run_geometry(unsigned g)
     printf("geometry %u (%u B pages, %u B cells): %lu cut points, %lu recovery cut points, "
            "%lu cut outcomes, %lu invariant failures; further commits: %lu erases in %lu "
            "committing sessions\n",
-           g, s_geoms[g].page_size, s_geoms[g].prog_size, s_cuts1 - c1, s_cuts2 - c2,
-           s_outcomes - oc, s_failures - f0, s_further_erases - fe0, s_further_sessions - fs0);
+           g, s_geoms[g].page_size, s_geoms[g].prog_size, s_cuts1 - c1, s_cuts2 - c2, s_outcomes - oc,
+           s_failures - f0, s_further_erases - fe0, s_further_sessions - fs0);
 }
-
 
 /* Seeded random histories on the STM32G0 layout: sessions of 1-3 commits
  * (some resets, some idle maintenance), a cut armed at a random operation of
@@ -569,8 +588,7 @@ static void prv_seed_history(uint32_t seed)
     prv_ack(&st);
     for (uint32_t sess = 0; sess < SESSIONS + 3u; sess++) {
         /* The last three mounts read weak cells low, high, at random. */
-        static const km_nor_weak_reads_t k_way[] = {KM_NOR_WEAK_RANDOM, KM_NOR_WEAK_HIGH,
-                                                    KM_NOR_WEAK_LOW};
+        static const km_nor_weak_reads_t k_way[] = {KM_NOR_WEAK_RANDOM, KM_NOR_WEAK_HIGH, KM_NOR_WEAK_LOW};
         const km_nor_weak_reads_t way =
             (sess < SESSIONS) ? k_way[prv_rand() % 3u] : k_way[(sess - SESSIONS + 2u) % 3u];
         km_nor_sim_power_cycle(&s_sim);
@@ -689,8 +707,8 @@ static int prv_summary(void **state)
     printf("total: %lu first-level cut points, %lu recovery cut points, %lu cut outcomes, "
            "%lu reboots checked, %lu further commits checked, %lu invariant failures\n",
            s_cuts1, s_cuts2, s_outcomes, s_reboots, s_further, s_failures);
-    printf("failures by invariant: (a) %lu, (b) %lu, (c) %lu, (d) %lu\n", s_fail_kind[0],
-           s_fail_kind[1], s_fail_kind[2], s_fail_kind[3]);
+    printf("failures by invariant: (a) %lu, (b) %lu, (c) %lu, (d) %lu\n", s_fail_kind[0], s_fail_kind[1],
+           s_fail_kind[2], s_fail_kind[3]);
     return 0;
 }
 

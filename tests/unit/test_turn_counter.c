@@ -1,5 +1,6 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* control/km_turn_counter.c: multi-turn position from a single-turn
- * absolute encoder (PROTOCOL.md §5.3 0x46 as i32, §6 encoder products). */
+ * absolute encoder (docs/protocol.md §5.3 0x46 as i32, §6 encoder products). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The update state machine and its 0x78 frames (docs/update.md §2-§4) on
  * the NOR simulator: a whole update, every bad input of the table in §4
  * with its outcome, the wrong-model refusal before any erase, the commit
@@ -147,12 +148,12 @@ static void test_begin_bad_inputs_erase_nothing(void **state)
         uint8_t expect;
         int fix_crc;
     } cases[] = {
-        {0, 0x57464D4Cu, KM_UPD_BAD_HEADER, 1},   /* magic */
-        {28, 0x12345678u, KM_UPD_BAD_HEADER, 0},  /* header CRC */
-        {16, 0x200u, KM_UPD_BAD_HEADER, 1},       /* vectors */
-        {20, 0x08002000u, KM_UPD_BAD_HEADER, 1},  /* base */
+        {0, 0x57464D4Cu, KM_UPD_BAD_HEADER, 1},  /* magic */
+        {28, 0x12345678u, KM_UPD_BAD_HEADER, 0}, /* header CRC */
+        {16, 0x200u, KM_UPD_BAD_HEADER, 1},      /* vectors */
+        {20, 0x08002000u, KM_UPD_BAD_HEADER, 1}, /* base */
         {8, KM_IMAGE_MIN_LEN - 1u, KM_UPD_TOO_BIG, 1},
-        {8, 6u * 1024u + 1u, KM_UPD_TOO_BIG, 1},  /* above the region */
+        {8, 6u * 1024u + 1u, KM_UPD_TOO_BIG, 1}, /* above the region */
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         rig_image_t im = s_new;
@@ -293,8 +294,8 @@ static void test_status_bitmap(void **state)
     const uint8_t st[3] = {KM_UPD_SUB_STATUS, 0, 0};
     prv_frame(st, 3);
     assert_int_equal(s_a.len, 9 + 4);
-    const uint8_t expect[13] = {KM_UPD_SUB_STATUS, KM_UPD_STATE_RECEIVING, KM_UPD_OK, 32, 0, 30, 0,
-                                0, 0, 0xFF, 0xFD, 0xFF, 0x7F};
+    const uint8_t expect[13] = {
+        KM_UPD_SUB_STATUS, KM_UPD_STATE_RECEIVING, KM_UPD_OK, 32, 0, 30, 0, 0, 0, 0xFF, 0xFD, 0xFF, 0x7F};
     assert_memory_equal(s_a.body, expect, sizeof expect);
     const uint8_t st8[3] = {KM_UPD_SUB_STATUS, 8, 0};
     prv_frame(st8, 3);
@@ -324,7 +325,7 @@ static void test_three_servos_one_broadcast(void **state)
     km_flash_t region[3];
     for (int i = 0; i < 3; i++) {
         rig_init(&r[i], 2048u, 8u, 4u, 3u, 0xFFu); /* STM32G0 geometry */
-        win[i] = s_rig_win_region;                   /* each servo its own window */
+        win[i] = s_rig_win_region;                 /* each servo its own window */
         region[i] = r[i].region;
         region[i].ctx = &win[i];
         km_update_init(&u[i], &region[i], &r[i].target);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Power-cut runner for the firmware update (docs/update.md §7). For each
  * flash geometry and starting point (an old image in place, or a region
  * that never held one), an update is run through its 0x78 frames (BEGIN,
@@ -50,18 +51,18 @@ static const prv_geom_t s_geoms[] = {
 enum { BOOT_OLD, BOOT_NEW, BOOT_LOADER, BOOT_KINDS };
 static const char *const k_boot_name[BOOT_KINDS] = {"old image", "new image", "bootloader"};
 
-static rig_t s_base;         /* after the prologue: store written, old image (or none) */
-static rig_t s_r;            /* the flash under test */
+static rig_t s_base; /* after the prologue: store written, old image (or none) */
+static rig_t s_r;    /* the flash under test */
 static km_update_t s_u;
 static rig_image_t s_old, s_new;
 static bool s_has_old;
-static bool s_reverse;       /* blocks sent last to first */
+static bool s_reverse; /* blocks sent last to first */
 static uint8_t s_store_snapshot[KM_NOR_SIM_MAX_BYTES];
 static uint32_t s_store_values[KM_STORE_MAX_KEYS];
 
 static unsigned long s_cut_points, s_runs, s_bricks, s_boots[BOOT_KINDS], s_recovered;
 static unsigned long s_step_cuts;
-static unsigned long s_decisions;     /* trial decisions taken over power-cut RAM */
+static unsigned long s_decisions;        /* trial decisions taken over power-cut RAM */
 static uint32_t s_garbage = 0x2545F491u; /* xorshift state of that RAM */
 static unsigned long s_fail[4];
 static const char *s_where;
@@ -71,8 +72,8 @@ static void prv_fail(int kind, const char *what)
 {
     s_fail[kind]++;
     if (s_fail[0] + s_fail[1] + s_fail[2] + s_fail[3] <= 20u) {
-        fprintf(stderr, "INVARIANT (%c) %s: %s, cut %u outcome %u\n", 'a' + kind, what, s_where,
-                s_where_i, s_where_o);
+        fprintf(stderr, "INVARIANT (%c) %s: %s, cut %u outcome %u\n", 'a' + kind, what, s_where, s_where_i,
+                s_where_o);
     }
 }
 
@@ -233,8 +234,7 @@ static void prv_run_cut(uint32_t i, unsigned outcome, bool erase, unsigned draw)
     s_r = s_base;
     rig_bind(&s_r);
     km_nor_sim_seed(&s_r.sim, 0x9E3779B9u ^ (i * 131u + outcome * 7u + draw));
-    static const km_nor_weak_reads_t modes[3] = {KM_NOR_WEAK_RANDOM, KM_NOR_WEAK_HIGH,
-                                                 KM_NOR_WEAK_LOW};
+    static const km_nor_weak_reads_t modes[3] = {KM_NOR_WEAK_RANDOM, KM_NOR_WEAK_HIGH, KM_NOR_WEAK_LOW};
     km_nor_sim_set_weak_reads(&s_r.sim, modes[draw % 3u]);
     km_nor_sim_arm_cut(&s_r.sim, i, erase ? KM_NOR_PROG_NOT_DONE : (km_nor_prog_outcome_t)outcome,
                        erase ? (km_nor_erase_outcome_t)outcome : KM_NOR_ERASE_NOT_DONE);
@@ -310,8 +310,7 @@ static void prv_prologue(const prv_geom_t *g, bool with_old)
     const uint32_t off = s_r.region_pages * s_r.whole.page_size;
     memcpy(s_store_snapshot, s_r.sim.data + off, prv_store_bytes());
     km_store_t st2;
-    assert_int_equal(km_store_mount(&st2, &s_r.store, &k_test_schema, s_store_values),
-                     KM_STORE_MOUNT_LOADED);
+    assert_int_equal(km_store_mount(&st2, &s_r.store, &k_test_schema, s_store_values), KM_STORE_MOUNT_LOADED);
     if (with_old) {
         km_image_header_t h;
         assert_true(prv_checks(&h));
@@ -364,8 +363,8 @@ static void prv_scenario(const prv_geom_t *g, bool with_old, bool reverse)
         const unsigned long before[BOOT_KINDS] = {s_boots[0], s_boots[1], s_boots[2]};
         prv_boot(k == prv_steps());
         /* Exact here: old before BEGIN, new after COMMIT, bootloader between. */
-        const int expect = k == 0u ? (with_old ? BOOT_OLD : BOOT_LOADER)
-                                   : (k == prv_steps() ? BOOT_NEW : BOOT_LOADER);
+        const int expect =
+            k == 0u ? (with_old ? BOOT_OLD : BOOT_LOADER) : (k == prv_steps() ? BOOT_NEW : BOOT_LOADER);
         if (s_boots[expect] != before[expect] + 1u) {
             prv_fail(0, "a step boundary booted the wrong thing");
         }
@@ -374,7 +373,8 @@ static void prv_scenario(const prv_geom_t *g, bool with_old, bool reverse)
         prv_recover();
         s_step_cuts++;
     }
-    printf("  %-48s %-9s %-10s: %4u flash ops, %5lu cut runs, %3lu step cuts -> old %lu, bootloader %lu, new %lu\n",
+    printf("  %-48s %-9s %-10s: %4u flash ops, %5lu cut runs, %3lu step cuts -> old %lu, bootloader %lu, new "
+           "%lu\n",
            g->name, with_old ? "old image" : "no image", reverse ? "last first" : "in order", ops,
            s_runs - runs0, s_step_cuts - steps0, s_boots[BOOT_OLD] - boots0[BOOT_OLD],
            s_boots[BOOT_LOADER] - boots0[BOOT_LOADER], s_boots[BOOT_NEW] - boots0[BOOT_NEW]);
@@ -401,9 +401,8 @@ static void test_update_survives_every_cut(void **state)
     }
     printf("total: %lu cut points (flash ops), %lu runs cut at an op, %lu cut between steps;\n"
            "       boots: %lu %s, %lu %s, %lu %s; %lu updates finished after the cut; %lu bricks\n",
-           s_cut_points, s_runs, s_step_cuts, s_boots[BOOT_OLD], k_boot_name[BOOT_OLD],
-           s_boots[BOOT_LOADER], k_boot_name[BOOT_LOADER], s_boots[BOOT_NEW],
-           k_boot_name[BOOT_NEW], s_recovered, s_bricks);
+           s_cut_points, s_runs, s_step_cuts, s_boots[BOOT_OLD], k_boot_name[BOOT_OLD], s_boots[BOOT_LOADER],
+           k_boot_name[BOOT_LOADER], s_boots[BOOT_NEW], k_boot_name[BOOT_NEW], s_recovered, s_bricks);
     printf("       trial decisions over power-cut RAM: %lu, each the checks' verdict\n", s_decisions);
     printf("invariant failures: (a) boot %lu, (b) store %lu, (c) flash rules %lu, (d) recovery %lu\n",
            s_fail[0], s_fail[1], s_fail[2], s_fail[3]);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The bootloader's board part for the nRF51 (km_boot_board.h): HFCLK and
  * TIMER0 at 1 MHz, UART0 polled, the NVMC over the application region,
  * the start on trial (WDT and the TIMER2 trial timer, docs/update.md §3a),
@@ -124,8 +125,12 @@ static km_flash_result_t prv_read(void *ctx, uint32_t off, void *data, uint32_t 
 }
 
 static const km_flash_t k_region = {
-    .page_size = BOOT_PAGE, .prog_size = PRV_CELL, .page_count = BOOT_REGION_SIZE / BOOT_PAGE,
-    .erase = prv_erase, .program = prv_program, .read = prv_read,
+    .page_size = BOOT_PAGE,
+    .prog_size = PRV_CELL,
+    .page_count = BOOT_REGION_SIZE / BOOT_PAGE,
+    .erase = prv_erase,
+    .program = prv_program,
+    .read = prv_read,
     .ctx = (void *)(uintptr_t)BOOT_REGION_BASE,
 };
 
@@ -141,8 +146,7 @@ const km_flash_t *km_bootb_store(void)
 
 const km_image_target_t *km_bootb_target(void)
 {
-    static const km_image_target_t k_target = {KM_MODEL_QEMU_MICROBIT, BOOT_REGION_BASE,
-                                               BOOT_REGION_SIZE};
+    static const km_image_target_t k_target = {KM_MODEL_QEMU_MICROBIT, BOOT_REGION_BASE, BOOT_REGION_SIZE};
     return &k_target;
 }
 
@@ -156,8 +160,12 @@ void km_bootb_factory(void)
 {
     static km_update_t s_upd;
     static const km_flash_t k_slot = {
-        .page_size = BOOT_PAGE, .prog_size = PRV_CELL, .page_count = BOOT_REGION_SIZE / BOOT_PAGE,
-        .erase = prv_erase, .program = prv_program, .read = prv_read,
+        .page_size = BOOT_PAGE,
+        .prog_size = PRV_CELL,
+        .page_count = BOOT_REGION_SIZE / BOOT_PAGE,
+        .erase = prv_erase,
+        .program = prv_program,
+        .read = prv_read,
         .ctx = (void *)(uintptr_t)BOOT_FACTORY_BASE,
     };
     if (*(const volatile uint32_t *)(uintptr_t)BOOT_REGION_BASE != 0u ||
@@ -277,12 +285,11 @@ _Noreturn void km_bootb_start(uint32_t vectors, uint32_t sp, uint32_t pc)
     km_bootb_shared()->app_running = KM_BOOT_APP_MAGIC;
     prv_watchdog_start();
     prv_trial_timer_start();
-    __asm__ volatile(
-        "msr msp, %0 \n"
-        "bx  %1      \n"
-        :
-        : "r"(sp), "r"(pc)
-        : "memory");
+    __asm__ volatile("msr msp, %0 \n"
+                     "bx  %1      \n"
+                     :
+                     : "r"(sp), "r"(pc)
+                     : "memory");
     for (;;) {
     }
 }

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The bootloader's vector table and reset for the nRF51 (docs/update.md
  * §5). The Cortex-M0 has no VTOR: the core always vectors through this
  * table at address 0, so every entry but the initial SP and the reset
@@ -39,24 +40,33 @@ __attribute__((naked)) void km_boot_forward(void)
 {
     __asm__ volatile(
         ".syntax unified                   \n"
-        "ldr  r0, =" PRV_STR(BOOT_APP_RUNNING_ADDR) "\n"
-        "ldr  r0, [r0]                     \n"
-        "ldr  r1, =" PRV_STR(BOOT_APP_MAGIC_WORD) "\n"
-        "cmp  r0, r1                       \n"
-        "bne  1f                           \n"
-        "mrs  r0, ipsr                     \n"
-        "lsls r0, r0, #2                   \n"
-        "ldr  r1, =" PRV_STR(BOOT_APP_VECTORS) "\n"
-        "ldr  r0, [r1, r0]                 \n"
-        "bx   r0                           \n"
-        "1:                                \n"
-        "ldr  r0, =" PRV_STR(BOOT_AIRCR) "\n"
-        "ldr  r1, =" PRV_STR(BOOT_AIRCR_RESET) "\n"
-        "dsb                               \n"
-        "str  r1, [r0]                     \n"
-        "dsb                               \n"
-        "2: b 2b                           \n"
-        ".ltorg                            \n");
+        "ldr  r0, =" PRV_STR(
+            BOOT_APP_RUNNING_ADDR) "\n"
+                                   "ldr  r0, [r0]                     \n"
+                                   "ldr  r1, =" PRV_STR(
+                                       BOOT_APP_MAGIC_WORD) "\n"
+                                                            "cmp  r0, r1                       \n"
+                                                            "bne  1f                           \n"
+                                                            "mrs  r0, ipsr                     \n"
+                                                            "lsls r0, r0, #2                   \n"
+                                                            "ldr  r1, =" PRV_STR(
+                                                                BOOT_APP_VECTORS) "\n"
+                                                                                  "ldr  r0, [r1, r0]         "
+                                                                                  "        \n"
+                                                                                  "bx   r0                   "
+                                                                                  "        \n"
+                                                                                  "1:                        "
+                                                                                  "        \n"
+                                                                                  "ldr  r0, =" PRV_STR(
+                                                                                      BOOT_AIRCR) "\n"
+                                                                                                  "ldr  r1, "
+                                                                                                  "=" PRV_STR(
+                                                                                                      BOOT_AIRCR_RESET) "\n"
+                                                                                                                        "dsb                               \n"
+                                                                                                                        "str  r1, [r0]                     \n"
+                                                                                                                        "dsb                               \n"
+                                                                                                                        "2: b 2b                           \n"
+                                                                                                                        ".ltorg                            \n");
 }
 
 /* The trial's entries: reset unless the application confirmed its start
@@ -65,21 +75,37 @@ __attribute__((naked)) void km_boot_trial(void)
 {
     __asm__ volatile(
         ".syntax unified                   \n"
-        "ldr  r0, =" PRV_STR(BOOT_CONFIRMED_ADDR) "\n"
-        "ldr  r0, [r0]                     \n"
-        "ldr  r1, =" PRV_STR(BOOT_CONFIRMED_WORD) "\n"
-        "cmp  r0, r1                       \n"
-        "bne  1f                           \n"
-        "ldr  r0, =km_boot_forward         \n"
-        "bx   r0                           \n"
-        "1:                                \n"
-        "ldr  r0, =" PRV_STR(BOOT_AIRCR) "\n"
-        "ldr  r1, =" PRV_STR(BOOT_AIRCR_RESET) "\n"
-        "dsb                               \n"
-        "str  r1, [r0]                     \n"
-        "dsb                               \n"
-        "2: b 2b                           \n"
-        ".ltorg                            \n");
+        "ldr  r0, =" PRV_STR(
+            BOOT_CONFIRMED_ADDR) "\n"
+                                 "ldr  r0, [r0]                     \n"
+                                 "ldr  r1, =" PRV_STR(
+                                     BOOT_CONFIRMED_WORD) "\n"
+                                                          "cmp  r0, r1                       \n"
+                                                          "bne  1f                           \n"
+                                                          "ldr  r0, =km_boot_forward         \n"
+                                                          "bx   r0                           \n"
+                                                          "1:                                \n"
+                                                          "ldr  r0, =" PRV_STR(
+                                                              BOOT_AIRCR) "\n"
+                                                                          "ldr  r1, =" PRV_STR(
+                                                                              BOOT_AIRCR_RESET) "\n"
+                                                                                                "dsb         "
+                                                                                                "            "
+                                                                                                "          \n"
+                                                                                                "str  r1, "
+                                                                                                "[r0]        "
+                                                                                                "            "
+                                                                                                " \n"
+                                                                                                "dsb         "
+                                                                                                "            "
+                                                                                                "          \n"
+                                                                                                "2: b 2b     "
+                                                                                                "            "
+                                                                                                "          \n"
+                                                                                                ".ltorg      "
+                                                                                                "            "
+                                                                                                "          "
+                                                                                                "\n");
 }
 
 typedef void (*km_vector_t)(void);
@@ -90,14 +116,56 @@ typedef void (*km_vector_t)(void);
 /* 16 core entries + 32 nRF51 interrupts: the initial SP, the reset, the
  * trial's two (HardFault, IRQ BOOT_TRIAL_IRQ = TIMER2), the rest forwarded. */
 __attribute__((section(".isr_vector"), used)) const km_vector_t km_vectors[48] = {
-    (km_vector_t)(uintptr_t)__stack_top, km_boot_reset_handler,
-    PRV_F, PRV_T, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F,
+    (km_vector_t)(uintptr_t)__stack_top,
+    km_boot_reset_handler,
+    PRV_F,
+    PRV_T,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
     /* IRQ 0-15 */
-    PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_T, PRV_F, PRV_F, PRV_F,
-    PRV_F, PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_T,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
     /* IRQ 16-31 */
-    PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F, PRV_F,
-    PRV_F, PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
+    PRV_F,
 };
 _Static_assert(BOOT_TRIAL_IRQ == 10, "km_vectors puts km_boot_trial at IRQ 10");
 

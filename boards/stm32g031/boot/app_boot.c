@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The application's half of the handshake with the bootloader (docs/update.md
  * §3, §3a): 0x78 ENTER leaves the "stay in update mode" request in the
  * shared RAM words (the app then restarts), and the confirmation of a good

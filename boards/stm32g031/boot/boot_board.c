@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The bootloader's board part for the STM32G031 (km_boot_board.h), kept
  * small for the 4 KiB budget: the reset clock (HSI16, 16 MHz: no PLL to
  * set up), TIM2 at 1 MHz, USART1 single-wire half-duplex on PB6 polled,
@@ -90,8 +91,7 @@ static km_flash_result_t prv_erase(void *ctx, uint32_t page)
 static km_flash_result_t prv_program(void *ctx, uint32_t off, const void *data, uint32_t n)
 {
     (void)ctx;
-    if (off % PRV_CELL != 0u || n % PRV_CELL != 0u || off > BOOT_REGION_SIZE ||
-        n > BOOT_REGION_SIZE - off) {
+    if (off % PRV_CELL != 0u || n % PRV_CELL != 0u || off > BOOT_REGION_SIZE || n > BOOT_REGION_SIZE - off) {
         return KM_FLASH_ERR_ALIGN;
     }
     const uint8_t *src = data;
@@ -112,8 +112,7 @@ static km_flash_result_t prv_program(void *ctx, uint32_t off, const void *data, 
 
 /* Reads `n` bytes at base + off; a double ECC error (the NMI counted it)
  * makes the data untrustworthy. */
-static km_flash_result_t prv_read_at(uint32_t base, uint32_t size, uint32_t off, void *data,
-                                     uint32_t n)
+static km_flash_result_t prv_read_at(uint32_t base, uint32_t size, uint32_t off, void *data, uint32_t n)
 {
     if (off > size || n > size - off) {
         return KM_FLASH_ERR_ALIGN;
@@ -160,13 +159,22 @@ static km_flash_result_t prv_store_refuse_program(void *ctx, uint32_t off, const
 }
 
 static const km_flash_t k_region = {
-    .page_size = PRV_PAGE, .prog_size = PRV_CELL, .page_count = BOOT_REGION_SIZE / PRV_PAGE,
-    .erase = prv_erase, .program = prv_program, .read = prv_read, .ctx = 0,
+    .page_size = PRV_PAGE,
+    .prog_size = PRV_CELL,
+    .page_count = BOOT_REGION_SIZE / PRV_PAGE,
+    .erase = prv_erase,
+    .program = prv_program,
+    .read = prv_read,
+    .ctx = 0,
 };
 
 static const km_flash_t k_store = {
-    .page_size = PRV_PAGE, .prog_size = PRV_CELL, .page_count = BOOT_STORE_SIZE / PRV_PAGE,
-    .erase = prv_store_refuse, .program = prv_store_refuse_program, .read = prv_store_read,
+    .page_size = PRV_PAGE,
+    .prog_size = PRV_CELL,
+    .page_count = BOOT_STORE_SIZE / PRV_PAGE,
+    .erase = prv_store_refuse,
+    .program = prv_store_refuse_program,
+    .read = prv_store_read,
     .ctx = 0,
 };
 
@@ -182,8 +190,7 @@ const km_flash_t *km_bootb_store(void)
 
 const km_image_target_t *km_bootb_target(void)
 {
-    static const km_image_target_t k_target = {KM_MODEL_STM32G031, BOOT_REGION_BASE,
-                                               BOOT_REGION_SIZE};
+    static const km_image_target_t k_target = {KM_MODEL_STM32G031, BOOT_REGION_BASE, BOOT_REGION_SIZE};
     return &k_target;
 }
 
@@ -269,14 +276,13 @@ _Noreturn void km_bootb_start(uint32_t vectors, uint32_t sp, uint32_t pc)
     km_bootb_shared()->app_running = KM_BOOT_APP_MAGIC;
     prv_watchdog_start();
     PRV_SCB_VTOR = vectors;
-    __asm__ volatile(
-        "dsb         \n"
-        "isb         \n"
-        "msr msp, %0 \n"
-        "bx  %1      \n"
-        :
-        : "r"(sp), "r"(pc)
-        : "memory");
+    __asm__ volatile("dsb         \n"
+                     "isb         \n"
+                     "msr msp, %0 \n"
+                     "bx  %1      \n"
+                     :
+                     : "r"(sp), "r"(pc)
+                     : "memory");
     for (;;) {
     }
 }

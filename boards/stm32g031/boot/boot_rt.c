@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The few C run-time routines the STM32G031 bootloader links, written for
  * size (docs/update.md §1: the bootloader fits pages 0-1, 4 KiB): newlib's
  * memcpy/memset/memcmp/memmove (552 B, unrolled for speed) and libgcc's unsigned

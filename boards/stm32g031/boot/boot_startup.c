@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The STM32G031 bootloader's vector table and reset (docs/update.md §5).
  * The bootloader polls and enables no interrupt: its table has the reset,
  * the NMI (a double ECC error on a flash read, which boot_board.c's read
@@ -43,8 +44,22 @@ typedef void (*km_vector_t)(void);
 
 /* 16 core entries: SP, reset, NMI, HardFault (reset); no interrupts. */
 __attribute__((section(".isr_vector"), used)) const km_vector_t km_vectors[16] = {
-    (km_vector_t)(uintptr_t)__stack_top, km_boot_reset_handler, km_boot_nmi, km_boot_unexpected,
-    0, 0, 0, 0, 0, 0, 0, km_boot_unexpected, 0, 0, km_boot_unexpected, km_boot_unexpected,
+    (km_vector_t)(uintptr_t)__stack_top,
+    km_boot_reset_handler,
+    km_boot_nmi,
+    km_boot_unexpected,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0,
+    km_boot_unexpected,
+    0,
+    0,
+    km_boot_unexpected,
+    km_boot_unexpected,
 };
 
 void km_boot_reset_handler(void)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Cortex-M0 instruction-count benchmark image (QEMU microbit). Runs the
  * firmware's own code, compiled with the firmware's flags (-Os, newlib-nano),
  * between two markers, m0_begin() and m0_end(). tools/bench-m0 runs the
@@ -238,8 +239,8 @@ static const km_servo_ops_t s_ops = {
 
 /* One complete command frame, as the parser hands it out, through the
  * dispatcher in a region of its own. */
-static void m0h_dispatch(const char *name, uint8_t id, uint8_t cmd, const uint8_t *body,
-                         uint8_t n, bool want_answer, bool commit)
+static void m0h_dispatch(const char *name, uint8_t id, uint8_t cmd, const uint8_t *body, uint8_t n,
+                         bool want_answer, bool commit)
 {
     km_frame_t *f = &s_frame;
     f->id = id;
@@ -264,8 +265,7 @@ static void m0h_dispatch(const char *name, uint8_t id, uint8_t cmd, const uint8_
 static void m0h_dispatcher(void)
 {
     uint32_t persisted[KM_USERDATA_MAX];
-    const km_store_mount_t mount =
-        km_app_userdata_mount(km_board_flash(), km_board_product(), persisted);
+    const km_store_mount_t mount = km_app_userdata_mount(km_board_flash(), km_board_product(), persisted);
     km_servo_init(&s_servo, km_board_product(), persisted, 0x12345678u, &s_ops);
     km_servo_set_userdata_source(&s_servo, (uint8_t)mount);
     km_servo_control_params(&s_servo, &s_params);
@@ -321,8 +321,8 @@ static void m0h_dispatcher(void)
             e[3] = 0xF4;
             e[4] = 0x01;
         }
-        m0h_dispatch(entries == 3 ? "multi_write_0x83_3" : "multi_write_0x83_49", KM_ID_BROADCAST,
-                     0x83, b, (uint8_t)(2u + 5u * entries), false, false);
+        m0h_dispatch(entries == 3 ? "multi_write_0x83_3" : "multi_write_0x83_49", KM_ID_BROADCAST, 0x83, b,
+                     (uint8_t)(2u + 5u * entries), false, false);
     }
     /* 0x82 of 0x46 naming 20 and 249 servos (the longest list), this one
      * last, so the whole list is scanned and the last slot computed. */
@@ -331,8 +331,8 @@ static void m0h_dispatcher(void)
         for (unsigned i = 0; i < ids; i++) {
             b[1 + i] = (uint8_t)(i + 1u == ids ? M0_ID : i + 1u);
         }
-        m0h_dispatch(ids == 20 ? "multi_read_0x82_20" : "multi_read_0x82_249", KM_ID_BROADCAST,
-                     0x82, b, (uint8_t)(1u + ids), true, false);
+        m0h_dispatch(ids == 20 ? "multi_read_0x82_20" : "multi_read_0x82_249", KM_ID_BROADCAST, 0x82, b,
+                     (uint8_t)(1u + ids), true, false);
     }
     b[0] = 0x01; /* status */
     m0h_dispatch("read_status_0x01", M0_ID, 0x02, b, 1, true, false);
@@ -370,8 +370,8 @@ static unsigned m0h_follow(const char *name, unsigned n, km_sensors_t *in, km_li
 }
 
 /* n ticks with the sensor moving `step` 0.1 deg a tick. */
-static unsigned m0h_motor_ticks(const char *name, unsigned n, int32_t step, km_sensors_t *in,
-                                km_live_t *live, km_bridge_t *bridge)
+static unsigned m0h_motor_ticks(const char *name, unsigned n, int32_t step, km_sensors_t *in, km_live_t *live,
+                                km_bridge_t *bridge)
 {
     for (unsigned t = 0; t < n; t++) {
         m0h_tick(name, in, live, bridge);
@@ -481,8 +481,7 @@ static void m0h_control_encoder(void)
 {
     km_sim_product_select(KM_SIM_PRODUCT_ENCODER);
     uint32_t persisted[KM_USERDATA_MAX];
-    const km_store_mount_t mount =
-        km_app_userdata_mount(km_board_flash(), km_board_product(), persisted);
+    const km_store_mount_t mount = km_app_userdata_mount(km_board_flash(), km_board_product(), persisted);
     km_servo_init(&s_servo, km_board_product(), persisted, 0x12345678u, &s_ops);
     km_servo_set_userdata_source(&s_servo, (uint8_t)mount);
     km_servo_control_params(&s_servo, &s_params);
@@ -495,7 +494,7 @@ static void m0h_control_encoder(void)
     km_bridge_t bridge;
     m0h_desc("control_tick_enc_off", "encoder product, torque off (its first ticks)");
     (void)m0h_motor_ticks("control_tick_enc_off", 2u, 0, &in, &live, &bridge); /* sensing primed */
-    const uint8_t spd[3] = {0x6F, 0xB4, 0x00}; /* 180 deg/s */
+    const uint8_t spd[3] = {0x6F, 0xB4, 0x00};                                 /* 180 deg/s */
     m0h_dispatch("write_0x6F_speed", M0_ID, 0x03, spd, 3, false, false);
     m0h_desc("control_tick_motor_speed", "motor mode, speed loop 180 deg/s (0x6F, encoder product)");
     (void)m0h_motor_ticks("control_tick_motor_speed", 30u, 2, &in, &live, &bridge);
@@ -504,8 +503,7 @@ static void m0h_control_encoder(void)
     /* 0x70: 2.0 turns at 180 deg/s, brake after */
     const uint8_t adv[6] = {0x70, 0x36, 20, 0, 0xB4, 0x00};
     m0h_dispatch("write_0x70_turns", M0_ID, 0x03, adv, 6, false, false);
-    m0h_desc("control_tick_motor_turns",
-             "motor mode, 0x70 run of 2.0 turns at 180 deg/s (encoder product)");
+    m0h_desc("control_tick_motor_turns", "motor mode, 0x70 run of 2.0 turns at 180 deg/s (encoder product)");
     (void)m0h_motor_ticks("control_tick_motor_turns", 30u, 2, &in, &live, &bridge);
     m0h_check("control_motor_turns", live.running && bridge.mode == KM_BRIDGE_PWM && bridge.pwm != 0);
 

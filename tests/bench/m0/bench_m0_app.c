@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Cortex-M0 end-to-end instruction counts (tools/bench-m0): the firmware's
  * real main loop (firmware/app/km_app.c, km_app_init + km_app_poll) over
  * this board's time, flash and system drivers, with the bus UART, motor and
@@ -126,8 +127,8 @@ static void m0h_after_tick(void)
     }
 }
 
-static void m0h_frame(const char *name, uint8_t id, uint8_t cmd, const uint8_t *body, uint8_t n,
-                      bool answer, bool changes)
+static void m0h_frame(const char *name, uint8_t id, uint8_t cmd, const uint8_t *body, uint8_t n, bool answer,
+                      bool changes)
 {
     uint8_t f[KM_FRAME_MAX];
     f[0] = KM_HDR0;
@@ -160,8 +161,7 @@ static void m0h_frame(const char *name, uint8_t id, uint8_t cmd, const uint8_t *
     m0h_after_tick();
     /* An answer went out, or (writes) a register changed: the frame was
      * handled, not lost. */
-    const bool ok = answer ? s_sent != sent
-                           : (km_servo_params_gen(km_app_servo()) != gen) == changes;
+    const bool ok = answer ? s_sent != sent : (km_servo_params_gen(km_app_servo()) != gen) == changes;
     km_semihost_write0("check e2e_");
     m0h_say(name, ok ? " ok" : " FAIL");
     if (!ok) {
@@ -171,8 +171,8 @@ static void m0h_frame(const char *name, uint8_t id, uint8_t cmd, const uint8_t *
 
 /* ---- line rate: 1 Mbit/s back to back ---------------------------------- */
 
-#define LR_BUF 5000u   /* one lap of the stream, in RAM (50 ms at 1 Mbit/s) */
-#define LR_LAPS 2u     /* 100 ms, 100 control ticks per rate */
+#define LR_BUF 5000u         /* one lap of the stream, in RAM (50 ms at 1 Mbit/s) */
+#define LR_LAPS 2u           /* 100 ms, 100 control ticks per rate */
 #define LR_TIMER 0x40009000u /* TIMER1: the stand-in for the UART's byte interrupt */
 /* Byte intervals in 16 MHz timer ticks: 160 = 10 us, one 10-bit character
  * at 1 Mbit/s (156.25 instructions at shift=6); the shorter ones give the
@@ -321,7 +321,7 @@ static void m0h_lr_timer_start(uint32_t interval)
 {
     NRF_REG(LR_TIMER, TIMER_TASKS_STOP) = 1u;
     NRF_REG(LR_TIMER, TIMER_MODE) = 0u;
-    NRF_REG(LR_TIMER, TIMER_BITMODE) = 0u; /* 16 bit */
+    NRF_REG(LR_TIMER, TIMER_BITMODE) = 0u;   /* 16 bit */
     NRF_REG(LR_TIMER, TIMER_PRESCALER) = 0u; /* 16 MHz */
     NRF_REG(LR_TIMER, TIMER_CC(0)) = interval;
     NRF_REG(LR_TIMER, TIMER_SHORTS) = 1u; /* COMPARE0 -> CLEAR: periodic */
@@ -448,8 +448,8 @@ int main(void)
             e[3] = 0xF4;
             e[4] = 0x01;
         }
-        m0h_frame(entries == 3 ? "multi_write_0x83_3" : "multi_write_0x83_49", KM_ID_BROADCAST,
-                  0x83, b, (uint8_t)(2u + 5u * entries), false, false); /* a move: no register changes */
+        m0h_frame(entries == 3 ? "multi_write_0x83_3" : "multi_write_0x83_49", KM_ID_BROADCAST, 0x83, b,
+                  (uint8_t)(2u + 5u * entries), false, false); /* a move: no register changes */
     }
     b[0] = 0x01;
     m0h_frame("read_status_0x01", 0, 0x02, b, 1, true, false);

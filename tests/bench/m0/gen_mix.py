@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Writes the parser bus mix of tests/bench/bench_parser.c as a C file for
 the Cortex-M0 benchmark image (tests/bench/m0/bench_m0.c): the same
 xorshift32 stream, the same exchanges (pings, reads, writes, 0x83 multi-ID

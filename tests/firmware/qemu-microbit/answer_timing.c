@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* QEMU timing image: the servo firmware, plus the app's measurement hook
  * printing over semihosting how late each answer started against the delay
  * it asked for. tools/bench-answer-delay runs it under -icount, where

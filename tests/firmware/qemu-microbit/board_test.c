@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Board driver test for qemu-microbit, run in QEMU with semihosting: NVMC
  * erase/program/read rules, persistence of NVMC-programmed flash across a
  * guest reset (SYSRESETREQ), the 1 MHz tick, the one-shot timer, the
@@ -160,7 +161,8 @@ static void prv_test_time(void)
     at = km_hal_time_now() + 1000u;
     km_hal_timer_at(at, prv_on_timer, NULL);
     prv_wait_us(5000u);
-    prv_check(s_fired_count == 1u && s_fired_tick - at < PRV_TIMER_SLACK_US, "re-arming replaces the pending shot");
+    prv_check(s_fired_count == 1u && s_fired_tick - at < PRV_TIMER_SLACK_US,
+              "re-arming replaces the pending shot");
 
     s_fired_count = 0u;
     uint32_t irq = km_hal_irq_lock();
@@ -204,7 +206,8 @@ static void prv_test_misc(void)
     km_sensors_t s;
     km_hal_sensors_read(&s);
     prv_check(s.voltage_mv == 0 && s.position == 0, "sensors read zero until a plant publishes");
-    km_sensors_t pub = {.position = 1234, .current_ma = -50, .voltage_mv = 12000, .temperature_c10 = 251, .faults = 0};
+    km_sensors_t pub = {
+        .position = 1234, .current_ma = -50, .voltage_mv = 12000, .temperature_c10 = 251, .faults = 0};
     km_board_sensors_publish(&pub);
     km_hal_sensors_read(&s);
     /* Member by member: memcmp would also compare the padding after faults. */
@@ -227,7 +230,8 @@ static void prv_phase_before_reset(const km_flash_t *f)
     prv_test_misc();
 
     const uint32_t marker = PRV_FLASH_MARKER;
-    prv_check(f->erase(f->ctx, 1u) == KM_FLASH_OK && f->program(f->ctx, f->page_size, &marker, 4u) == KM_FLASH_OK,
+    prv_check(f->erase(f->ctx, 1u) == KM_FLASH_OK &&
+                  f->program(f->ctx, f->page_size, &marker, 4u) == KM_FLASH_OK,
               "write a persistence marker in store page 1");
     km_semihost_write0("INFO resetting via SYSRESETREQ\n");
     s_boot.phase = 2u;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* UART smoke image for qemu-microbit: proves the RX interrupt, TX and the
  * one-shot timer together, the way the firmware answers a frame. Sends the
  * banner "KMQ\n" at boot, then for every received byte, after a fixed
