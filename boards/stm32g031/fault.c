@@ -163,7 +163,8 @@ __attribute__((naked, noreturn)) void g0_fault_stop(uint32_t kind __attribute__(
     __asm volatile("ldr  r3, =_estack         \n"
                    "mov  sp, r3               \n"
                    "ldr  r3, =prv_fault_stop_c\n"
-                   "bx   r3                   \n");
+                   "bx   r3                   \n"
+                   ".ltorg                    \n");
 }
 
 /* The frame the core stacked is on MSP or PSP as EXC_RETURN bit 2 says (this
@@ -186,5 +187,6 @@ __attribute__((naked)) void HardFault_Handler(void)
                    "ldr  r2, [r0, #20]       \n"
                    "mrs  r0, ipsr            \n"
                    "ldr  r3, =g0_fault_stop  \n"
-                   "bx   r3                  \n");
+                   "bx   r3                  \n"
+                   ".ltorg                   \n");
 }

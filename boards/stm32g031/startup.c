@@ -31,7 +31,8 @@ extern int main(void);
 __attribute__((naked)) static void prv_default_handler(void)
 {
     __asm volatile("ldr r0, =HardFault_Handler\n"
-                   "bx  r0                    \n");
+                   "bx  r0                    \n"
+                   ".ltorg                    \n");
 }
 
 /* Handlers a board file may define; otherwise they take the fault path.
