@@ -8,7 +8,8 @@
  * The answer starts exactly `delay_us` after the frame's last byte because
  * the timer is armed at end_tick + delay, end_tick being stamped by the RX
  * interrupt, not by when the main loop got to the frame. The main loop runs
- * the control tick every KM_APP_TICK_US and compacts the store when idle.
+ * the control tick every KM_APP_TICK_US and does the store's flash work
+ * (formatting, compaction) only when idle and the bus is silent.
  *
  * The loop never waits on the bus: an answer that cannot be handed to the
  * TX path yet (the previous one is still on the wire) and a restart that
@@ -34,6 +35,10 @@
 #define KM_APP_TICK_US KM_CONTROL_TICK_US /* control tick: 1 kHz */
 #define KM_APP_RX_BUDGET 64u              /* bytes parsed per loop pass: bounds tick jitter */
 #define KM_APP_WATCHDOG_MS 500u
+/* docs/store.md "Preparing in idle time": idle flash work (an erase stalls
+ * the G0's flash for 22-40 ms) starts only after the bus has been silent
+ * this long. */
+#define KM_APP_FLASH_QUIET_US 50000u
 /* docs/update.md §3a: the main loop has served the bus this long before
  * the start is confirmed to the bootloader (its trial timer: 2 s). */
 #define KM_APP_CONFIRM_US 1000000u
@@ -77,6 +82,9 @@ static bool s_reply_waiting;
 static uint32_t s_reply_end;
 static bool s_restart_pending;
 static bool s_boot_confirmed; /* km_board_boot_confirm() was called */
+/* The store does not hold this session's state in its current format
+ * (blank, invalid, migrated or old schema): format it in idle time. */
+static bool s_store_prepare;
 static uint32_t s_confirm_at; /* tick at which the start is confirmed */
 
 static void ISR_rx_byte(void *ctx, uint8_t byte, uint32_t tick, bool lost)
@@ -293,6 +301,25 @@ static bool prv_ops_commit(void *ctx, const uint8_t *addrs, const uint32_t *valu
     return km_app_userdata_commit(addrs, values, n);
 }
 
+/* One step of idle-time store work, with the bridge not driving and the
+ * bus silent for KM_APP_FLASH_QUIET_US (docs/store.md "Preparing in idle
+ * time"): first the session's preparation if the store needs formatting,
+ * then compaction ahead of a full page. True if it did flash work. */
+static bool prv_idle_flash_work(uint32_t now)
+{
+    if (prv_bridge_driving() || !km_rx_queue_empty(&s_rxq) ||
+        now - s_parser.last_tick < prv_us_to_ticks(KM_APP_FLASH_QUIET_US)) {
+        return false;
+    }
+    if (s_store_prepare) {
+        if (km_app_userdata_prepare()) {
+            return true;
+        }
+        s_store_prepare = false;
+    }
+    return km_app_userdata_maintain();
+}
+
 static void prv_ops_restart(void *ctx)
 {
     (void)ctx;
@@ -370,6 +397,12 @@ __attribute__((weak)) void km_board_boot_confirm(void)
 {
 }
 
+/* Prepare only a store that needs formatting (a board may ask for more). */
+__attribute__((weak)) bool km_board_store_prepare_each_boot(void)
+{
+    return false;
+}
+
 /* docs/update.md §3a: once the main loop has run KM_APP_CONFIRM_US with
  * the bus open, the start was good; told the bootloader once per boot. */
 static void prv_confirm_boot(uint32_t now)
@@ -427,6 +460,8 @@ void km_app_init(void)
     /* Extension 0x01 tells the master where the user data came from; the
      * store's mount results are in the same order as KM_USERDATA_*. */
     km_servo_set_userdata_source(&s_servo, (uint8_t)mount);
+    s_store_prepare = mount != KM_STORE_MOUNT_ERR_ARG &&
+                      (mount != KM_STORE_MOUNT_LOADED || km_board_store_prepare_each_boot());
     km_servo_set_reset_cause(&s_servo, (uint8_t)km_hal_reset_cause());
     (void)km_fault_log_boot(&s_fault_log);
     km_servo_control_params(&s_servo, &s_params);
@@ -475,7 +510,7 @@ void km_app_poll(void)
         prv_control_tick(now);
         km_hal_watchdog_kick();
         prv_confirm_boot(now);
-    } else if (prv_bridge_driving() || !km_app_userdata_maintain()) {
+    } else if (!prv_idle_flash_work(now)) {
         /* Check and sleep under the lock: WFI still wakes on an interrupt
          * that became pending after the check (a byte, the answer timer,
          * TX done, the 1 ms wake-up). */

@@ -33,6 +33,13 @@ bool km_board_boot_request(void);
  * to confirm the start to the bootloader's trial. Weak default: nothing. */
 void km_board_boot_confirm(void);
 
+/* A board that wants the store prepared in idle time in every session,
+ * not only when it needs formatting, defines this to return true: the
+ * session's first saved setting then never waits on an erase, at the cost
+ * of one erase per boot (docs/store.md "Preparing in idle time"). Weak
+ * default: false. */
+bool km_board_store_prepare_each_boot(void);
+
 /* Boot: hal, store mount, dispatcher, control, bus. Resets every piece of
  * the app's state, so a test may call it again to model a reset. */
 void km_app_init(void);

@@ -47,3 +47,8 @@ bool km_app_userdata_maintain(void)
 {
     return km_store_maintain(&s_store);
 }
+
+bool km_app_userdata_prepare(void)
+{
+    return km_store_prepare(&s_store);
+}

@@ -224,6 +224,31 @@ bool km_store_maintain(km_store_t *s)
     return true;
 }
 
+/* Idle work before the session's first commit (km_store.h): the steps of
+ * that commit's compaction, one flash step per call, writing the state
+ * mount loaded. */
+bool km_store_prepare(km_store_t *s)
+{
+    if (!s->mounted || s->own) {
+        return false;
+    }
+    const km_flash_t *f = s->flash;
+    for (uint32_t p = 0; p < f->page_count; p++) {
+        if ((s->suspect & prv_page_bit(p)) != 0u && p != s->target) {
+            if (prv_erase(s, p)) {
+                s->suspect &= ~prv_page_bit(p);
+            }
+            return true;
+        }
+    }
+    if ((s->erased & prv_page_bit(s->target)) == 0u) {
+        (void)prv_erase(s, s->target);
+        return true;
+    }
+    (void)prv_compact(s, s->target, s->values);
+    return true;
+}
+
 bool km_store_get(const km_store_t *s, uint8_t key, uint32_t *value)
 {
     if (!s->mounted) {

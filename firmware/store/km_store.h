@@ -96,6 +96,17 @@ km_store_status_t km_store_reset(km_store_t *s, const uint8_t *keep, uint32_t n_
  * a later idle tick; a failing flash keeps it returning true). */
 bool km_store_maintain(km_store_t *s);
 
+/* Idle work before the session's first commit, so that commit is one
+ * record with no erase: the steps that commit's compaction would take
+ * (erase each page without a valid snapshot, erase the target, write the
+ * mounted state as a snapshot and confirm it), at most one erase or one
+ * record per call, in the same order and with the same outcome at any cut.
+ * Costs one erase, so the caller decides when it is worth it (a blank or
+ * outdated store: once; docs/store.md "Preparing in idle time"). Returns
+ * true if it did flash work; false once the session owns a page (a failing
+ * flash keeps it returning true). */
+bool km_store_prepare(km_store_t *s);
+
 /* The committed value of key; false if key is not in the schema. */
 bool km_store_get(const km_store_t *s, uint8_t key, uint32_t *value);
 

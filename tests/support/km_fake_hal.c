@@ -82,6 +82,31 @@ const km_product_t *km_board_product(void)
     return kf_world.pot_product ? &s_product_pot : &s_product;
 }
 
+/* The board option of km_app.h, as the test sets it. */
+bool km_board_store_prepare_each_boot(void)
+{
+    return kf_world.prepare_each_boot;
+}
+
+/* The main loop stalls while flash is busy (kf_world.erase_us/program_us). */
+static void prv_flash_stall(uint32_t us)
+{
+    kf_world.now += us;
+    kf_world.last_idle += us; /* stalled by the hardware, not spinning */
+}
+
+static km_flash_result_t prv_flash_erase(void *ctx, uint32_t page)
+{
+    prv_flash_stall(kf_world.erase_us);
+    return kf_world.nor_flash.erase(ctx, page);
+}
+
+static km_flash_result_t prv_flash_program(void *ctx, uint32_t offset, const void *data, uint32_t len)
+{
+    prv_flash_stall(kf_world.program_us * (len / kf_world.nor_flash.prog_size));
+    return kf_world.nor_flash.program(ctx, offset, data, len);
+}
+
 const km_flash_t *km_board_flash(void)
 {
     return &kf_world.flash;
@@ -239,9 +264,12 @@ void kf_power_on(void)
     kf_world.temperature_c10 = 250;
     kf_world.now = 1000;
     const km_nor_sim_config_t cfg = {.page_size = 2048, .prog_size = 8, .page_count = 2, .fill = 0xFF};
-    if (!km_nor_sim_init(&kf_world.nor, &cfg, &kf_world.flash)) {
+    if (!km_nor_sim_init(&kf_world.nor, &cfg, &kf_world.nor_flash)) {
         abort();
     }
+    kf_world.flash = kf_world.nor_flash;
+    kf_world.flash.erase = prv_flash_erase;
+    kf_world.flash.program = prv_flash_program;
     /* RAM powers up as garbage: the app's reset-surviving fault log too */
     memset(km_app_fault_log(), 0xA5, sizeof(km_fault_log_t));
     kf_boot(KM_RESET_POWER_ON);

@@ -53,6 +53,12 @@ typedef struct {
     int32_t position, current_ma, voltage_mv, temperature_c10; /* sensors */
     uint8_t sensor_faults;
     bool pot_product; /* the board is the potentiometer product from the next kf_boot() */
+    /* Flash stall (0: none): an erase or a program stops the main loop for
+     * this long, as on the STM32G0 where code runs from the flash being
+     * written; interrupts (RAM-resident there) come due and run after it,
+     * each with its own tick, so a full RX queue drops bytes as it would. */
+    uint32_t erase_us, program_us;
+    bool prepare_each_boot; /* km_board_store_prepare_each_boot() */
 
     /* the world */
     uint32_t now;
@@ -84,8 +90,9 @@ typedef struct {
     int motor_mode;        /* 0 free, 1 brake, 2 drive */
     unsigned motor_brakes; /* km_hal_motor_brake() calls */
     km_nor_sim_t nor;
-    km_flash_t flash;
-    bool use_plant; /* sensors and motor are the plant's */
+    km_flash_t nor_flash; /* the simulator's own ops */
+    km_flash_t flash;     /* what the app gets: nor_flash plus the stall */
+    bool use_plant;       /* sensors and motor are the plant's */
     km_plant_t plant;
     uint32_t plant_last; /* virtual time the plant was advanced to */
 } kf_world_t;

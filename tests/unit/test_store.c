@@ -776,6 +776,74 @@ static void test_first_flash_op_of_a_committing_session_is_an_erase(void **state
     }
 }
 
+/* km_store_prepare (docs/store.md "Preparing in idle time"): on blank
+ * flash it formats the store one erase or one record per call, and the
+ * first commit after it is a single record with no erase; the snapshot
+ * it writes is the mounted state. */
+static void test_prepare_formats_blank_store_so_first_commit_is_one_record(void **state)
+{
+    (void)state;
+    static const km_nor_sim_config_t geoms[] = {
+        {2048u, 8u, 2u, 0xFFu}, {1024u, 2u, 2u, 0xFFu}, {1024u, 4u, 2u, 0xFFu}, {2048u, 8u, 3u, 0xFFu}};
+    for (unsigned g = 0; g < sizeof geoms / sizeof geoms[0]; g++) {
+        assert_true(km_nor_sim_init(&s_sim, &geoms[g], &s_flash));
+        assert_int_equal(km_store_mount(&s_store, &s_flash, &k_test_schema, NULL),
+                         KM_STORE_MOUNT_DEFAULTS_BLANK);
+        unsigned calls = 0;
+        uint32_t erases = 0;
+        while (km_store_prepare(&s_store)) {
+            assert_true(s_sim.count.erases - erases <= 1u); /* at most one erase per call */
+            if (s_sim.count.erases == erases) {
+                assert_int_equal(calls, geoms[g].page_count); /* the record comes after every erase */
+            }
+            erases = s_sim.count.erases;
+            calls++;
+            assert_true(calls <= geoms[g].page_count + 1u);
+        }
+        assert_int_equal(calls, geoms[g].page_count + 1u);
+        assert_int_equal(s_sim.count.erases, geoms[g].page_count);
+        const uint32_t programs = s_sim.count.programs;
+        prv_commit1(0x10, 5000u); /* the first saved setting: one dense delta */
+        assert_int_equal(s_sim.count.erases, geoms[g].page_count);
+        assert_true(s_sim.count.programs - programs <= 16u / geoms[g].prog_size);
+        assert_false(km_store_prepare(&s_store));
+        assert_int_equal(prv_remount(), KM_STORE_MOUNT_LOADED);
+        assert_int_equal(prv_get(0x10), 5000u);
+        assert_int_equal(s_sim.count.violations, 0);
+    }
+}
+
+/* On a loaded store after a reboot, prepare writes the loaded state (a
+ * remount right after it still loads it), and a user data reset after it
+ * is one record with no erase. */
+static void test_prepare_after_reboot_keeps_state_and_reset_needs_no_erase(void **state)
+{
+    (void)state;
+    assert_true(km_nor_sim_init(&s_sim, &s_geoms[0], &s_flash));
+    (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
+    prv_commit1(0x0F, 7u);
+    prv_commit1(0x12, 1234u);
+    assert_int_equal(prv_remount(), KM_STORE_MOUNT_LOADED);
+    while (km_store_prepare(&s_store)) {
+    }
+    assert_int_equal(prv_remount(), KM_STORE_MOUNT_LOADED);
+    assert_int_equal(prv_get(0x12), 1234u);
+    while (km_store_prepare(&s_store)) {
+    }
+    const uint32_t erases = s_sim.count.erases;
+    const uint8_t keep[] = {0x0F};
+    assert_int_equal(km_store_reset(&s_store, keep, 1), KM_STORE_OK);
+    assert_int_equal(s_sim.count.erases, erases);
+    assert_int_equal(prv_remount(), KM_STORE_MOUNT_LOADED);
+    assert_int_equal(prv_get(0x0F), 7u);
+    for (unsigned i = 0; i < k_test_schema.count; i++) {
+        if (k_test_keys[i].key != 0x0F) {
+            assert_int_equal(prv_get(k_test_keys[i].key), k_test_keys[i].def);
+        }
+    }
+    assert_int_equal(s_sim.count.violations, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -802,6 +870,8 @@ int main(void)
         cmocka_unit_test(test_dense_delta_indices_follow_the_snapshot_keys),
         cmocka_unit_test(test_legacy_delta_still_read),
         cmocka_unit_test(test_first_flash_op_of_a_committing_session_is_an_erase),
+        cmocka_unit_test(test_prepare_formats_blank_store_so_first_commit_is_one_record),
+        cmocka_unit_test(test_prepare_after_reboot_keeps_state_and_reset_needs_no_erase),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

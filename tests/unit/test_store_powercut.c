@@ -55,7 +55,7 @@ typedef struct {
     uint32_t v[NKEYS];
 } prv_state_t;
 
-typedef enum { STEP_COMMIT, STEP_RESET, STEP_MAINTAIN } prv_step_kind_t;
+typedef enum { STEP_COMMIT, STEP_RESET, STEP_MAINTAIN, STEP_PREPARE } prv_step_kind_t;
 
 typedef struct {
     prv_step_kind_t kind;
@@ -112,6 +112,21 @@ static const prv_scenario_t s_scenarios[] = {
      0,
      2,
      {{STEP_COMMIT, 1, {0x0F}, {3}}, {STEP_COMMIT, 2, {0x0F, 0x10}, {4, 5000}}}},
+    /* km_store_prepare (docs/store.md "Preparing in idle time"): the first
+     * commit's compaction done ahead, step by step, then commits and a
+     * user data reset that no longer erase. */
+    {"blank store formatted in idle time",
+     0xFF,
+     0,
+     3,
+     {{STEP_PREPARE, 0, {0}, {0}}, {STEP_COMMIT, 1, {0x0F}, {3}}, {STEP_COMMIT, 2, {0x0F, 0x10}, {4, 5000}}}},
+    {"prepared after a reboot, then a user data reset",
+     0xFF,
+     3,
+     3,
+     {{STEP_PREPARE, 0, {0}, {0}},
+      {STEP_RESET, 4, {0x0F, 0x10, 0x16, 0x17}, {0}},
+      {STEP_COMMIT, 1, {0x12}, {66}}}},
     {"first commit on QEMU 0x00 flash",
      0x00,
      0,
@@ -246,6 +261,10 @@ static bool prv_run_step(const prv_step_t *step)
         r = km_store_commit(&s_store, step->keys, step->vals, step->n);
     } else if (step->kind == STEP_RESET) {
         r = km_store_reset(&s_store, step->keys, step->n);
+    } else if (step->kind == STEP_PREPARE) {
+        for (int i = 0; i < 8 && km_store_prepare(&s_store); i++) {
+        }
+        return !km_nor_sim_cut_fired(&s_sim);
     } else {
         for (int i = 0; i < 8 && km_store_maintain(&s_store); i++) {
         }
