@@ -16,7 +16,7 @@ add_test(NAME board_stm32g031_ram_check_rejects_flash COMMAND ${KM_G031_CHECK}
 add_test(NAME board_stm32g031_stack_check_rejects_small_reserve COMMAND ${KM_G031_CHECK}
          --checks stack --stack-reserve 1024)
 set_tests_properties(board_stm32g031_ram_check_rejects_flash PROPERTIES
-                     PASS_REGULAR_EXPRESSION "FAIL ram: km_app_poll \\[km_app.c.obj\\] at 0x08")
+                     PASS_REGULAR_EXPRESSION "FAIL ram: km_app_poll \\[km_app.c(.obj|, LTO)\\] at 0x08")
 set_tests_properties(board_stm32g031_stack_check_rejects_small_reserve PROPERTIES
                      PASS_REGULAR_EXPRESSION "FAIL stack: worst-case stack [0-9]+ B exceeds the 1024 B")
 set_tests_properties(board_stm32g031_ram_check_rejects_flash

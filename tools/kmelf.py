@@ -12,7 +12,8 @@ import re
 import subprocess
 from pathlib import Path
 
-TOOLS = {"readelf": "arm-none-eabi-readelf", "objdump": "arm-none-eabi-objdump"}
+TOOLS = {"readelf": "arm-none-eabi-readelf", "objdump": "arm-none-eabi-objdump",
+         "addr2line": "arm-none-eabi-addr2line"}
 
 # objdump -d lines: "<addr> <name>:" opens a function, then instructions.
 _FUNC_RE = re.compile(r"^([0-9a-f]+) <([^>]+)>:$")
@@ -22,6 +23,15 @@ _LIT_RE = re.compile(r"[;@]\s*\(([0-9a-f]+) <")
 # A map's input-section line: " .text.name  0xADDR  0xSIZE  object", the
 # name on its own line when it is long.
 _MAP_SEC_RE = re.compile(r"^ (\.[^\s]+|COMMON)?\s*0x([0-9a-f]+)[ \t]+0x([0-9a-f]+)[ \t]+(\S.*)$", re.M)
+
+
+# Suffixes GCC gives a clone or an LTO-local copy of a function.
+CLONE_SUFFIX = r"(\.(isra|constprop|part|cold|lto_priv)(\.\d+)?)+$"
+
+
+def is_lto_partition(obj):
+    """True for a link-time-optimisation partition object (ccXXXX.ltrans0.ltrans.o)."""
+    return ".ltrans" in obj
 
 
 def run(tool, *args):
@@ -48,6 +58,7 @@ class Func:
         self.names = [name]
         self.addr, self.size = addr, size
         self.obj = None          # "archive(member)" or object path, from the map
+        self.src = None          # source file name of an LTO partition's function (debug info)
         self.insns = []
         self.words = {}          # address -> 32-bit literal word inside the function
         self.frame = None        # bytes, from .su or the prologue
@@ -60,6 +71,8 @@ class Func:
         return self.names[0]
 
     def label(self):
+        if self.obj and is_lto_partition(self.obj):
+            return f"{self.name} [{self.src or '?'}, LTO]"
         obj = self.obj.split("(")[-1].rstrip(")") if self.obj else "?"
         return f"{self.name} [{Path(obj).name}]"
 
@@ -115,6 +128,32 @@ class Image:
                 if addr <= f.addr < addr + size:
                     f.obj = obj
                     break
+        self._read_lto_sources()
+
+    def _read_lto_sources(self):
+        """A function of an LTO partition gets its source file from the debug
+        line table (the outermost function at its entry), so that a config
+        name "fn@file.c.obj" still tells two statics of the same name apart.
+        Without debug information the name alone is matched."""
+        lto = [f for f in self.funcs.values() if f.obj and is_lto_partition(f.obj)]
+        if not lto:
+            return
+        out = run("addr2line", "-a", "-f", "-i", "-e", str(self.elf), *[hex(f.addr) for f in lto])
+        last = {}
+        cur = None
+        lines = out.splitlines()
+        k = 0
+        while k < len(lines):
+            if re.match(r"^0x[0-9a-f]+$", lines[k]):
+                cur = int(lines[k], 16)
+                k += 1
+                continue
+            if cur is not None and k + 1 < len(lines):
+                last[cur] = lines[k + 1].split(":")[0]
+            k += 2
+        for f in lto:
+            src = last.get(f.addr, "??")
+            f.src = None if src.startswith("??") else Path(src).name
 
     # ---- code ----
     def _read_disassembly(self):
@@ -210,7 +249,9 @@ class Image:
         # (the naked handlers' "ldr rX, =fn; bx rX").
         last_lit = {}
         for i in f.insns:
-            if i.op in ("bl", "blx") and i.target is not None:
+            if i.op == "bl" and i.target is not None and f.addr < i.target < f.addr + f.size:
+                pass  # Thumb-1 far jump inside a function over 2 KiB (GCC saves LR for it): a branch
+            elif i.op in ("bl", "blx") and i.target is not None:
                 f.calls.add(i.target)
             elif i.op.startswith("b") and i.target is not None and not (f.addr <= i.target < f.addr + f.size):
                 f.calls.add(i.target)  # a tail branch into another function
@@ -275,7 +316,7 @@ class Image:
                 p = self._su_path(f.obj, self.elf.parent)
                 table = su.get(p.resolve()) if p else None
                 if table is not None:
-                    base = re.sub(r"(\.(isra|constprop|part|cold)(\.\d+)?)+$", "", f.name)
+                    base = re.sub(CLONE_SUFFIX, "", f.name)
                     for key in (f.name, re.sub(r"\.\d+$", "", f.name), base):
                         if key in table:
                             f.frame, f.frame_src = table[key], "su"
@@ -339,12 +380,41 @@ class Image:
         out = []
         for f in self.funcs.values():
             for n in f.names:
-                base = re.sub(r"(\.(isra|constprop|part)(\.\d+)?)+$", "", n)
+                base = re.sub(CLONE_SUFFIX, "", n)
                 if n == want or base == want or (pattern and fnmatch.fnmatchcase(base, want)):
-                    if not obj or (f.obj and f.obj.rstrip(")").endswith(obj)):
+                    # An LTO partition names no source object: the function
+                    # name alone is matched (every same-named static: more
+                    # edges, never fewer).
+                    if not obj or (f.obj and (f.obj.rstrip(")").endswith(obj) or self._lto_source_is(f, obj))):
                         out.append(f)
                     break
         return out
+
+    def inline_origins(self, addrs):
+        """For each address, the function its code comes from in the source
+        (innermost of the debug info's inline chain) and that function's
+        file: {addr: (name, file)}; empty without debug information."""
+        if not addrs:
+            return {}
+        out = run("addr2line", "-a", "-f", "-i", "-e", str(self.elf), *[hex(a) for a in addrs])
+        origins, cur, lines, k = {}, None, out.splitlines(), 0
+        while k < len(lines):
+            if re.match(r"^0x[0-9a-f]+$", lines[k]):
+                cur = int(lines[k], 16)
+                k += 1
+                continue
+            if cur is not None and cur not in origins and k + 1 < len(lines) and not lines[k].startswith("??"):
+                origins[cur] = (lines[k], Path(lines[k + 1].split(":")[0]).name)
+            k += 2
+        return origins
+
+    @staticmethod
+    def _lto_source_is(f, obj):
+        """An LTO partition's function matches "x.c.obj" if its source is x.c
+        (or, without debug information, always)."""
+        if not is_lto_partition(f.obj):
+            return False
+        return f.src is None or f.src == re.sub(r"\.(obj|o)$", "", Path(obj).name)
 
     def vectors(self, section_start, count):
         """Handler addresses of the vector table (entry 0 is the initial SP)."""

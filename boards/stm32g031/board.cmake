@@ -16,3 +16,13 @@ set(KM_BOARD_LINK_OPTIONS -mcpu=cortex-m0plus -mthumb --specs=nano.specs --specs
 # tests/board/test_stm32g031_*.c: fixed-point sensor conversions and their
 # calibration, the USART divider, reset-cause decoding.
 set(KM_BOARD_HOST_SOURCES sensor_convert.c board_config.c usart_brr.c reset_cause.c)
+# Link-time optimisation (docs/footprint.md "LTO"): the images shrink by
+# inlining and dropping across objects. The link repeats the section and
+# section flags for the link-time partitions; tools/image-check then takes
+# frames from the disassembly and tells functions apart by the source file
+# the debug line table (-g: no code change) gives for them.
+set(KM_G031_LTO ON CACHE BOOL "stm32g031: build and link with -flto")
+if(KM_G031_LTO)
+  list(APPEND KM_BOARD_COMPILE_OPTIONS -flto -g)
+  list(APPEND KM_BOARD_LINK_OPTIONS -flto -Os -g -ffunction-sections -fdata-sections)
+endif()

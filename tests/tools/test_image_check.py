@@ -58,10 +58,17 @@ void Irq_Handler(void)
 #endif
     sink = 3;
 }
+#ifdef WITH_DISPATCH
+static void dispatch(fn_t f) { f(); }
+#endif
 void Reset_Handler(void)
 {
     leaf();
+#ifdef WITH_DISPATCH
+    dispatch(hook);
+#else
     hook();
+#endif
 #ifdef WITH_MALLOC
     sink = malloc(4) != 0;
 #endif
@@ -82,12 +89,14 @@ class ImageCheckTest(unittest.TestCase):
     def tearDown(self):
         shutil.rmtree(self.dir)
 
-    def build(self, *defines, stack=1024):
+    def build(self, *defines, stack=1024, lto=False):
         (self.dir / "t.c").write_text(SRC)
         (self.dir / "t.ld").write_text(f"STACK = {stack};\n" + LD)
         obj = self.dir / "t.o"
         elf = self.dir / "t.elf"
         flags = ["-mcpu=cortex-m0plus", "-mthumb", "-Os", "-ffunction-sections", "-fstack-usage"]
+        if lto:
+            flags += ["-flto", "-g"]
         subprocess.run([GCC, *flags, *[f"-D{d}" for d in defines], "-c", str(self.dir / "t.c"),
                         "-o", str(obj)], check=True, cwd=self.dir)
         subprocess.run([GCC, *flags, "-nostdlib", "-T", str(self.dir / "t.ld"), str(obj), "-o", str(elf),
@@ -162,6 +171,25 @@ class ImageCheckTest(unittest.TestCase):
         rc, out = self.check(self.build("IRQ_IN_RAM"), self.config(ram=True))
         self.assertEqual(rc, 0, out)
         self.assertIn("PASS ram", out)
+
+    # docs/footprint.md "LTO": the functions come from a link-time partition;
+    # an indirect call inlined into another function is judged by the config
+    # entry of the function it was written in (the debug line table's
+    # inline chain), and fails when that function has none.
+    def lto_config(self, describe):
+        cfg = self.config(describe=False)
+        cfg["indirect"] = {"dispatch@t.c.obj": ["callback"]} if describe else {}
+        return cfg
+
+    def test_lto_inlined_call_site_uses_its_origins_entry(self):
+        rc, out = self.check(self.build("WITH_DISPATCH", lto=True), self.lto_config(True))
+        self.assertEqual(rc, 0, out)
+        self.assertRegex(out, r"indirect call in Reset_Handler \[t.c, LTO\] at 0x\w+: inlined from dispatch \(t.c\)")
+
+    def test_lto_inlined_call_site_without_entry_fails(self):
+        rc, out = self.check(self.build("WITH_DISPATCH", lto=True), self.lto_config(False))
+        self.assertEqual(rc, 1, out)
+        self.assertIn("(written in dispatch, t.c) not described in the config", out)
 
 
 if __name__ == "__main__":
