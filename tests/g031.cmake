@@ -31,3 +31,9 @@ foreach(t test_standalone_image_reaches_main_loop test_bootloader_starts_app_to_
             ${KM_G031_IMAGES} Images.${t})
   set_tests_properties(${name} PROPERTIES LABELS g031 TIMEOUT 600)
 endforeach()
+# Flash work and the bus, and the stack's measured high-water mark
+# (tests/g031/test_vg031_flash.py; docs/store.md "Preparing in idle time").
+add_test(NAME g031_first_saved_setting_ping_on_time
+  COMMAND ${KM_DEBIAN_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/g031/test_vg031_flash.py
+          ${KM_G031_IMAGES} Flash.test_first_saved_setting_after_idle_format_ping_on_time)
+set_tests_properties(g031_first_saved_setting_ping_on_time PROPERTIES LABELS g031 TIMEOUT 600)
