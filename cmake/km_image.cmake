@@ -52,7 +52,9 @@ function(km_add_image)
   set(check_args)
   set(check_deps)
   if(EXISTS ${check_cfg})
-    set(check_args --config ${check_cfg})
+    # KM_BOARD_IMAGE_CHECK_ARGS: a board's extra options (stm32g031:
+    # --enforce-budget when built for the 32 KiB part).
+    set(check_args --config ${check_cfg} ${KM_BOARD_IMAGE_CHECK_ARGS})
     set(check_deps ${check_cfg})
   endif()
   add_custom_command(OUTPUT ${out}.check

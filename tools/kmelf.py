@@ -12,7 +12,7 @@ import re
 import subprocess
 from pathlib import Path
 
-TOOLS = {"readelf": "arm-none-eabi-readelf", "objdump": "arm-none-eabi-objdump",
+TOOLS = {"readelf": "arm-none-eabi-readelf", "objdump": "arm-none-eabi-objdump", "objcopy": "arm-none-eabi-objcopy",
          "addr2line": "arm-none-eabi-addr2line"}
 
 # objdump -d lines: "<addr> <name>:" opens a function, then instructions.

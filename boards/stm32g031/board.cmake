@@ -26,3 +26,21 @@ if(KM_G031_LTO)
   list(APPEND KM_BOARD_COMPILE_OPTIONS -flto -g)
   list(APPEND KM_BOARD_LINK_OPTIONS -flto -Os -g -ffunction-sections -fdata-sections)
 endif()
+# Flash size of the part (docs/footprint.md "STM32G031F6"): 64 (G031x8,
+# bootloader region 8 KiB) or 32 (G031x6 such as the 20-pin F6, bootloader
+# region 4 KiB). The linker scripts and boot/boot_layout.h take the layout
+# from it; tools/image-check prints the 32 KiB budget after every link and,
+# in a 32 KiB build, fails an image over it.
+set(KM_G031_FLASH_KB 64 CACHE STRING "stm32g031: flash of the part in KiB (64 or 32)")
+set_property(CACHE KM_G031_FLASH_KB PROPERTY STRINGS 64 32)
+if(KM_G031_FLASH_KB EQUAL 32)
+  set(KM_G031_BOOT_KB 4)
+  set(KM_BOARD_IMAGE_CHECK_ARGS --enforce-budget)
+elseif(KM_G031_FLASH_KB EQUAL 64)
+  set(KM_G031_BOOT_KB 8)
+else()
+  message(FATAL_ERROR "KM_G031_FLASH_KB must be 64 or 32, not ${KM_G031_FLASH_KB}")
+endif()
+list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_G031_FLASH_KB=${KM_G031_FLASH_KB}u -DKM_G031_BOOT_KB=${KM_G031_BOOT_KB}u)
+list(APPEND KM_BOARD_LINK_OPTIONS -Wl,--defsym=KM_FLASH_SIZE=${KM_G031_FLASH_KB}K
+     -Wl,--defsym=KM_BOOT_SIZE=${KM_G031_BOOT_KB}K)

@@ -4,10 +4,23 @@
 #ifndef BOOT_LAYOUT_H
 #define BOOT_LAYOUT_H
 
-#define BOOT_REGION_BASE 0x08002000u /* application region: 25 pages, 50 KiB */
-#define BOOT_REGION_SIZE (25u * 2048u)
-#define BOOT_STORE_BASE 0x0800E800u /* user-data store: 3 pages */
-#define BOOT_STORE_SIZE (3u * 2048u)
+/* The part's flash and the bootloader's region in KiB, as the build sets
+ * them (boards/stm32g031/board.cmake KM_G031_FLASH_KB): 64 and 8 on the
+ * G031x8, 32 and 4 on the G031x6 (docs/footprint.md "STM32G031F6"). */
+#ifndef KM_G031_FLASH_KB
+#define KM_G031_FLASH_KB 64u
+#endif
+#ifndef KM_G031_BOOT_KB
+#define KM_G031_BOOT_KB 8u
+#endif
+
+#define BOOT_FLASH_BASE 0x08000000u
+#define BOOT_STORE_SIZE (3u * 2048u) /* user-data store: the last 3 pages */
+#define BOOT_STORE_BASE (BOOT_FLASH_BASE + KM_G031_FLASH_KB * 1024u - BOOT_STORE_SIZE)
+/* Application region: after the bootloader, up to the store (64 KiB part:
+ * 0x08002000, 25 pages, 50 KiB; 32 KiB part: 0x08001000, 11 pages). */
+#define BOOT_REGION_BASE (BOOT_FLASH_BASE + KM_G031_BOOT_KB * 1024u)
+#define BOOT_REGION_SIZE (BOOT_STORE_BASE - BOOT_REGION_BASE)
 #define BOOT_RAM_BASE 0x20000000u
 #define BOOT_SHARED_ADDR 0x20001FE0u /* km_boot_shared_t: the top 32 bytes of RAM */
 
