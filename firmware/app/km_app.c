@@ -312,10 +312,9 @@ static bool prv_idle_flash_work(uint32_t now)
         return false;
     }
     if (s_store_prepare) {
-        if (km_app_userdata_prepare()) {
-            return true;
-        }
-        s_store_prepare = false;
+        /* Done, or a step failed: either way no more of it this session. */
+        s_store_prepare = km_app_userdata_prepare();
+        return true;
     }
     return km_app_userdata_maintain();
 }

@@ -31,8 +31,8 @@ bool km_app_userdata_commit(const uint8_t *addrs, const uint32_t *values, uint8_
 /* Idle-time compaction; true if it did flash work. */
 bool km_app_userdata_maintain(void);
 
-/* Idle-time preparation of the session's first commit (km_store_prepare);
- * true if it did flash work. */
+/* Idle-time preparation of the session's first commit (km_store_prepare):
+ * true after a step that succeeded, false when done or after a failure. */
 bool km_app_userdata_prepare(void);
 
 #endif

@@ -235,18 +235,17 @@ bool km_store_prepare(km_store_t *s)
     const km_flash_t *f = s->flash;
     for (uint32_t p = 0; p < f->page_count; p++) {
         if ((s->suspect & prv_page_bit(p)) != 0u && p != s->target) {
-            if (prv_erase(s, p)) {
-                s->suspect &= ~prv_page_bit(p);
+            if (!prv_erase(s, p)) {
+                return false;
             }
+            s->suspect &= ~prv_page_bit(p);
             return true;
         }
     }
     if ((s->erased & prv_page_bit(s->target)) == 0u) {
-        (void)prv_erase(s, s->target);
-        return true;
+        return prv_erase(s, s->target);
     }
-    (void)prv_compact(s, s->target, s->values);
-    return true;
+    return prv_compact(s, s->target, s->values);
 }
 
 bool km_store_get(const km_store_t *s, uint8_t key, uint32_t *value)

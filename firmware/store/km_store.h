@@ -103,8 +103,9 @@ bool km_store_maintain(km_store_t *s);
  * record per call, in the same order and with the same outcome at any cut.
  * Costs one erase, so the caller decides when it is worth it (a blank or
  * outdated store: once; docs/store.md "Preparing in idle time"). Returns
- * true if it did flash work; false once the session owns a page (a failing
- * flash keeps it returning true). */
+ * true after a step that succeeded; false once the session owns a page,
+ * or when a step failed (stop calling: the first commit then does the
+ * same work, and reports the failure). */
 bool km_store_prepare(km_store_t *s);
 
 /* The committed value of key; false if key is not in the schema. */

@@ -844,6 +844,22 @@ static void test_prepare_after_reboot_keeps_state_and_reset_needs_no_erase(void 
     assert_int_equal(s_sim.count.violations, 0);
 }
 
+/* A flash that fails (here: dead after a cut in the second erase) stops the
+ * preparation: prepare returns false at once instead of erasing on every
+ * idle pass, and the store is not owned (the first commit redoes it). */
+static void test_prepare_stops_at_a_failed_step(void **state)
+{
+    (void)state;
+    assert_true(km_nor_sim_init(&s_sim, &s_geoms[0], &s_flash));
+    (void)km_store_mount(&s_store, &s_flash, &k_test_schema, NULL);
+    km_nor_sim_arm_cut(&s_sim, 1, KM_NOR_PROG_NOT_DONE, KM_NOR_ERASE_NOT_DONE);
+    assert_true(km_store_prepare(&s_store));  /* first erase */
+    assert_false(km_store_prepare(&s_store)); /* second erase: cut, flash dead */
+    assert_true(km_nor_sim_cut_fired(&s_sim));
+    assert_false(s_store.own);
+    assert_int_equal(s_sim.count.violations, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -872,6 +888,7 @@ int main(void)
         cmocka_unit_test(test_first_flash_op_of_a_committing_session_is_an_erase),
         cmocka_unit_test(test_prepare_formats_blank_store_so_first_commit_is_one_record),
         cmocka_unit_test(test_prepare_after_reboot_keeps_state_and_reset_needs_no_erase),
+        cmocka_unit_test(test_prepare_stops_at_a_failed_step),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
