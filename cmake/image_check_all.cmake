@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-# Runs tools/image-check on every *.elf of one board's build tree (ctest -P
+# Runs tools/check/image-check on every *.elf of one board's build tree (ctest -P
 # script): fails if the tree holds no image or any image fails.
 #   cmake -DPYTHON=… -DTOOL=… -DCONFIG=… -DIMAGES=<build dir> -DSU_ROOT=<build>
 #         [-DBOARD=<board>] -P image_check_all.cmake

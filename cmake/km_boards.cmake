@@ -19,7 +19,7 @@
 #
 # Included by CMakeLists.txt and tests/; run as a script it prints one line
 # per board, "<name> <build dir> <preset or -> <toolchain or ->", for
-# tools/test-all and tools/static-analysis:
+# tools/test-all and tools/check/static-analysis:
 #   cmake -P cmake/km_boards.cmake
 # The build dir is the binaryDir of the CMakePresets.json configure preset
 # whose KM_BOARD names the board, else build/<name>.

@@ -8,11 +8,11 @@
 # interface library such as boards/sim-common's, compiled into the image).
 # Emits <name>.elf (the target, named <name>), <name>.bin, <name>.hex,
 # <name>.map and <name>.size next to it: the size report (arm-none-eabi-size
-# and the per-module flash/RAM table of tools/footprint), also printed after
+# and the per-module flash/RAM table of tools/check/footprint), also printed after
 # each link, so the figures stay with the image they describe.
 # CPU and libc flags come from the board's board.cmake, not from here.
 #
-# Every image is then checked by tools/image-check (no heap linked; static
+# Every image is then checked by tools/check/image-check (no heap linked; static
 # worst-case stack against the linker script's reserve; on boards whose
 # config names RAM roots, the flash-busy interrupt paths all in RAM), with
 # the board's boards/<board>/image-check.json as the written-down
@@ -42,7 +42,7 @@ function(km_add_image)
     COMMAND ${CMAKE_OBJCOPY} -O binary $<TARGET_FILE:${IMG_NAME}> ${out}.bin
     COMMAND ${CMAKE_OBJCOPY} -O ihex $<TARGET_FILE:${IMG_NAME}> ${out}.hex
     COMMAND ${CMAKE_SIZE} $<TARGET_FILE:${IMG_NAME}> > ${out}.size
-    COMMAND ${Python3_EXECUTABLE} ${CMAKE_SOURCE_DIR}/tools/footprint ${out}.map >> ${out}.size
+    COMMAND ${Python3_EXECUTABLE} ${CMAKE_SOURCE_DIR}/tools/check/footprint ${out}.map >> ${out}.size
     COMMAND ${CMAKE_COMMAND} -E cat ${out}.size
     BYPRODUCTS ${out}.bin ${out}.hex ${out}.map ${out}.size
     COMMENT "${IMG_NAME}: .bin, .hex, .map and the size report .size"
@@ -58,12 +58,12 @@ function(km_add_image)
     set(check_deps ${check_cfg})
   endif()
   add_custom_command(OUTPUT ${out}.check
-    COMMAND ${Python3_EXECUTABLE} ${CMAKE_SOURCE_DIR}/tools/image-check
+    COMMAND ${Python3_EXECUTABLE} ${CMAKE_SOURCE_DIR}/tools/check/image-check
             $<TARGET_FILE:${IMG_NAME}> ${check_args} --su-root ${CMAKE_BINARY_DIR}
             --stamp ${out}.check
-    DEPENDS ${IMG_NAME} ${CMAKE_SOURCE_DIR}/tools/image-check ${CMAKE_SOURCE_DIR}/tools/kmelf.py
+    DEPENDS ${IMG_NAME} ${CMAKE_SOURCE_DIR}/tools/check/image-check ${CMAKE_SOURCE_DIR}/tools/check/kmelf.py
             ${check_deps}
-    COMMENT "${IMG_NAME}: heap, stack and flash-busy checks (tools/image-check)"
+    COMMENT "${IMG_NAME}: heap, stack and flash-busy checks (tools/check/image-check)"
     VERBATIM)
   add_custom_target(${IMG_NAME}-check ALL DEPENDS ${out}.check)
 endfunction()

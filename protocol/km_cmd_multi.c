@@ -46,7 +46,7 @@ km_report_t km_cmd_multi_write(km_servo_t *s, const km_frame_view_t *f, km_reply
 }
 
 /* The first position of `own` in ids[0..n), or n. Four IDs a pass, then
- * the rest: the scan is what a long list costs (tools/bench-m0); the
+ * the rest: the scan is what a long list costs (tools/bench/bench-m0); the
  * answer is due j slots later anyway. A function of its own, so the loop
  * has the registers to itself. */
 static __attribute__((noinline)) uint32_t prv_find_id(const uint8_t *ids, uint32_t n, uint8_t own)

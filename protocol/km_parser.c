@@ -47,7 +47,7 @@
  *    and is copied out at most once, so the iterations over a whole stream
  *    are <= bytes fed + calls. A whole frame judged in place is read twice
  *    (header, sum) and never enters the window.
- *  Measured on the bench mix, Cortex-M0 -Os (tools/bench-m0): about 20
+ *  Measured on the bench mix, Cortex-M0 -Os (tools/bench/bench-m0): about 20
  *  instructions per byte through km_parser_feed_bytes in runs of <= 64
  *  bytes (73 byte by byte through the former single-byte path).
 

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The registers' names, for tools and tests (tools/regdoc.c prints them):
+/* The registers' names, for tools and tests (tools/gen/regdoc.c prints them):
  * in a file of their own, so the firmware, which never names a register,
  * does not carry the strings. */
 #include "km_registers.h"

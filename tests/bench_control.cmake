@@ -5,8 +5,8 @@
 # definition, the dispatcher and control on the realistic plant; it writes
 # its traces and the generated section of the doc into this build
 # directory. bench_control_plot then draws one PNG per criterion with
-# tools/plot-control, so the script cannot rot. Both print figures and fail
-# only on a broken run. tools/bench-control --doc regenerates
+# tools/bench/plot-control, so the script cannot rot. Both print figures and fail
+# only on a broken run. tools/bench/bench-control --doc regenerates
 # docs/control-quality.md from the same two programs.
 if(TARGET bench_control)
   target_link_libraries(bench_control PRIVATE km_sim_product)  # the simulated product, compiled in
@@ -15,7 +15,7 @@ if(TARGET bench_control)
     FIXTURES_SETUP km_control_traces)
   if(EXISTS /usr/bin/python3)
     add_test(NAME bench_control_plot
-      COMMAND ${CMAKE_SOURCE_DIR}/tools/plot-control
+      COMMAND ${CMAKE_SOURCE_DIR}/tools/bench/plot-control
               -o ${CMAKE_CURRENT_BINARY_DIR}/control-quality
               ${CMAKE_CURRENT_BINARY_DIR}/control_traces.csv)
     set_tests_properties(bench_control_plot PROPERTIES
@@ -27,7 +27,7 @@ endif()
 # (in the source tree: run by hand, never by CTest).
 if(TARGET bench_control)
   add_custom_target(control-quality-doc
-    COMMAND ${CMAKE_SOURCE_DIR}/tools/bench-control --doc --build ${CMAKE_BINARY_DIR}
+    COMMAND ${CMAKE_SOURCE_DIR}/tools/bench/bench-control --doc --build ${CMAKE_BINARY_DIR}
     DEPENDS bench_control
     WORKING_DIRECTORY ${CMAKE_SOURCE_DIR}
     USES_TERMINAL)

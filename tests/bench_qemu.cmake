@@ -4,6 +4,6 @@
 # than one byte time (115200 baud) away from its configured delay.
 find_program(KM_PYTHON3_BENCH python3)
 if(KM_PYTHON3_BENCH)
-  add_test(NAME bench_answer_delay_qemu COMMAND ${KM_PYTHON3_BENCH} ${CMAKE_SOURCE_DIR}/tools/bench-answer-delay)
+  add_test(NAME bench_answer_delay_qemu COMMAND ${KM_PYTHON3_BENCH} ${CMAKE_SOURCE_DIR}/tools/bench/bench-answer-delay)
   set_tests_properties(bench_answer_delay_qemu PROPERTIES LABELS bench TIMEOUT 300 RUN_SERIAL TRUE)
 endif()

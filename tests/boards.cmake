@@ -10,7 +10,7 @@
 #    without a word.
 #
 # 2. A board with a cross toolchain builds images: board_<board>_image_check
-#    runs tools/image-check again on every image of its build tree (no heap,
+#    runs tools/check/image-check again on every image of its build tree (no heap,
 #    stack within the linker script's reserve, the flash-busy RAM rule where
 #    the board's image-check.json names RAM roots), so CI shows the
 #    build-time checks as tests (label board). It reads the board's build
@@ -51,7 +51,7 @@ foreach(board ${KM_BOARDS})
     km_board_build_dir(${board} dir preset)
     set(KM_BUILD_DIR_${board_id} ${dir} CACHE PATH "${board} build read by board_${board_id}_image_check")
     add_test(NAME board_${board_id}_image_check
-      COMMAND ${CMAKE_COMMAND} -DPYTHON=${Python3_EXECUTABLE} -DTOOL=${CMAKE_SOURCE_DIR}/tools/image-check
+      COMMAND ${CMAKE_COMMAND} -DPYTHON=${Python3_EXECUTABLE} -DTOOL=${CMAKE_SOURCE_DIR}/tools/check/image-check
               -DCONFIG=${KM_ROOT_DIR}/boards/${board}/image-check.json
               -DIMAGES=${KM_BUILD_DIR_${board_id}} -DSU_ROOT=${KM_BUILD_DIR_${board_id}}
               -DBOARD=${board}

@@ -22,12 +22,12 @@
 # their times). Its emulators answer late behind host stalls even under
 # SCHED_FIFO: on this 2-core host at load average 8-9 the 7 slot-order
 # checks failed in 3 of 20 runs at the real slot rule and passed 20 of 20
-# with the floor at load 12 (tools/bench-superid --realtime --no-hog: 0.33 %
+# with the floor at load 12 (tools/bench/bench-superid --realtime --no-hog: 0.33 %
 # order errors, answer lateness up to 6 ms). host-sim passed 20 of 20 at the
 # real rule at the same load, but a later loaded tools/test-all saw one
 # super-ID answer out of order in its load run, so it gets the floor too;
 # the rule itself is checked in virtual time by tests/app and
-# tests/unit/test_dispatch_multi_read.c, and tools/bench-superid measures it
+# tests/unit/test_dispatch_multi_read.c, and tools/bench/bench-superid measures it
 # on the emulated bus.
 #
 # The load run here is 10,000 transactions on host-sim and 3,000 on QEMU

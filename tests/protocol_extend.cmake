@@ -5,7 +5,7 @@
 # to each .def file; tests/extend/km_hook_demo.c is its hook); the copy is
 # built as a library of its own and tests/extend/test_protocol_extend.c
 # checks that every command path knows the register, and the register
-# table generator (tools/regdoc.c) lists it. A change that made adding a
+# table generator (tools/gen/regdoc.c) lists it. A change that made adding a
 # register need a third edit (a list of addresses in the dispatcher, a
 # switch over registers) makes this test fail.
 set(KM_EXT_DIR ${CMAKE_CURRENT_BINARY_DIR}/protocol_extend)
@@ -36,8 +36,8 @@ add_test(NAME test_protocol_extend COMMAND test_protocol_extend)
 set_tests_properties(test_protocol_extend PROPERTIES LABELS unit)
 
 # The generated register table lists it, from the two rows alone.
-add_executable(km_regdoc_extended ${CMAKE_SOURCE_DIR}/tools/regdoc.c ${CMAKE_SOURCE_DIR}/tools/regdoc_table.c
-  ${CMAKE_SOURCE_DIR}/tools/regdoc_json.c)
+add_executable(km_regdoc_extended ${CMAKE_SOURCE_DIR}/tools/gen/regdoc.c ${CMAKE_SOURCE_DIR}/tools/gen/regdoc_table.c
+  ${CMAKE_SOURCE_DIR}/tools/gen/regdoc_json.c)
 target_link_libraries(km_regdoc_extended PRIVATE km_protocol_extended)
 add_test(NAME protocol_extend_regdoc
   COMMAND sh -c "\"$<TARGET_FILE:km_regdoc_extended>\" | grep -q '^| 0x71 | DEMO_ACCUMULATE | RW |' && \"$<TARGET_FILE:km_regdoc_extended>\" --json | grep -q '\"name\": \"demo_accumulate\"'")

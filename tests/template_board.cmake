@@ -10,10 +10,10 @@
 # 2. board_template_copy (label board, a few minutes): a scratch copy of the
 #    source tree, boards/template copied there to a new board name and
 #    nothing else touched; the new board must be discovered
-#    (cmake/km_boards.cmake, as tools/test-all and tools/static-analysis
+#    (cmake/km_boards.cmake, as tools/test-all and tools/check/static-analysis
 #    find boards) and build with its own toolchain from
 #    `cmake -S <copy> -B <build> -DKM_BOARD=<name>`: its servo image linked
-#    and passing tools/image-check (tests/template/copy_check.cmake).
+#    and passing tools/check/image-check (tests/template/copy_check.cmake).
 set(KM_TEMPLATE_DIR ${CMAKE_SOURCE_DIR}/boards/template)
 file(GLOB KM_TEMPLATE_BOARD_SRC CONFIGURE_DEPENDS ${KM_TEMPLATE_DIR}/*.c)
 list(REMOVE_ITEM KM_TEMPLATE_BOARD_SRC ${KM_TEMPLATE_DIR}/startup.c ${KM_TEMPLATE_DIR}/main.c)

@@ -1,10 +1,10 @@
 # SPDX-License-Identifier: Apache-2.0
-# Python tests of the host tools (tools/kmbus.py, tools/servo-bus) and the host
+# Python tests of the host tools (the frame codec kmx.frame, sim/bus/servo-bus) and the host
 # package host/kmx (test_kmx.py: codec, registers, transports, Bus against a
 # real host-sim servo over TCP and a pty and on the 3-servo host-sim bus of
 # servo-bus, about 3 s; test_kmx_cli.py: the kmx command
 # against host-sim and the 3-servo bus, with tools/servo-session, about 14 s;
-# test_kmx_baud.py: the baud model (tools/kmwire.py, host-sim --baud,
+# test_kmx_baud.py: the baud model (sim/bus/kmwire.py, host-sim --baud,
 # servo-bus over RFC 2217) and kmx set-baud, scan --all-bauds, rescue on two
 # host-sim servos, about 23 s; test_servo_bus_stop.py: Ctrl-C at random
 # moments of servo-bus's start-up, 20 runs on host-sim and 20 on QEMU (when
@@ -33,6 +33,9 @@ if(KM_PYTHON3)
   set_tests_properties(py_tools PROPERTIES
     LABELS tools TIMEOUT 300
     FAIL_REGULAR_EXPRESSION "Ran 0 tests;FAILED")
+  # test_run_on_bus.py also imports the conformance wrapper (tests/conformance/)
+  set_property(TEST py_tools APPEND PROPERTY ENVIRONMENT_MODIFICATION
+    "PYTHONPATH=path_list_append:${CMAKE_SOURCE_DIR}/tests/conformance")
 endif()
 
 # host/ installs with pip from the checkout without network, into a venv of

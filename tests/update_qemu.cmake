@@ -1,8 +1,8 @@
 # SPDX-License-Identifier: Apache-2.0
 # Firmware update end to end on QEMU (docs/update.md): three servos booting
-# through the bootloader on tools/servo-bus, a wrong-model image refused,
+# through the bootloader on sim/bus/servo-bus, a wrong-model image refused,
 # v2 by one broadcast pass, back to v1 with 3 restart frames and 4 real
-# system resets (QEMU monitor, tools/servo-bus --monitor-dir) at random
+# system resets (QEMU monitor, sim/bus/servo-bus --monitor-dir) at random
 # points. About 40 s; RUN_SERIAL like the other bus tests. tools/servo-update
 # --resets 55 is the long run (docs/update.md §11 gives its figures).
 find_program(KM_PYTHON3_UPD python3)

@@ -37,7 +37,7 @@
  * the master as what a UART at N decodes from them (hs_wire.c), so a servo
  * at another baud hears garbage and stays silent, as on a real wire. Without
  * --baud the master follows the servo. --report-baud prints "baud N" on
- * stdout at every UART start, for tools/servo-bus, which models the wire
+ * stdout at every UART start, for sim/bus/servo-bus, which models the wire
  * itself (docs/protocol-decisions.md "Baud on the emulated bus"). */
 #define _GNU_SOURCE /* posix_openpt, ptsname */
 #include <errno.h>

@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* host-sim: what a UART at one baud rate decodes from bytes sent at
  * another (the wire's baud mismatch model, docs/protocol-decisions.md "Baud
- * on the emulated bus"; the same algorithm as tools/kmwire.py garble()). */
+ * on the emulated bus"; the same algorithm as sim/bus/kmwire.py garble()). */
 #ifndef HS_WIRE_H
 #define HS_WIRE_H
 

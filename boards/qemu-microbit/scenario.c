@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* QEMU: the plant scenario (boards/sim-common/km_sim_scenario.h) as a table
- * in RAM at 0x20000040 (nrf51822.ld .km_scenario), which tools/servo-bus
+ * in RAM at 0x20000040 (nrf51822.ld .km_scenario), which sim/bus/servo-bus
  * --scenario FILE writes with
  *   -device loader,file=<table>,addr=0x20000040,force-raw=on
  * before the CPU starts; QEMU re-applies it at every reset, so a restart

@@ -24,7 +24,7 @@
 #define PRV_BAUD_MAX 1000000u
 
 /* Run-time options (README.md, "Run-time options"). The guest has no command
- * line, so tools/servo-bus writes these words before the CPU starts with
+ * line, so sim/bus/servo-bus writes these words before the CPU starts with
  *   -device loader,addr=0x20000000,data=0x4B4D4746,data-len=4
  *   -device loader,addr=0x20000004,data=<floor us>,data-len=4
  *   -device loader,addr=0x20000008,data=<product: 0 pot, 1 encoder>,data-len=4

@@ -3,7 +3,7 @@
  * around a servo (supply, ambient temperature, a load on the horn, a
  * broken wire), played on the plant's clock so a protection can be
  * exercised through bytes on the bus. host-sim reads them from a text file
- * (--scenario FILE), QEMU from a table in RAM that tools/servo-bus loads
+ * (--scenario FILE), QEMU from a table in RAM that sim/bus/servo-bus loads
  * (boards/qemu-microbit/README.md); both hand the same events to this
  * player. Text format, one event per line, times never decreasing:
  *     T_MS KEY VALUE        # comment

@@ -3,7 +3,7 @@
 # Cortex-M0+ built with Debian's arm-none-eabi-gcc. Every object of its
 # build gets one section per function/object so --gc-sections drops what
 # is unused, and -fstack-usage: a .su file per object, the frames
-# tools/image-check sums over the call graph to bound the stack. Links with
+# tools/check/image-check sums over the call graph to bound the stack. Links with
 # newlib-nano without the C start-up files (startup.c is ours) and no heap.
 set(KM_BOARD_DESCRIPTION "STM32G031 servo board (Cortex-M0+)")
 set(KM_BOARD_TOOLCHAIN arm-none-eabi)

@@ -9,7 +9,7 @@
  * (prv_run), and the interrupts that serve the bus (USART1, the answer
  * timer, SysTick) run from RAM through a RAM vector table: a byte that
  * arrives during an erase is received and stamped, and an answer that falls
- * due is sent, on time (docs/flash-busy.md; tools/image-check proves the
+ * due is sent, on time (docs/flash-busy.md; tools/check/image-check proves the
  * placement after every link). Interrupts are masked only around the
  * two-word write of one double word, which must reach the controller back
  * to back. */

@@ -4,7 +4,7 @@
 # Debian's arm-none-eabi-gcc and newlib-nano: set -mcpu to your core
 # (cortex-m0plus, cortex-m3, cortex-m4...). Every object gets one section
 # per function/object (--gc-sections drops what is unused) and
-# -fstack-usage (.su files: tools/image-check bounds the stack from them).
+# -fstack-usage (.su files: tools/check/image-check bounds the stack from them).
 # No crt0 (startup.c is ours) and no nosys.specs: anything reaching for
 # syscalls or a heap fails to link.
 set(KM_BOARD_DESCRIPTION "A board made from boards/template (every hal contract empty)")

@@ -475,7 +475,7 @@ static void prv_thermal(km_plant_t *p)
 /* km_plant_real.h: sub-steps, then R(T), the ideal getters' state and the sensors. */
 /* One sub-step of the whole model. Kept out of line (as its parts): the
  * Cortex-M0 reaches past 2 KB inside one function only with a bl, which
- * tools/image-check would read as a call to itself. */
+ * tools/check/image-check would read as a call to itself. */
 __attribute__((noinline)) static void prv_substep(km_plant_t *p, const km_plant_input_t *in, int32_t d)
 {
     prv_electrical(p, in->bridge, d);

@@ -21,9 +21,9 @@
  * move that never starts or never ends, an output it cannot write.
  *
  * Usage: bench_control [--hours H] [out-dir]   (else $KM_BENCH_CONTROL_DIR,
- * else "."). Writes <dir>/control_traces.csv (tools/plot-control draws one
+ * else "."). Writes <dir>/control_traces.csv (tools/bench/plot-control draws one
  * PNG per criterion) and <dir>/control_quality.md (the generated section of
- * docs/control-quality.md; tools/bench-control --doc puts it there).
+ * docs/control-quality.md; tools/bench/bench-control --doc puts it there).
  * --hours: how long the multi-turn closed loop of criterion 7 runs (1 by
  * default; 24 for the full day, ~25x longer).
  * bench_control --cost: host CPU time of one 1 ms km_plant_step, ideal and
@@ -1464,7 +1464,7 @@ int main(int argc, char **argv)
         s_csv,
         "criterion,series,t_ms,target_deg,shaft_deg,report_deg,speed_dps,pwm,current_ma,peak_ma,running\n");
     printf("Control quality (issue 20): the real control code and dispatcher on the realistic plant,\n"
-           "1 kHz tick, virtual time. Reproduce: %s [--hours H] [out-dir]  (tools/bench-control)\n\n",
+           "1 kHz tick, virtual time. Reproduce: %s [--hours H] [out-dir]  (tools/bench/bench-control)\n\n",
            argv[0]);
     prv_measure_stall();
     printf("plant: stall %d mA, %.2f N.m (full PWM, 7.4 V, its 4-servo bus)\n\n", s_stall_ma,

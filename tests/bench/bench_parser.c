@@ -6,7 +6,7 @@
  * runs of up to 64 bytes with their ticks, as the firmware's main loop feeds
  * it from the RX queue), and checks every generated command frame came out
  * both ways. Prints bytes fed and frames; exits 1 on a wrong count. Timing is measured from
- * outside (tools/bench-parser runs it under callgrind), so the stream is
+ * outside (tools/bench/bench-parser runs it under callgrind), so the stream is
  * generated first and the feed loop does nothing else. */
 #include <stdint.h>
 #include <stdio.h>

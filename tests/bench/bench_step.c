@@ -5,7 +5,7 @@
  * simulated plant (sim/plant), for both products, small and large steps, a
  * move in time and a fastest move, light load, heavy load and a low supply.
  * Prints one table of figures and writes every trace to a CSV file
- * (tools/plot-step draws them). Fails (exit 1) only on a broken run: a
+ * (tools/bench/plot-step draws them). Fails (exit 1) only on a broken run: a
  * refused command, a move that never starts or never moves the shaft, an
  * impossible reading, or a CSV it cannot write; never on a figure.
  *

@@ -30,7 +30,7 @@
                                          move back accepted; an NTC that opens
                                          while running found (bit 2), motion
                                          refused, a stop accepted; about 25 s
-  [--gap-floor-us N]  passed to tools/servo-bus (tests/bus.cmake: 0 for host-sim)
+  [--gap-floor-us N]  passed to sim/bus/servo-bus (tests/bus.cmake: 0 for host-sim)
   [--slot-timing auto|realtime|floor]  the bus test's answer-slot
                       timing (below); default auto. The other tests run
                       servo-bus's default: SCHED_FIFO where the host
@@ -38,7 +38,7 @@
   [--build-dir DIR]   the backend's build tree (default: servo-bus's, which
                       also reads KM_BUILD_QEMU / KM_BUILD_HOST_SIM)
 
-Starts tools/servo-bus (which runs the built images), waits for its `ready`
+Starts sim/bus/servo-bus (which runs the built images), waits for its `ready`
 line, then acts as the bus master. Exits non-zero on the first mismatch.
 
 Both backends, smoke and bus: the servo moves (torque on, 0x65 to +45.0 deg
@@ -59,7 +59,7 @@ emulated servo answers whenever the host schedules its process, so three
 emulators on two busy cores jitter by milliseconds, more than the 0.7 ms super-ID ping slot at 115200 (it used to
 switch the servos to 9600 baud, 8.3 ms, and still failed under load). Now
 (docs/protocol-decisions.md "Answer slots on emulated buses", figures from
-tools/bench-superid):
+tools/bench/bench-superid):
   realtime  (auto when the host allows SCHED_FIFO, e.g. root or an rtprio
             limit) servo-bus --realtime: the hub and the emulators run under
             SCHED_FIFO, and the slots are the real rule's: 0 answer-order
@@ -83,8 +83,7 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "tools"))
-import kmbus  # noqa: E402
+from kmx import frame as kmframe  # noqa: E402  (docs/architecture.md "The folders": PYTHONPATH)
 
 
 GAP_FLOOR_DEFAULT_US = 20000  # the emulated boards' own default
@@ -92,7 +91,7 @@ GAP_FLOOR_DEFAULT_US = 20000  # the emulated boards' own default
 
 class Bus:
     def __init__(self, backend, ids, opts):
-        argv = [sys.executable, os.path.join(ROOT, "tools", "servo-bus"), "--ids",
+        argv = [sys.executable, os.path.join(ROOT, "sim", "bus", "servo-bus"), "--ids",
                 ",".join(map(str, ids)), "--port", "0", "--backend", backend, "--timeout", "30"]
         if opts.gap_floor_us is not None:
             argv += ["--gap-floor-us", str(opts.gap_floor_us)]
@@ -113,7 +112,7 @@ class Bus:
         # A frame written in pieces must leave at once: with Nagle a piece can
         # wait ~40 ms for the ACK of the last one, longer than the gap rule.
         self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self.parser = kmbus.Parser()
+        self.parser = kmframe.Parser()
 
     def close(self):
         self.sock.close()
@@ -164,7 +163,7 @@ def check(cond, what):
 def wait_ping(bus, dev_id, seconds=10):
     deadline = time.monotonic() + seconds
     while time.monotonic() < deadline:
-        if bus.exchange(kmbus.ping(dev_id), 1, timeout=0.3):
+        if bus.exchange(kmframe.ping(dev_id), 1, timeout=0.3):
             return True
     return False
 
@@ -173,7 +172,7 @@ def check_burst(bus, dev_id, count):
     """`count` pings to one servo, back to back in one TCP write: far more than
     the servo's 128-byte RX queue. A ping's answer is as long as the ping,
     so a servo at line rate answers each before the next one ends."""
-    burst = kmbus.ping(dev_id) * count
+    burst = kmframe.ping(dev_id) * count
     r = bus.exchange(burst, count, timeout=5.0 + count * 0.002, quiet=True)
     check(len(r) == count and all(f.id == dev_id and f.is_status for f in r),
           "host-sim line rate: a %d-byte burst of %d pings in one write, all %d answered (got %d)"
@@ -189,15 +188,15 @@ def check_gap(bus, dev_id, opts):
     # process stalled by a loaded machine reads both pieces together (then
     # there is no pause on its wire), so give it 50 ms of margin.
     pause = (gap_us + 50000) / 1e6
-    r = bus.split_frame(kmbus.ping(dev_id), 3, pause, 0)
+    r = bus.split_frame(kmframe.ping(dev_id), 3, pause, 0)
     check(r == [], "§7 a ping paused %.0f ms after 3 bytes (gap %.0f ms): dropped"
           % (pause * 1000, gap_us / 1000))
-    r = bus.exchange(kmbus.ping(dev_id), 1)
+    r = bus.exchange(kmframe.ping(dev_id), 1)
     check(len(r) == 1 and r[0].id == dev_id, "§7 the next whole ping is answered")
 
 
 def read_pos(bus, dev_id):
-    r = bus.exchange(kmbus.read(dev_id, 0x46), 1, timeout=0.5, quiet=True)
+    r = bus.exchange(kmframe.read(dev_id, 0x46), 1, timeout=0.5, quiet=True)
     if len(r) != 1 or len(r[0].params) not in (2, 4):
         return None
     return int.from_bytes(r[0].params, "little", signed=True)
@@ -221,10 +220,10 @@ def check_move(bus, dev_id):
     on a shared machine: the bounds are loose (a stalled emulator integrates
     its plant over the stall); tests/unit/test_control_servo.c and
     tests/app/test_app_motion.c hold the tight figures in virtual time."""
-    bus.exchange(kmbus.write(dev_id, 0x64, b"\x02"), 0, timeout=0.1)
+    bus.exchange(kmframe.write(dev_id, 0x64, b"\x02"), 0, timeout=0.1)
     start = read_pos(bus, dev_id)
     t0 = time.monotonic()
-    bus.exchange(kmbus.write(dev_id, 0x65, (450).to_bytes(2, "little", signed=True)
+    bus.exchange(kmframe.write(dev_id, 0x65, (450).to_bytes(2, "little", signed=True)
                              + (500).to_bytes(2, "little")), 0, timeout=0.02)
     seen = []
     near = wait_pos(bus, dev_id, 440, 460, 3.0, seen)
@@ -240,14 +239,14 @@ def check_move(bus, dev_id):
              max(seen) if seen else None))
     check(arrived < 1.5, "§5.4 ... in about the requested time (under 1.5 s of wall clock)")
     t0 = time.monotonic()
-    bus.exchange(kmbus.write(dev_id, 0x66, (0).to_bytes(2, "little") + (180).to_bytes(2, "little")),
+    bus.exchange(kmframe.write(dev_id, 0x66, (0).to_bytes(2, "little") + (180).to_bytes(2, "little")),
                  0, timeout=0.02)
     back = wait_pos(bus, dev_id, -10, 10, 3.0, seen)
     check(back is not None, "§5.4 0x66 back to 0 at 180 deg/s: within 1 deg after %s ms"
           % (None if back is None else round((back + 0.02) * 1000)))
     check_motor_for_time(bus, dev_id)
-    bus.exchange(kmbus.write(dev_id, 0x64, b"\x00"), 0, timeout=0.1)
-    r = bus.exchange(kmbus.read(dev_id, 0x64), 1, timeout=0.5)
+    bus.exchange(kmframe.write(dev_id, 0x64, b"\x00"), 0, timeout=0.1)
+    r = bus.exchange(kmframe.read(dev_id, 0x64), 1, timeout=0.5)
     check(len(r) == 1 and r[0].params == b"\x00", "§5.4 torque off: 0x64 reads 0")
 
 
@@ -257,11 +256,11 @@ def check_motor_for_time(bus, dev_id):
     by itself: two reads 200 ms apart agree once the time is up."""
     start = read_pos(bus, dev_id)
     control = 0x10 | 0x02  # p1 = time (0.1 s), p2 = PWM, brake after, positive
-    bus.exchange(kmbus.write(dev_id, 0x70, bytes([control]) + (5).to_bytes(2, "little")
+    bus.exchange(kmframe.write(dev_id, 0x70, bytes([control]) + (5).to_bytes(2, "little")
                              + (500).to_bytes(2, "little")), 0, timeout=0.02)
     time.sleep(0.2)
     mid = read_pos(bus, dev_id)
-    r = bus.exchange(kmbus.read(dev_id, 0x01), 1, timeout=0.5)
+    r = bus.exchange(kmframe.read(dev_id, 0x01), 1, timeout=0.5)
     running = len(r) == 1 and r[0].params[:1] and r[0].params[0] & 0x80
     check(start is not None and mid is not None and mid > start + 50 and running,
           "§5.4 0x70 PWM 500 for 0.5 s: running (status %s), 0x46 from %s to %s after 200 ms "
@@ -270,7 +269,7 @@ def check_motor_for_time(bus, dev_id):
     a = read_pos(bus, dev_id)
     time.sleep(0.2)
     b = read_pos(bus, dev_id)
-    r = bus.exchange(kmbus.read(dev_id, 0x01), 1, timeout=0.5)
+    r = bus.exchange(kmframe.read(dev_id, 0x01), 1, timeout=0.5)
     stopped = len(r) == 1 and r[0].params[:1] and not r[0].params[0] & 0x80
     check(a is not None and a == b and a > mid and stopped,
           "§5.4 0x70 ... stops by itself after its time: 0x46 %s then %s 200 ms later, "
@@ -287,7 +286,7 @@ def check_multi_move(bus, ids):
     def multi(addr, items):
         k = len(next(iter(items.values())))
         body = bytes([k]) + b"".join(bytes([i]) + d for i, d in items.items())
-        return kmbus.encode_command(kmbus.ID_BROADCAST, kmbus.MULTI_WRITE, addr, body)
+        return kmframe.encode_command(kmframe.ID_BROADCAST, kmframe.MULTI_WRITE, addr, body)
 
     bus.exchange(multi(0x64, {i: b"\x02" for i in ids}), 0, timeout=0.1)
     bus.exchange(multi(0x65, {i: t.to_bytes(2, "little", signed=True) + (500).to_bytes(2, "little")
@@ -304,39 +303,39 @@ def check_multi_move(bus, ids):
                  0, timeout=0.02)
     back = [i for i in ids if wait_pos(bus, i, -10, 10, 3.0, []) is not None]
     check(back == ids, "§4.2 0x83 of 0x66 back to 0: %s of %s arrived" % (back, ids))
-    bus.exchange(kmbus.write(kmbus.ID_BROADCAST, 0x64, b"\x00"), 0, timeout=0.3)
-    r = bus.exchange(kmbus.read(kmbus.ID_SUPER, 0x64), len(ids))
+    bus.exchange(kmframe.write(kmframe.ID_BROADCAST, 0x64, b"\x00"), 0, timeout=0.3)
+    r = bus.exchange(kmframe.read(kmframe.ID_SUPER, 0x64), len(ids))
     check([f.params for f in r] == [b"\x00"] * len(ids), "§5.4 broadcast torque off: every 0x64 reads 0")
 
 
 def smoke(backend, opts):
     bus = Bus(backend, [1], opts)
     try:
-        r = bus.exchange(kmbus.ping(1), 1)
-        check(len(r) == 1 and r[0].to_bytes() == kmbus.encode_status(1, 0), "§3 ping answered F9 F5 01 02 00 FC")
-        r = bus.exchange(kmbus.read(1, 0x0B), 1)
+        r = bus.exchange(kmframe.ping(1), 1)
+        check(len(r) == 1 and r[0].to_bytes() == kmframe.encode_status(1, 0), "§3 ping answered F9 F5 01 02 00 FC")
+        r = bus.exchange(kmframe.read(1, 0x0B), 1)
         check(len(r) == 1 and r[0].params == bytes.fromhex("00000205"), "§5.1 0x0B reads 0x05020000 little-endian")
-        check(bus.exchange(kmbus.write(1, 0x12, (350).to_bytes(2, "little")), 0, timeout=0.5) == [],
+        check(bus.exchange(kmframe.write(1, 0x12, (350).to_bytes(2, "little")), 0, timeout=0.5) == [],
               "§3 write at response level 0: no answer")
-        r = bus.exchange(kmbus.read(1, 0x12), 1)
+        r = bus.exchange(kmframe.read(1, 0x12), 1)
         check(len(r) == 1 and r[0].params == (350).to_bytes(2, "little"), "§5.1 0x12 reads back 350")
-        bad = bytearray(kmbus.ping(1))
+        bad = bytearray(kmframe.ping(1))
         bad[-1] ^= 0xFF
         check(bus.exchange(bytes(bad), 0, timeout=0.5) == [], "§4 bad checksum: no answer")
-        r = bus.exchange(kmbus.ping(1), 1)
+        r = bus.exchange(kmframe.ping(1), 1)
         check(len(r) == 1 and r[0].status == 0x20, "§4 decision: next answer carries bit 5 after a bad checksum with our ID")
-        check(bus.exchange(kmbus.write(1, 0x02, bytes.fromhex("E1E2E3E4")), 0, timeout=0.3) == [],
+        check(bus.exchange(kmframe.write(1, 0x02, bytes.fromhex("E1E2E3E4")), 0, timeout=0.3) == [],
               "§3 restart: no answer")
         check(wait_ping(bus, 1), "answers again after the restart")
-        r = bus.exchange(kmbus.read(1, 0x12), 1)
+        r = bus.exchange(kmframe.read(1, 0x12), 1)
         check(len(r) == 1 and r[0].params == (350).to_bytes(2, "little"), "§5 user data 0x12 survived the restart")
-        r = bus.exchange(kmbus.encode_command(1, 0x7F, 0x01), 1)
+        r = bus.exchange(kmframe.encode_command(1, 0x7F, 0x01), 1)
         check(len(r) == 1 and r[0].cmd == 0x7F and r[0].params == b"\x00",
               "extension read 0x7F 0x01: user data loaded from flash at boot")
         check_move(bus, 1)
         if backend == "host-sim":
             check_burst(bus, 1, 40)
-            check_burst(bus, 1, 4096 // len(kmbus.ping(1)))
+            check_burst(bus, 1, 4096 // len(kmframe.ping(1)))
             check_gap(bus, 1, opts)
     finally:
         bus.close()
@@ -346,7 +345,7 @@ REALTIME_PROBE = "import os; os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_pa
 SLOT_FLOOR_US = 20000  # the fallback without SCHED_FIFO (module docstring)
 # A master's pause between the last answer and its next request: host-sim
 # models each servo's wire, on which the answers it heard may still be
-# arriving when the master has already read them (tools/bench-superid
+# arriving when the master has already read them (tools/bench/bench-superid
 # --turnaround-ms: 0 ms gave order errors on host-sim, 2 ms none).
 TURNAROUND_S = 0.005
 
@@ -387,29 +386,29 @@ def bus_test(backend, opts):
     opts.bus_timing_args = bus_slot_timing(backend, opts)
     bus = Bus(backend, ids, opts)
     try:
-        r = bus.exchange(kmbus.read(1, 0x10), 1)
+        r = bus.exchange(kmframe.read(1, 0x10), 1)
         check(len(r) == 1 and r[0].params == (1152).to_bytes(2, "little"), "§5.1 the bus runs at 115200 baud (0x10 = 1152)")
         for _ in range(3):
             time.sleep(TURNAROUND_S)
-            r = bus.exchange(kmbus.ping(kmbus.ID_SUPER), 3)
+            r = bus.exchange(kmframe.ping(kmframe.ID_SUPER), 3)
             check([f.id for f in r] == ids and all(f.is_status for f in r), "§3 super-ID ping: three answers in ID order")
-        bus.exchange(kmbus.write(kmbus.ID_BROADCAST, 0x12, (400).to_bytes(2, "little")), 0, timeout=0.5)
-        r = bus.exchange(kmbus.read(kmbus.ID_SUPER, 0x12), 3)
+        bus.exchange(kmframe.write(kmframe.ID_BROADCAST, 0x12, (400).to_bytes(2, "little")), 0, timeout=0.5)
+        r = bus.exchange(kmframe.read(kmframe.ID_SUPER, 0x12), 3)
         check([f.id for f in r] == ids and all(f.params == (400).to_bytes(2, "little") for f in r),
               "§3 broadcast write changed all three (read back with the super ID)")
-        mread = kmbus.encode_command(kmbus.ID_BROADCAST, kmbus.MULTI_READ, 0x12, bytes([3, 1, 2]))
+        mread = kmframe.encode_command(kmframe.ID_BROADCAST, kmframe.MULTI_READ, 0x12, bytes([3, 1, 2]))
         for _ in range(3):
             time.sleep(TURNAROUND_S)
             r = bus.exchange(mread, 3)
-            check([f.id for f in r] == [3, 1, 2] and all(f.cmd == kmbus.READ and f.addr == 0x12 and
+            check([f.id for f in r] == [3, 1, 2] and all(f.cmd == kmframe.READ and f.addr == 0x12 and
                                                          f.params == (400).to_bytes(2, "little") for f in r),
                   "0x82 multi-ID read of 0x12 listing 3, 1, 2: three read answers in list order "
                   "(docs/protocol-decisions.md \"Multi-ID read 0x82\")")
         # A response from "servo 2" whose value bytes hold a whole ping to
         # servo 1: every servo must skip it whole (§2), nobody answers.
-        fake = kmbus.encode_response(2, kmbus.READ, 0x0A, kmbus.ping(1))
+        fake = kmframe.encode_response(2, kmframe.READ, 0x0A, kmframe.ping(1))
         check(bus.exchange(fake, 0, timeout=0.8) == [], "§2 a response frame with F9 FF inside is skipped whole")
-        r = bus.exchange(kmbus.ping(1), 1)
+        r = bus.exchange(kmframe.ping(1), 1)
         check(len(r) == 1 and r[0].id == 1 and r[0].status == 0, "servo 1 still answers, status clean")
         check_move(bus, 2)
         check_multi_move(bus, ids)
@@ -422,7 +421,7 @@ def bus_test(backend, opts):
 
 
 def motor_speed(bus, dev_id, dps):
-    return bus.exchange(kmbus.write(dev_id, 0x6F, dps.to_bytes(2, "little", signed=True)), 0,
+    return bus.exchange(kmframe.write(dev_id, 0x6F, dps.to_bytes(2, "little", signed=True)), 0,
                         timeout=0.05)
 
 
@@ -434,13 +433,13 @@ def encoder(backend, opts):
     opts.product = "encoder"
     bus = Bus(backend, [1], opts)
     try:
-        r = bus.exchange(kmbus.read(1, 0x0A), 1)
+        r = bus.exchange(kmframe.read(1, 0x0A), 1)
         check(len(r) == 1 and r[0].params.rstrip(b"\0") == b"KM-SIM-ENCODER",
               "§5.1 0x0A names the encoder product KM-SIM-ENCODER (%r)"
               % (r[0].params if r else None))
         start = read_pos(bus, 1)
         motor_speed(bus, 1, 360)
-        r = bus.exchange(kmbus.ping(1), 1)
+        r = bus.exchange(kmframe.ping(1), 1)
         check(len(r) == 1 and not r[0].status & 0x40, "§5.4 0x6F 360 deg/s accepted: status bit 6 clear (%s)"
               % (hex(r[0].status) if r else None))
         seen = []
@@ -460,7 +459,7 @@ def encoder(backend, opts):
         # The shaft is physics: a restart of the MCU leaves it where it is.
         # The encoder is absolute within one turn and the turn count is RAM,
         # so after the restart 0x46 is the angle within one turn.
-        check(bus.exchange(kmbus.write(1, 0x02, bytes.fromhex("E1E2E3E4")), 0, timeout=0.3) == [],
+        check(bus.exchange(kmframe.write(1, 0x02, bytes.fromhex("E1E2E3E4")), 0, timeout=0.3) == [],
               "§3 restart: no answer")
         check(wait_ping(bus, 1), "answers again after the restart")
         pos = read_pos(bus, 1)
@@ -473,11 +472,11 @@ def encoder(backend, opts):
     opts.product = "pot"
     bus = Bus(backend, [1], opts)
     try:
-        r = bus.exchange(kmbus.read(1, 0x0A), 1)
+        r = bus.exchange(kmframe.read(1, 0x0A), 1)
         check(len(r) == 1 and r[0].params.rstrip(b"\0") == b"KM-SIM-P135",
               "§5.1 0x0A names the pot product KM-SIM-P135")
         motor_speed(bus, 1, 360)
-        r = bus.exchange(kmbus.ping(1), 1)
+        r = bus.exchange(kmframe.ping(1), 1)
         check(len(r) == 1 and r[0].status & 0x40, "§6 the pot product refuses 0x6F: the next ping has "
               "status bit 6 (%s)" % (hex(r[0].status) if r else None))
         time.sleep(0.3)
@@ -514,12 +513,12 @@ def ask(bus, frame):
 
 
 def ping_status(bus, dev_id):
-    f = ask(bus, kmbus.ping(dev_id))
+    f = ask(bus, kmframe.ping(dev_id))
     return None if f is None else f.status
 
 
 def read_int(bus, dev_id, addr, signed=True):
-    f = ask(bus, kmbus.read(dev_id, addr))
+    f = ask(bus, kmframe.read(dev_id, addr))
     if f is None or f.addr != addr or not f.params:
         return None
     return int.from_bytes(f.params, "little", signed=signed)
@@ -527,7 +526,7 @@ def read_int(bus, dev_id, addr, signed=True):
 
 def read_show(bus, dev_id, addr, signed=True):
     """A read printed as the other modes print frames."""
-    r = bus.exchange(kmbus.read(dev_id, addr), 1, timeout=0.5)
+    r = bus.exchange(kmframe.read(dev_id, addr), 1, timeout=0.5)
     if len(r) != 1 or r[0].addr != addr or not r[0].params:
         return None
     return int.from_bytes(r[0].params, "little", signed=signed)
@@ -535,7 +534,7 @@ def read_show(bus, dev_id, addr, signed=True):
 
 def write0(bus, dev_id, addr, value):
     """A write at response level 0 (§3: no answer)."""
-    bus.exchange(kmbus.write(dev_id, addr, value), 0, timeout=0.05)
+    bus.exchange(kmframe.write(dev_id, addr, value), 0, timeout=0.05)
 
 
 def poll(bus, probe, seconds, step=0.01):
@@ -552,7 +551,7 @@ def poll(bus, probe, seconds, step=0.01):
 
 def ext_read(bus, dev_id, addr):
     """0x7F addr: F9 FF id 03 7F addr cs -> F9 F5 id len 7F addr value cs."""
-    r = bus.exchange(kmbus.encode_command(dev_id, 0x7F, addr), 1, timeout=0.5)
+    r = bus.exchange(kmframe.encode_command(dev_id, 0x7F, addr), 1, timeout=0.5)
     if len(r) != 1 or r[0].cmd != 0x7F or r[0].addr != addr:
         return None
     return r[0].params
@@ -659,12 +658,12 @@ def protect(backend, opts):
         check(read_show(bus, d, 0x64) == 5, "§5.4 0x64 reads 5 while protecting")
         p0 = read_show(bus, d, 0x46)
         write0(bus, d, 0x65, (450).to_bytes(2, "little", signed=True) + (500).to_bytes(2, "little"))
-        r = bus.exchange(kmbus.ping(d), 1, timeout=0.5)
+        r = bus.exchange(kmframe.ping(d), 1, timeout=0.5)
         check(len(r) == 1 and r[0].status & ST_REFUSED and r[0].status & ST_VOLTAGE,
               "§6 0x65 +45.0 deg while protecting: refused, the next ping has bit 6 (status %s)"
               % (hex(r[0].status) if r else None))
         write0(bus, d, 0x36, b"\x01")
-        r = bus.exchange(kmbus.ping(d), 1, timeout=0.5)
+        r = bus.exchange(kmframe.ping(d), 1, timeout=0.5)
         still = read_show(bus, d, 0x36)
         check(len(r) == 1 and r[0].status & ST_REFUSED and still == 0x01,
               "§5.2 0x36 = 0x01 while the supply is still at 5 V: refused (ping status %s), "
@@ -760,7 +759,7 @@ def protect(backend, opts):
               % (load[1] / 1000, max(0.0, wait)))
         time.sleep(max(0.0, wait))
         t_ret = time.monotonic()
-        bus.exchange(kmbus.write(d, 0x65, (0).to_bytes(2, "little") + (500).to_bytes(2, "little")),
+        bus.exchange(kmframe.write(d, 0x65, (0).to_bytes(2, "little") + (500).to_bytes(2, "little")),
                      0, timeout=0.02)
         seen = []
         t_back, _ = poll(bus, lambda: (lambda x: seen.append(x) or (x is not None and -10 <= x <= 10))(
@@ -802,7 +801,7 @@ def protect(backend, opts):
               % (None if t_held is None else round((t_held - t_trip) * 1000), p_trip,
                  min((q for _, q in trace if q is not None), default=None), trace[-1][1], trace[-1][0]))
         write0(bus, d, 0x36, b"\x08")
-        r = bus.exchange(kmbus.ping(d), 1, timeout=0.5)
+        r = bus.exchange(kmframe.ping(d), 1, timeout=0.5)
         still = read_show(bus, d, 0x36)
         check(len(r) == 1 and r[0].status & ST_REFUSED and r[0].status & ST_STALL and still == 0x08,
               "§5.2 0x36 = 0x08 while the stall holds (drive >= 600, shaft still): refused, ping "
@@ -812,12 +811,12 @@ def protect(backend, opts):
         check(t_free is not None, "plant: the load is gone, the holding drive drops to %s PWM"
               % (v[0] if v else None))
         time.sleep(2.5)
-        r = bus.exchange(kmbus.ping(d), 1, timeout=0.5)
+        r = bus.exchange(kmframe.ping(d), 1, timeout=0.5)
         check(len(r) == 1 and r[0].status & ST_STALL,
               "§5.2 0x33 bit 3 = 1: 2.5 s after the condition went, still tripped (status %s)"
               % (hex(r[0].status) if r else None))
         write0(bus, d, 0x36, b"\x08")
-        r = bus.exchange(kmbus.ping(d), 1, timeout=0.5)
+        r = bus.exchange(kmframe.ping(d), 1, timeout=0.5)
         check(len(r) == 1 and r[0].status == 0,
               "§5.2 0x36 = 0x08 now: taken, the next ping is clean (status %s)"
               % (hex(r[0].status) if r else None))
@@ -904,7 +903,7 @@ def selftest(backend, opts):
         rest = read_show(bus, d, 0x46)
         check(rest is not None and rest <= -1340, "plant: the shaft rests on its stop, 0x46 %s" % rest)
         for n in (1, 2):
-            check(bus.exchange(kmbus.write(d, 0x02, bytes.fromhex("E1E2E3E4")), 0, timeout=0.3) == [],
+            check(bus.exchange(kmframe.write(d, 0x02, bytes.fromhex("E1E2E3E4")), 0, timeout=0.3) == [],
                   "§3 restart %d: no answer" % n)
             check(wait_ping(bus, d), "answers again after restart %d" % n)
             st = ping_status(bus, d)
@@ -973,8 +972,8 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("which", choices=["smoke", "bus", "encoder", "protect", "selftest"])
     ap.add_argument("--backend", choices=["qemu", "host-sim"], required=True)
-    ap.add_argument("--gap-floor-us", type=int, help="passed to tools/servo-bus")
-    ap.add_argument("--build-dir", help="passed to tools/servo-bus")
+    ap.add_argument("--gap-floor-us", type=int, help="passed to sim/bus/servo-bus")
+    ap.add_argument("--build-dir", help="passed to sim/bus/servo-bus")
     ap.add_argument("--slot-timing", choices=["auto", "realtime", "floor"], default="auto",
                     help="the bus test's answer slots: SCHED_FIFO bus or a 20 ms slot floor "
                     "(auto: SCHED_FIFO when the host allows it)")

@@ -34,10 +34,8 @@ import time
 import traceback
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
-
 import ctx as C  # noqa: E402
-import wire as W  # noqa: E402  (puts host/ on the path: kmx)
+import wire as W  # noqa: E402
 from kmx.errors import KmxError  # noqa: E402
 import checks_commands  # noqa: E402,F401  (each module registers its checks)
 import checks_registers  # noqa: E402,F401

@@ -6,7 +6,7 @@
                   [--slot-timing auto|realtime|plain] [--slot-floor-us N]
                   [--slow-baud N --slow NAME...] [--] SUITE-ARGS...
 
-Starts tools/servo-bus on a free port (--port 0: it prints the port in its
+Starts sim/bus/servo-bus on a free port (--port 0: it prints the port in its
 "ready" line), runs conformance.py --bus rfc2217:127.0.0.1:PORT@BAUD (the
 hub as a serial port whose baud the suite sets and changes) with the same
 --ids and SUITE-ARGS, and always stops the bus (SIGTERM, then SIGKILL),
@@ -59,14 +59,13 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 SUITE = os.path.join(HERE, "conformance.py")
-sys.path.insert(0, HERE)
 import wire as W  # noqa: E402
 import conformance as S  # noqa: E402  (its check selection: S.matches)
 
 
 def switch_baud(port, ids, baud, old):
     """Servos and master from `old` to `baud` (the hub models the line
-    rate: tools/servo-bus "Baud"), over RFC 2217 as over a serial port."""
+    rate: sim/bus/servo-bus "Baud"), over RFC 2217 as over a serial port."""
     t = W.Wire("rfc2217:127.0.0.1:%d@%d" % (port, old))
     try:
         kmbus = W.fr
@@ -213,7 +212,7 @@ def main():
     ap.add_argument("--slot-timing", choices=("auto", "realtime", "plain"), default="auto")
     ap.add_argument("suite", nargs=argparse.REMAINDER)
     a = ap.parse_args()
-    argv = [sys.executable, os.path.join(ROOT, "tools", "servo-bus"), "--ids", a.ids, "--port", "0",
+    argv = [sys.executable, os.path.join(ROOT, "sim", "bus", "servo-bus"), "--ids", a.ids, "--port", "0",
             "--backend", a.backend, "--timeout", "30"]
     realtime = a.slot_timing == "realtime" or (a.slot_timing == "auto" and realtime_allowed())
     if realtime:

@@ -9,15 +9,11 @@ this file adds what a conformance master needs beyond kmx.Bus:
     on a half-duplex wire are dropped, bad frames are counted;
   - tcp:HOST:PORT@BAUD keeps the master to that line rate on an emulated
     bus (Paced below), which TCP alone does not; rfc2217:HOST:PORT@BAUD
-    (tools/servo-bus as a serial port) also sets the master's baud on the
+    (sim/bus/servo-bus as a serial port) also sets the master's baud on the
     emulated wire, and set_baud() changes it, as on a serial bus.
 """
-import os
-import sys
 import time
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(HERE)), "host"))
 from kmx import frame as fr  # noqa: E402
 from kmx import transport as kt  # noqa: E402
 

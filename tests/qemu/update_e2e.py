@@ -3,7 +3,7 @@
 """Firmware update end to end on QEMU (docs/update.md, issue 12): three
 emulated servos that boot through the bootloader (km-servo-boot-qemu-microbit.elf:
 the bootloader with the v1 application in its factory slot) on one
-tools/servo-bus, then tools/servo-update:
+sim/bus/servo-bus, then tools/servo-update:
   1. every servo answers 0x0C with the bootloader byte 0x10 and v1;
   2. an image for another board is refused by all three with nothing
      erased: they still run v1 (a BEGIN with the stm32g031 image);
@@ -25,7 +25,6 @@ import tempfile
 import time
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
-sys.path.insert(0, os.path.join(REPO, "host"))
 from kmx.bus import Bus  # noqa: E402
 from kmx import frame as fr  # noqa: E402
 
@@ -48,7 +47,7 @@ def main():
             print("missing %s: cmake --preset qemu && cmake --build --preset qemu" % f)
             return 1
     mon = tempfile.TemporaryDirectory(prefix="update-e2e-")
-    bus_proc = subprocess.Popen([os.path.join(REPO, "tools/servo-bus"), "--ids", "1,2,3", "--port", "0",
+    bus_proc = subprocess.Popen([os.path.join(REPO, "sim/bus/servo-bus"), "--ids", "1,2,3", "--port", "0",
                                  "--image", boot, "--monitor-dir", mon.name],
                                 stdout=subprocess.PIPE, text=True)
     failures = []

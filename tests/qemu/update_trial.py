@@ -3,11 +3,11 @@
 """A bad image does not brick a servo (docs/update.md §3a, issue 18 item 1),
 on QEMU: two emulated servos (IDs 1 and 2) that boot through the bootloader
 (km-servo-boot-qemu-microbit.elf, v1 in its factory slot) on one
-tools/servo-bus, each with its QEMU monitor (to read the words the
+sim/bus/servo-bus, each with its QEMU monitor (to read the words the
 bootloader and the application share at the top of RAM). For the hang image
 (reset vector at `b .`) and then the crash image (reset vector at
 `udf #0`), both built by CMake from tests/qemu/trial/bad_image.c and
-tools/make-image:
+tools/gen/make-image:
   1. tools/servo-update sends it to both servos (it passes every check, so
      COMMIT and START go through);
   2. both servos must be back in update mode (STATUS state 1, idle) on their
@@ -41,7 +41,6 @@ import tempfile
 import time
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
-sys.path.insert(0, os.path.join(REPO, "host"))
 from kmx.bus import Bus  # noqa: E402
 from kmx import frame as fr  # noqa: E402
 
@@ -57,7 +56,7 @@ GOOD_BAUD = 19200       # servo-update's pacing of the good image: emulators on 
 
 
 class Monitor:
-    """One servo's QEMU human monitor (tools/servo-bus --monitor-dir)."""
+    """One servo's QEMU human monitor (sim/bus/servo-bus --monitor-dir)."""
 
     def __init__(self, path):
         self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
@@ -132,7 +131,7 @@ def main():
             print("missing %s: cmake --preset qemu && cmake --build --preset qemu" % f)
             return 1
     mon = tempfile.TemporaryDirectory(prefix="update-trial-")
-    bus_proc = subprocess.Popen([os.path.join(REPO, "tools/servo-bus"), "--ids", ",".join(map(str, IDS)),
+    bus_proc = subprocess.Popen([os.path.join(REPO, "sim/bus/servo-bus"), "--ids", ",".join(map(str, IDS)),
                                  "--port", "0", "--image", boot, "--monitor-dir", mon.name],
                                 stdout=subprocess.PIPE, text=True)
     failures = []

@@ -2,7 +2,7 @@
 /* Test rig for the firmware update (docs/update.md): a NOR simulator split
  * into an application region (the first pages, the only ones the update's
  * km_flash_t reaches) and user-data store pages above it, and images built
- * as tools/make-image builds them (header, vector table at 0x100, body). */
+ * as tools/gen/make-image builds them (header, vector table at 0x100, body). */
 #ifndef KM_UPDATE_RIG_H
 #define KM_UPDATE_RIG_H
 

@@ -4,7 +4,7 @@
 # Copies the source tree (without build trees and .git) to SCRATCH/src,
 # copies boards/template to boards/BOARD there, then checks that the board
 # is discovered by cmake/km_boards.cmake and that a plain configure and
-# build of it links its servo image and passes tools/image-check (the
+# build of it links its servo image and passes tools/check/image-check (the
 # build's stamp). Prints "board_template_copy: ok" when every step passed.
 foreach(v SOURCE SCRATCH BOARD)
   if(NOT ${v})
@@ -37,7 +37,7 @@ if(EXISTS ${src}/boards/${BOARD})
 endif()
 file(COPY ${src}/boards/template/ DESTINATION ${src}/boards/${BOARD})
 
-# Discovered as tools/test-all and tools/static-analysis discover boards.
+# Discovered as tools/test-all and tools/check/static-analysis discover boards.
 km_run("board discovery" ${CMAKE_COMMAND} -P ${src}/cmake/km_boards.cmake)
 string(REGEX MATCH "(^|\n)${BOARD} [^\n]*" line "${km_run_out}")
 if(NOT line)

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 # SPDX-License-Identifier: Apache-2.0
-"""Ctrl-C at random moments of tools/servo-bus's start-up must never leave a
+"""Ctrl-C at random moments of sim/bus/servo-bus's start-up must never leave a
 servo process (QEMU or host-sim) behind (issue 11 item 4).
 
     tests/tools/ctrl_c_check.py [--backend host-sim|qemu] [--runs N] [--seed S]
@@ -47,11 +47,11 @@ SERVO_BUS_FRAME = re.compile(r'File ".*servo-bus", line (\d+)')
 
 
 def handlers_line():
-    with open(os.path.join(REPO, "tools", "servo-bus")) as f:
+    with open(os.path.join(REPO, "sim", "bus", "servo-bus")) as f:
         for n, line in enumerate(f, 1):
             if line.strip().startswith("signal.signal(signal.SIGTERM"):
                 return n
-    raise SystemExit("tools/servo-bus installs no SIGTERM handler at the top")
+    raise SystemExit("sim/bus/servo-bus installs no SIGTERM handler at the top")
 
 
 def after_handlers(frames, first):
@@ -150,7 +150,7 @@ def main():
     seed = a.seed if a.seed is not None else int(time.time())
     rng = random.Random(seed)
     sig = getattr(signal, "SIG" + a.signal)
-    argv = [sys.executable, os.path.join(REPO, "tools", "servo-bus"), "--ids", a.ids, "--port", "0",
+    argv = [sys.executable, os.path.join(REPO, "sim", "bus", "servo-bus"), "--ids", a.ids, "--port", "0",
             "--backend", a.backend]
     ready_text = "ready "
     if a.demo:

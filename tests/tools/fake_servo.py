@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
-"""A stand-in for the host-sim servo program, for testing tools/servo-bus
+"""A stand-in for the host-sim servo program, for testing sim/bus/servo-bus
 without QEMU or the firmware. It speaks the host-sim command-line contract:
 
     fake_servo.py --listen 127.0.0.1:PORT --flash FILE [--baud N] [--report-baud]
@@ -19,12 +19,10 @@ import argparse
 import os
 import random
 import socket
-import sys
 import threading
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "..", "tools"))
-import kmbus  # noqa: E402
+from kmx import frame as kmframe  # noqa: E402  (docs/architecture.md "The folders": PYTHONPATH)
 
 SLOT_S = 0.002  # super-ID answer slot per ID (the fake's own, simplified rule)
 
@@ -36,7 +34,7 @@ class FakeServo:
         try:
             with open(flash, "rb") as f:
                 first = f.read(1)
-            if first and first[0] <= kmbus.ID_MAX:
+            if first and first[0] <= kmframe.ID_MAX:
                 self.id = first[0]
         except FileNotFoundError:
             with open(flash, "wb") as f:
@@ -65,22 +63,22 @@ class FakeServo:
     def handle(self, frame):
         """Return the answer bytes for one command frame (b"" = silence)."""
         mine = frame.id == self.id
-        to_super = frame.id == kmbus.ID_SUPER
-        broadcast = frame.id == kmbus.ID_BROADCAST
-        if frame.cmd == kmbus.PING and (mine or to_super):
+        to_super = frame.id == kmframe.ID_SUPER
+        broadcast = frame.id == kmframe.ID_BROADCAST
+        if frame.cmd == kmframe.PING and (mine or to_super):
             if to_super:
                 time.sleep(self.id * SLOT_S)
-            return kmbus.encode_status(self.id, 0)
-        if frame.cmd == kmbus.READ and (mine or to_super):
-            if frame.addr == kmbus.REG_ID:
-                return kmbus.encode_response(self.id, kmbus.READ, kmbus.REG_ID, bytes([self.id]))
-            if frame.addr == kmbus.REG_STATUS:
-                return kmbus.encode_response(self.id, kmbus.READ, kmbus.REG_STATUS,
+            return kmframe.encode_status(self.id, 0)
+        if frame.cmd == kmframe.READ and (mine or to_super):
+            if frame.addr == kmframe.REG_ID:
+                return kmframe.encode_response(self.id, kmframe.READ, kmframe.REG_ID, bytes([self.id]))
+            if frame.addr == kmframe.REG_STATUS:
+                return kmframe.encode_response(self.id, kmframe.READ, kmframe.REG_STATUS,
                                              bytes([0, random.randrange(256)]))
-            return kmbus.encode_status(self.id, 0x20)  # address not supported
-        if frame.cmd == kmbus.WRITE and (mine or broadcast):
-            if frame.addr == kmbus.REG_ID and len(frame.params) == 1 and \
-                    frame.params[0] <= kmbus.ID_MAX:
+            return kmframe.encode_status(self.id, 0x20)  # address not supported
+        if frame.cmd == kmframe.WRITE and (mine or broadcast):
+            if frame.addr == kmframe.REG_ID and len(frame.params) == 1 and \
+                    frame.params[0] <= kmframe.ID_MAX:
                 self.set_id(frame.params[0])  # response level 0: no answer
         return b""
 
@@ -106,7 +104,7 @@ def main():
         rx_log = open(os.path.join(servo.log_dir, "rx-%d.bin" % os.getpid()), "ab", buffering=0)
     while True:
         conn, _ = srv.accept()
-        parser = kmbus.Parser(kmbus.CMD_HEADER)
+        parser = kmframe.Parser(kmframe.CMD_HEADER)
         while True:
             data = conn.recv(4096)
             if not data:

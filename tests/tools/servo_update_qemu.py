@@ -52,7 +52,7 @@ class InterruptedUpdate(unittest.TestCase):
         for f in (BOOT, V2):
             if not os.path.isfile(f):
                 raise AssertionError("missing %s: cmake --preset qemu && cmake --build --preset qemu" % f)
-        cls.bus_proc = subprocess.Popen([os.path.join(REPO, "tools", "servo-bus"), "--ids", "1,2", "--port", "0",
+        cls.bus_proc = subprocess.Popen([os.path.join(REPO, "sim", "bus", "servo-bus"), "--ids", "1,2", "--port", "0",
                                          "--image", BOOT], stdout=subprocess.PIPE, text=True)
         line = read_line(cls.bus_proc, 60) or ""
         if not line.startswith("ready "):

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
-"""Tests of tools/image-check on small Cortex-M0+ images built here with
+"""Tests of tools/check/image-check on small Cortex-M0+ images built here with
 arm-none-eabi-gcc: each failure the checks exist for (a heap, recursion, an
 indirect call nobody described, a stack over its reserve, an interrupt path
 that reaches flash) must fail the check, and the clean image must pass with
@@ -15,7 +15,7 @@ import tempfile
 import unittest
 from pathlib import Path
 
-TOOLS = Path(__file__).resolve().parents[2] / "tools"
+TOOLS = Path(__file__).resolve().parents[2] / "tools" / "check"
 GCC = shutil.which("arm-none-eabi-gcc")
 
 LD = """

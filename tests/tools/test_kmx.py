@@ -4,7 +4,7 @@ docs/protocol.md §2 byte for byte, the stream parser on noise and checksum
 errors, registers by name with units and range refusal (from
 docs/registers.json), transport spec parsing and each open error's
 message, and the Bus against a real host-sim servo over TCP and over a
-pseudo-terminal, and on the 3-servo host-sim bus of tools/servo-bus
+pseudo-terminal, and on the 3-servo host-sim bus of sim/bus/servo-bus
 (super-ID and 0x82 answers collected). The host-sim image is the host-sim preset's
 (build/host-sim, or KM_BUILD_HOST_SIM); a missing image fails with the
 command that builds it. About 8 s."""
@@ -506,12 +506,12 @@ class BusOverTcp(unittest.TestCase):
 
 class ServoBus:
     """Three real host-sim servos, IDs 1, 2, 3, on the emulated wire of
-    tools/servo-bus (answers reach the master in wire order)."""
+    sim/bus/servo-bus (answers reach the master in wire order)."""
 
     def __init__(self, ids=(1, 2, 3), extra=()):
         host_sim_image()
         self.proc = subprocess.Popen(
-            [sys.executable, os.path.join(REPO, "tools", "servo-bus"), "--ids", ",".join(map(str, ids)),
+            [sys.executable, os.path.join(REPO, "sim", "bus", "servo-bus"), "--ids", ",".join(map(str, ids)),
              "--port", "0", "--backend", "host-sim", "--gap-floor-us", "0", *extra],
             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
         line = self.proc.stdout.readline().split()

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """Baud on the emulated bus (docs/protocol-decisions.md "Baud on the
 emulated bus"; docs/protocol.md §1 8N1, §3 baud change, §5.1 0x10) and the kmx
-commands built on it: the mismatch model tools/kmwire.py, host-sim --baud,
+commands built on it: the mismatch model sim/bus/kmwire.py, host-sim --baud,
 servo-bus as an RFC 2217 serial port, kmx set-baud, scan --all-bauds and
 rescue on two real host-sim servos, and each refusal's one-line message.
 About 30 s (the all-baud scans listen 2.2 s at 9600)."""
@@ -17,7 +17,6 @@ from kmx.bus import Bus  # noqa: E402
 from kmx import frame as fr  # noqa: E402
 from kmx.errors import NoAnswer  # noqa: E402
 
-sys.path.insert(0, os.path.join(REPO, "tools"))
 import kmwire  # noqa: E402
 
 PING1 = fr.ping(1)
@@ -93,7 +92,7 @@ class HostSimBaud(unittest.TestCase):
     def test_servo_bus_refuses_bad_baud(self):
         for bad, why in (("abc", "'abc' is not a baud rate"), ("0", "0 baud is outside"),
                          ("2000000", "2000000 baud is outside the servos' range 9600..1000000")):
-            r = subprocess.run([sys.executable, os.path.join(REPO, "tools", "servo-bus"), "--ids", "1",
+            r = subprocess.run([sys.executable, os.path.join(REPO, "sim", "bus", "servo-bus"), "--ids", "1",
                                 "--port", "0", "--backend", "host-sim", "--baud", bad],
                                capture_output=True, text=True, timeout=20)
             self.assertEqual(r.returncode, 2)

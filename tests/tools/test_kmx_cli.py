@@ -218,7 +218,7 @@ class KmxOverTcp(unittest.TestCase):
 
 
 class KmxOnThreeServos(unittest.TestCase):
-    """The 3-servo host-sim bus of tools/servo-bus, IDs 1, 2, 3."""
+    """The 3-servo host-sim bus of sim/bus/servo-bus, IDs 1, 2, 3."""
 
     @classmethod
     def setUpClass(cls):

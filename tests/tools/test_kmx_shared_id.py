@@ -6,7 +6,7 @@ Registers.set) refuses an ID another servo answers on, and an ID two servos
 already share; kmx scan flags an ID answered twice with the command that
 separates them, and that command, run as the warning says (one of the two
 servos alone on the bus), does separate them. On host-sim servos of
-tools/servo-bus (their user data kept in --flash-dir, so one of them can be
+sim/bus/servo-bus (their user data kept in --flash-dir, so one of them can be
 "disconnected" by starting the bus without it); the collision of two
 answers on a wire, which the emulated bus does not model (it hands both
 answers over whole), through a transport that ANDs them as an idle-high
@@ -28,11 +28,11 @@ from kmx.errors import IdTaken  # noqa: E402
 from kmx.registers import Registers  # noqa: E402
 from kmx.transport import Transport  # noqa: E402
 
-SERVO_BUS = os.path.join(REPO, "tools", "servo-bus")
+SERVO_BUS = os.path.join(REPO, "sim", "bus", "servo-bus")
 
 
 class KeptBus:
-    """tools/servo-bus --backend host-sim with the servos' user data in
+    """sim/bus/servo-bus --backend host-sim with the servos' user data in
     flash_dir (servo-ID.flash), on a given TCP port (0: a free one)."""
 
     def __init__(self, ids, flash_dir, port=0):

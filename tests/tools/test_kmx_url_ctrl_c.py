@@ -3,7 +3,7 @@
 and Ctrl-C anywhere in kmx (issue 18 item 8): one line, `kmx: interrupted`,
 status 130, never a traceback, also while an RFC 2217 port closes (pyserial
 joins its reader thread and sleeps 0.3 s there). On the 3-servo host-sim
-bus of tools/servo-bus, which takes RFC 2217 and raw TCP on one port.
+bus of sim/bus/servo-bus, which takes RFC 2217 and raw TCP on one port.
 About 15 s (16 runs of tools/kmx interrupted at random)."""
 import os
 import random

@@ -15,11 +15,9 @@ import sys
 import threading
 import unittest
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from test_kmx import REPO, host_sim_image  # noqa: E402
 
 CONF = os.path.join(REPO, "tests", "conformance")
-sys.path.insert(0, CONF)
 import run_on_bus  # noqa: E402
 
 RUN_ON_BUS = os.path.join(CONF, "run_on_bus.py")

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""tools/servo-bus against tests/tools/fake_servo.py (a stand-in for the
+"""sim/bus/servo-bus against tests/tools/fake_servo.py (a stand-in for the
 host-sim program, speaking its command-line contract): provisioning of IDs,
 the shared-bus relay, missing images, child death and stopping, and the
 per-servo options (--gap-floor-us, --build-dir). No QEMU."""
@@ -16,10 +16,9 @@ import unittest
 
 HERE = os.path.dirname(os.path.realpath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
-LAUNCHER = os.path.join(REPO, "tools", "servo-bus")
+LAUNCHER = os.path.join(REPO, "sim", "bus", "servo-bus")
 FAKE = os.path.join(HERE, "fake_servo.py")
-sys.path.insert(0, os.path.join(REPO, "tools"))
-import kmbus  # noqa: E402
+from kmx import frame as kmframe  # noqa: E402  (docs/architecture.md "The folders": PYTHONPATH)
 
 
 def pid_alive(pid):
@@ -94,7 +93,7 @@ class Launcher:
 def exchange(sock, frame, timeout=0.5, settle=0.0):
     """Send a frame; collect response frames until timeout passes with no data."""
     sock.sendall(frame)
-    parser = kmbus.Parser()
+    parser = kmframe.Parser()
     frames = []
     end = time.monotonic() + timeout
     while time.monotonic() < end:
@@ -130,39 +129,39 @@ class ServoBus(unittest.TestCase):
             self.assertEqual(line, "ready %s:%d\n" % addr)
             with socket.create_connection(addr) as s:
                 for dev_id in (1, 2, 3):
-                    got = exchange(s, kmbus.ping(dev_id))
+                    got = exchange(s, kmframe.ping(dev_id))
                     self.assertEqual([(f.id, f.status) for f in got], [(dev_id, 0)])
-                    got = exchange(s, kmbus.read(dev_id, kmbus.REG_ID))
+                    got = exchange(s, kmframe.read(dev_id, kmframe.REG_ID))
                     self.assertEqual([(f.id, f.params) for f in got], [(dev_id, bytes([dev_id]))])
                 # nobody is left on the default ID
-                self.assertEqual(exchange(s, kmbus.ping(0), timeout=0.3), [])
+                self.assertEqual(exchange(s, kmframe.ping(0), timeout=0.3), [])
                 # super ID: everyone answers, each on the client's wire
-                got = exchange(s, kmbus.ping(kmbus.ID_SUPER), timeout=0.5, settle=1)
+                got = exchange(s, kmframe.ping(kmframe.ID_SUPER), timeout=0.5, settle=1)
                 self.assertEqual(sorted(f.id for f in got), [1, 2, 3])
             # what servo 1 said on the bus was heard by servos 2 and 3, not echoed to 1
-            answer1 = kmbus.encode_status(1, 0)
+            answer1 = kmframe.encode_status(1, 0)
             self.assertIn(answer1, ln.heard_by(2))
             self.assertIn(answer1, ln.heard_by(3))
             self.assertNotIn(answer1, ln.heard_by(1))
             # the client's bytes reached every servo
             for dev_id in (1, 2, 3):
-                self.assertIn(kmbus.ping(2), ln.heard_by(dev_id))
+                self.assertIn(kmframe.ping(2), ln.heard_by(dev_id))
             # provisioning spoke to each servo alone: servo 2 never heard
             # servo 1's write of its ID
-            self.assertNotIn(kmbus.write(0, kmbus.REG_ID, b"\x01"), ln.heard_by(2))
-            self.assertIn(kmbus.write(0, kmbus.REG_ID, b"\x02"), ln.heard_by(2))
+            self.assertNotIn(kmframe.write(0, kmframe.REG_ID, b"\x01"), ln.heard_by(2))
+            self.assertIn(kmframe.write(0, kmframe.REG_ID, b"\x02"), ln.heard_by(2))
             # the provisioning transcript, alone with each servo: ping 0 until
             # it answers, write 0x0F, then a confirming ping on the new ID
             for dev_id in (1, 2, 3):
                 rx = ln.heard_by(dev_id)
-                self.assertTrue(rx.startswith(kmbus.ping(0)))
-                while rx.startswith(kmbus.ping(0)):
-                    rx = rx[len(kmbus.ping(0)):]
-                confirm = kmbus.write(0, kmbus.REG_ID, bytes([dev_id])) + kmbus.ping(dev_id)
+                self.assertTrue(rx.startswith(kmframe.ping(0)))
+                while rx.startswith(kmframe.ping(0)):
+                    rx = rx[len(kmframe.ping(0)):]
+                confirm = kmframe.write(0, kmframe.REG_ID, bytes([dev_id])) + kmframe.ping(dev_id)
                 self.assertTrue(rx.startswith(confirm), rx.hex())
             # a second client after the first disconnects
             with socket.create_connection(addr) as s:
-                got = exchange(s, kmbus.ping(3))
+                got = exchange(s, kmframe.ping(3))
                 self.assertEqual([f.id for f in got], [3])
             pids = [ln.pid_of(i) for i in (1, 2, 3)]
         finally:
@@ -180,12 +179,12 @@ class ServoBus(unittest.TestCase):
                 try:
                     _, addr = ln.wait_ready()
                     with socket.create_connection(addr) as s:
-                        self.assertEqual([f.id for f in exchange(s, kmbus.ping(9))], [9])
+                        self.assertEqual([f.id for f in exchange(s, kmframe.ping(9))], [9])
                     heard = ln.heard_by(9)
                 finally:
                     rc, _, err = ln.stop()
                 self.assertEqual(rc, 0, err)
-                wrote = kmbus.write(0, kmbus.REG_ID, b"\x09") in heard
+                wrote = kmframe.write(0, kmframe.REG_ID, b"\x09") in heard
                 # first run: fresh servo, written; second: already ID 9, not written
                 self.assertEqual(wrote, run == 1)
             self.assertTrue(os.path.isfile(os.path.join(flash_dir, "servo-9.flash")))
@@ -321,7 +320,7 @@ class GapFloorOption(unittest.TestCase):
             try:
                 _, addr = ln.wait_ready()
                 with socket.create_connection(addr) as s:
-                    self.assertEqual([f.id for f in exchange(s, kmbus.ping(2))], [2])
+                    self.assertEqual([f.id for f in exchange(s, kmframe.ping(2))], [2])
             finally:
                 rc, _, err = ln.stop()
             self.assertEqual(rc, 0, err)

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""tools/servo-bus's scheduling (issue 18 item 11): SCHED_FIFO by default
+"""sim/bus/servo-bus's scheduling (issue 18 item 11): SCHED_FIFO by default
 where the host allows it (servos at 10, the hub at 20), plain with
 --no-realtime (also under a real-time parent) and where the host does not
 allow it, --realtime there exits 2, and stderr says which was chosen. Real
@@ -21,17 +21,15 @@ import tempfile
 import time
 import unittest
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from test_kmx import REPO, host_sim_image  # noqa: E402
-sys.path.insert(0, os.path.join(REPO, "tools"))
-import kmbus  # noqa: E402
+from kmx import frame as kmframe  # noqa: E402  (docs/architecture.md "The folders": PYTHONPATH)
 
-SERVO_BUS = os.path.join(REPO, "tools", "servo-bus")
+SERVO_BUS = os.path.join(REPO, "sim", "bus", "servo-bus")
 BOOT_IMAGE = os.path.join(os.environ.get("KM_BUILD_QEMU") or os.path.join(REPO, "build", "qemu"),
                           "boards", "qemu-microbit", "km-servo-boot-qemu-microbit.elf")
 # docs/update.md §4: 0x78 ENTER and START, broadcast
-ENTER = kmbus.encode_command(kmbus.ID_BROADCAST, 0x78, 0x01, bytes([0xB1, 0xB2, 0xB3, 0xB4]))
-START = kmbus.encode_command(kmbus.ID_BROADCAST, 0x78, 0x07, bytes([0xE1, 0xE2, 0xE3, 0xE4]))
+ENTER = kmframe.encode_command(kmframe.ID_BROADCAST, 0x78, 0x01, bytes([0xB1, 0xB2, 0xB3, 0xB4]))
+START = kmframe.encode_command(kmframe.ID_BROADCAST, 0x78, 0x07, bytes([0xE1, 0xE2, 0xE3, 0xE4]))
 PROBE = "import os; os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(1))"
 PR_CAPBSET_DROP = 24
 CAP_SYS_NICE = 23
@@ -132,8 +130,8 @@ def policies(pid):
 
 def ping(sock, dev_id, timeout):
     """True when dev_id answers a ping on the bus before the timeout."""
-    sock.sendall(kmbus.ping(dev_id))
-    parser, end = kmbus.Parser(), time.monotonic() + timeout
+    sock.sendall(kmframe.ping(dev_id))
+    parser, end = kmframe.Parser(), time.monotonic() + timeout
     while time.monotonic() < end:
         sock.settimeout(max(0.01, end - time.monotonic()))
         try:

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""tools/servo-bus starts and stops cleanly (issue 11 item 4): Ctrl-C at
+"""sim/bus/servo-bus starts and stops cleanly (issue 11 item 4): Ctrl-C at
 random moments of start-up leaves no servo process behind, checked by PID
 (tests/tools/ctrl_c_check.py: 20 runs on host-sim and 20 on QEMU when its
 image and qemu-system-arm are there, about 15 s); a signal that comes at
@@ -21,12 +21,11 @@ import tempfile
 import time
 import unittest
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from test_kmx import REPO, host_sim_image  # noqa: E402
 from test_kmx_cli import kmx  # noqa: E402
 
 CHECK = os.path.join(REPO, "tests", "tools", "ctrl_c_check.py")
-SERVO_BUS = os.path.join(REPO, "tools", "servo-bus")
+SERVO_BUS = os.path.join(REPO, "sim", "bus", "servo-bus")
 QEMU_IMAGE = os.path.join(os.environ.get("KM_BUILD_QEMU") or os.path.join(REPO, "build", "qemu"),
                           "boards", "qemu-microbit", "km-servo-qemu-microbit.elf")
 
@@ -57,7 +56,7 @@ class CtrlC(unittest.TestCase):
         self.run_check("qemu", 20)
 
 
-# Runs tools/servo-bus as __main__, unchanged, and sends itself SIGNAL at one
+# Runs sim/bus/servo-bus as __main__, unchanged, and sends itself SIGNAL at one
 # point of its start-up, found by a profile hook: "bus" when the Bus object
 # is built (after the servos answered, just before the ready line), "held"
 # right after announce_ready() blocked the stop signals (the kernel then

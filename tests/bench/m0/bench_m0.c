@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Cortex-M0 instruction-count benchmark image (QEMU microbit). Runs the
  * firmware's own code, compiled with the firmware's flags (-Os, newlib-nano),
- * between two markers, m0_begin() and m0_end(). tools/bench-m0 runs the
+ * between two markers, m0_begin() and m0_end(). tools/bench/bench-m0 runs the
  * image under QEMU with -singlestep -d exec,nochain: one log line per
  * executed instruction, with its PC. A region's count is the lines between
  * the markers; the "inclusive" count leaves out every instruction whose PC
@@ -92,7 +92,7 @@ static void m0h_info(const char *name, uint32_t v)
 }
 
 /* A line "desc LABEL TEXT": what region LABEL measures, for the table of
- * tools/bench-m0 (control_tick_* regions are listed by it without a change
+ * tools/bench/bench-m0 (control_tick_* regions are listed by it without a change
  * to the tool). */
 static void m0h_desc(const char *label, const char *text)
 {

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Cortex-M0 end-to-end instruction counts (tools/bench-m0): the firmware's
+/* Cortex-M0 end-to-end instruction counts (tools/bench/bench-m0): the firmware's
  * real main loop (firmware/app/km_app.c, km_app_init + km_app_poll) over
  * this board's time, flash and system drivers, with the bus UART, motor and
  * sensors replaced by the stand-ins below, so that the benchmark hands a
@@ -332,7 +332,7 @@ static void m0h_lr_timer_start(uint32_t interval)
     NRF_REG(LR_TIMER, TIMER_TASKS_START) = 1u;
 }
 
-/* "info linerate_<interval>_<key> <v>" for tools/bench-m0. */
+/* "info linerate_<interval>_<key> <v>" for tools/bench/bench-m0. */
 static void m0h_lr_info(uint32_t interval, const char *key, uint32_t v)
 {
     km_semihost_write0("info linerate_");

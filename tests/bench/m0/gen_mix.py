@@ -6,7 +6,7 @@ xorshift32 stream, the same exchanges (pings, reads, writes, 0x83 multi-ID
 writes, 0x04/0x84 sync writes, other servos' answers, line noise), ~100k
 bytes, plus the frame and response counts the image checks the parser
 against. A port, so the M0 figure is over the very bytes the host figure
-(tools/bench-parser) uses; the image fails if the counts do not match.
+(tools/bench/bench-parser) uses; the image fails if the counts do not match.
   usage: gen_mix.py OUT.c"""
 import sys
 
@@ -87,7 +87,7 @@ class Mix:
 def generate():
     """(Mix, command frames generated). Mix.kind classes each byte (command
     frame, other servo's answer, noise) for anyone who wants per-class costs;
-    tools/bench-m0 now counts whole batch calls, not bytes one by one."""
+    tools/bench/bench-m0 now counts whole batch calls, not bytes one by one."""
     mix = Mix()
     want = 0
     while len(mix.stream) < TARGET_BYTES:

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The count markers of the bench-m0 images (tools/bench-m0): one `bx lr`
+/* The count markers of the bench-m0 images (tools/bench/bench-m0): one `bx lr`
  * each, in assembly so that no compiler can merge, inline or pad them. The
  * tool counts the executed instructions from the entry of m0_begin to the
  * entry of m0_end; regions nest.

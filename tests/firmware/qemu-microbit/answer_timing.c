@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* QEMU timing image: the servo firmware, plus the app's measurement hook
  * printing over semihosting how late each answer started against the delay
- * it asked for. tools/bench-answer-delay runs it under -icount, where
+ * it asked for. tools/bench/bench-answer-delay runs it under -icount, where
  * virtual time is a function of executed instructions, so the figure is
  * the firmware's own latency (RX stamp, timer interrupt), not host noise. */
 #include "km_app.h"

@@ -7,7 +7,7 @@
  * points at the same code, so the image's own fault handler hangs or
  * faults again: nothing of it helps the servo back. Linked for the
  * application region with nrf51822_app.ld, made an update image by
- * tools/make-image. Never flashed anywhere but in that test. */
+ * tools/gen/make-image. Never flashed anywhere but in that test. */
 #include <stdint.h>
 
 extern uint32_t __stack_top[];

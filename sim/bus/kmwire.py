@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
 """What a UART at one baud rate decodes from bytes sent at another: the
-emulated bus's model of a baud mismatch (tools/servo-bus, docs/
+emulated bus's model of a baud mismatch (sim/bus/servo-bus, docs/
 protocol-decisions.md "Baud on the emulated bus").
 
 A sender puts each byte on the wire as 8N1 (start bit 0, 8 data bits LSB
@@ -88,11 +88,6 @@ def garble(data, tx_baud, rx_baud):
 def import_rfc2217():
     """pyserial's RFC 2217 module, from this interpreter or Debian's
     python3-serial (host/kmx/deps.py); SystemExit naming the package."""
-    import os
-    import sys
-    host = os.path.join(os.path.dirname(os.path.dirname(os.path.realpath(__file__))), "host")
-    if host not in sys.path:
-        sys.path.insert(0, host)
     from kmx.deps import import_debian
     from kmx.errors import MissingPackage
     try:

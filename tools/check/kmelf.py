@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
 """Reads a linked ARMv6-M firmware image for the build-time checks
-(tools/image-check) and the footprint table (tools/footprint): functions
+(tools/check/image-check) and the footprint table (tools/check/footprint): functions
 with their object file, frame size and call edges, taken from the ELF
 (nm, objdump -d), the linker map and GCC's -fstack-usage (.su) files.
 

@@ -152,7 +152,7 @@ int regdoc_json(void)
     }
     printf("{\n");
     printf("  \"comment\": \"Generated from protocol/km_registers.def and km_registers_doc.def by "
-           "tools/regdoc_json.c (km_regdoc --json); do not edit. Value in unit = wire value * scale; "
+           "tools/gen/regdoc_json.c (km_regdoc --json); do not edit. Value in unit = wire value * scale; "
            "\\\"product\\\" = taken from the product config; ranges are the firmware's write check "
            "of the first field (both fields of u8u8).\",\n");
     printf("  \"protocol\": \"KINGMAX serial servo protocol v5.2.0, docs/protocol.md section 5\",\n");

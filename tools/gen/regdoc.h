@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Shared by the register-document generators (tools/regdoc.c writes
- * docs/registers.md, tools/regdoc_json.c docs/registers.json): the two probe
+/* Shared by the register-document generators (tools/gen/regdoc.c writes
+ * docs/registers.md, tools/gen/regdoc_json.c docs/registers.json): the two probe
  * product configs that tell a product-dependent value from a fixed one, and
  * the names of access modes and wire layouts. */
 #ifndef REGDOC_H

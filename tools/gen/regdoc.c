@@ -3,7 +3,7 @@
  * and its units and descriptions, km_registers_doc.def) so the document cannot
  * drift from the code: CTest (tests/regdoc.cmake) diffs this output against
  * the checked-in file. With --json it prints docs/registers.json instead, the
- * machine-readable description host tools load (tools/regdoc_json.c).
+ * machine-readable description host tools load (tools/gen/regdoc_json.c).
  *
  *   build/host/tests/km_regdoc > docs/registers.md
  *   build/host/tests/km_regdoc --json > docs/registers.json
@@ -144,7 +144,7 @@ int main(int argc, char **argv)
         return 2;
     }
     printf("# Register table\n\n");
-    printf("Generated from `protocol/km_registers.def` by `tools/regdoc.c`; do not edit.\n");
+    printf("Generated from `protocol/km_registers.def` by `tools/gen/regdoc.c`; do not edit.\n");
     printf("Regenerate with `build/host/tests/km_regdoc > docs/registers.md`\n");
     printf("(CTest `regdoc_up_to_date` fails when this file is out of date).\n\n");
     printf("Access: R read, W write. P = persisted user data. Default: stored registers\n");
