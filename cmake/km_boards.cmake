@@ -15,6 +15,11 @@
 #   KM_BOARD_HOST_SOURCES     its pure parts (files of boards/<name>/): the host
 #                             build compiles them into km_board_host_<name> for
 #                             the tests tests/board/test_<name>_*.c (tests/boards.cmake)
+#   KM_BOARD_BUS_BACKEND      a simulated board: the sim/bus/servo-bus --backend that
+#                             runs it; the bus and conformance tests run on every
+#                             board that names one (tests/bus.cmake, tests/conformance.cmake)
+#   KM_BOARD_BUS_OPTIONS      the servo-bus options those tests give it
+#   KM_BOARD_BUS_LOAD         the transactions of the conformance load run on it
 # Its CMakeLists.txt then builds the board (km_board and its images).
 #
 # Included by CMakeLists.txt and tests/; run as a script it prints one line
@@ -27,7 +32,8 @@ include_guard(GLOBAL)
 get_filename_component(KM_ROOT_DIR ${CMAKE_CURRENT_LIST_DIR}/.. ABSOLUTE)
 
 set(KM_BOARD_VARIABLES KM_BOARD_DESCRIPTION KM_BOARD_TOOLCHAIN KM_BOARD_BUILD_TYPE
-    KM_BOARD_COMPILE_OPTIONS KM_BOARD_LINK_OPTIONS KM_BOARD_HOST_SOURCES)
+    KM_BOARD_COMPILE_OPTIONS KM_BOARD_LINK_OPTIONS KM_BOARD_HOST_SOURCES
+    KM_BOARD_BUS_BACKEND KM_BOARD_BUS_OPTIONS KM_BOARD_BUS_LOAD)
 
 # The discovered boards' names, sorted, into `out`.
 function(km_boards_list out)

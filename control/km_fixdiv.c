@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Division by the control tick's constants without a divide instruction:
  * reciprocal multiplies, exact (km_fixdiv.h says why;
- * tests/unit/test_control_fixdiv.c checks it). */
+ * tests/unit/control/test_control_fixdiv.c checks it). */
 #include "km_fixdiv.h"
 
 /* (n x m) >> (32 + s): one copy of the multiply for every divisor (flash). */

@@ -5,7 +5,7 @@
  * rounded-up reciprocal, M = ceil(2^(32+s) / d), keeping the high word:
  *     floor(n / d) = (n x M) >> (32 + s)   for every uint32 n,
  * exact because M x d - 2^(32+s) <= 2^s (Granlund & Montgomery 1994,
- * theorem 4.2); tests/unit/test_control_fixdiv.c checks that condition for
+ * theorem 4.2); tests/unit/control/test_control_fixdiv.c checks that condition for
  * each constant and compares against C's / and % over the whole ranges the
  * tick uses. Signed quotients truncate toward zero, as C's / does.
  * The 32 x 32 -> 64 high word is built from four 16 x 16 products (the M0's

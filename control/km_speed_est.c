@@ -72,7 +72,7 @@ int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
         /* the steady 1 kHz tick: d x 1e6 / 7000 = d x 1000 / 7, and for
          * n = |d| x 1000 <= 2e6 (n x M) >> 32 with M = ceil(2^32 / 7) is
          * floor(n / 7) (the error n x (7M - 2^32) / 2^32 stays below 1/7);
-         * tests/unit/test_control_fixdiv.c checks every d */
+         * tests/unit/control/test_control_fixdiv.c checks every d */
         const uint32_t q = km_umulhi((uint32_t)(d < 0 ? -d : d) * 1000u, KM_FIXDIV_M7);
         f->ddps = d < 0 ? -(int32_t)q : (int32_t)q;
     } else {

@@ -15,7 +15,7 @@
  * Two ways in, one rule. km_parser_feed() takes one byte (prv_feed_one, the
  * rule itself). km_parser_feed_bytes(), what the firmware uses, takes a run
  * of bytes from the RX queue and gives the same result as prv_feed_one on
- * each byte in turn (tests/unit/test_parser_batch.c checks it byte for
+ * each byte in turn (tests/unit/protocol/test_parser_batch.c checks it byte for
  * byte), with three shortcuts where the result is provably the same:
  *  - on an empty window, bytes up to the next F9 are skipped in a tight
  *    loop (the byte rule keeps nothing before an F9);

@@ -30,23 +30,24 @@
 # holds, found (0x35 bit 2), motion refused, a stop taken, the fault log;
 # about 25 s per backend.
 #
-# host-sim runs with --gap-floor-us 0, the parser's real inter-byte gap rule
-# (its UART paces bytes at line rate and holds its clock for a late byte, so
-# no floor is needed for frames that reach it whole); QEMU keeps the boards'
-# default 20 ms floor, as QEMU hands bytes over at host speed and stalls.
+# The backends are the boards that name one (KM_BOARD_BUS_BACKEND in their
+# board.cmake, cmake/km_boards.cmake), with the servo-bus options they give
+# (KM_BOARD_BUS_OPTIONS: host-sim the real inter-byte gap rule, QEMU the
+# boards' default 20 ms floor).
 find_program(KM_PYTHON3_BUS python3)
-if(KM_PYTHON3_BUS)
-  foreach(backend qemu host-sim)
-    set(gap_args "")
-    if(backend STREQUAL "host-sim")
-      set(gap_args --gap-floor-us 0)
-    endif()
-    foreach(which smoke bus encoder protect selftest)
-      string(REPLACE "-" "_" tname "${backend}_${which}")
-      add_test(NAME bus_${tname}
-        COMMAND ${KM_PYTHON3_BUS} ${CMAKE_SOURCE_DIR}/tests/bus/bus_check.py ${which} --backend ${backend} ${gap_args})
-      set_tests_properties(bus_${tname} PROPERTIES LABELS bus TIMEOUT 180 RUN_SERIAL TRUE
-        PASS_REGULAR_EXPRESSION "all checks passed")
-    endforeach()
+km_boards_list(KM_BUS_BOARDS)
+foreach(board ${KM_BUS_BOARDS})
+  km_board_read(${board})
+  if(NOT KM_PYTHON3_BUS OR NOT KM_BOARD_BUS_BACKEND)
+    continue()
+  endif()
+  set(backend ${KM_BOARD_BUS_BACKEND})
+  foreach(which smoke bus encoder protect selftest)
+    string(REPLACE "-" "_" tname "${backend}_${which}")
+    add_test(NAME bus_${tname}
+      COMMAND ${KM_PYTHON3_BUS} ${CMAKE_SOURCE_DIR}/tests/bus/bus_check.py ${which} --backend ${backend}
+              ${KM_BOARD_BUS_OPTIONS})
+    set_tests_properties(bus_${tname} PROPERTIES LABELS bus TIMEOUT 180 RUN_SERIAL TRUE
+      PASS_REGULAR_EXPRESSION "all checks passed")
   endforeach()
-endif()
+endforeach()

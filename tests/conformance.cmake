@@ -26,36 +26,31 @@
 # order errors, answer lateness up to 6 ms). host-sim passed 20 of 20 at the
 # real rule at the same load, but a later loaded tools/test-all saw one
 # super-ID answer out of order in its load run, so it gets the floor too;
-# the rule itself is checked in virtual time by tests/app and
-# tests/unit/test_dispatch_multi_read.c, and tools/bench/bench-superid measures it
+# the rule itself is checked in virtual time by tests/unit/app and
+# tests/unit/protocol/test_dispatch_multi_read.c, and tools/bench/bench-superid measures it
 # on the emulated bus.
 #
-# The load run here is 10,000 transactions on host-sim and 3,000 on QEMU
-# (printed as such: QEMU on a loaded host still misses a super-ID slot about
-# once in 2,000 such exchanges, README "The full load run"); the full
+# The backends are the boards that name one (KM_BOARD_BUS_BACKEND,
+# cmake/km_boards.cmake), each with its servo-bus options and the size of its
+# load run (KM_BOARD_BUS_LOAD: 10,000 transactions on host-sim, 3,000 on
+# QEMU, printed as such); the full
 # 100,000 is `tests/conformance/run_on_bus.py --backend host-sim
 # --gap-floor-us 0 -- --only load --load 100000` (README). About 50-60 s
 # per backend. RUN_SERIAL: timing-sensitive.
 find_program(KM_PYTHON3_CONF python3)
-if(KM_PYTHON3_CONF)
-  foreach(backend host-sim qemu)
-    set(extra --slot-floor-us 20000)  # slots past the host's stalls (above)
-    set(load 3000)
-    if(backend STREQUAL "host-sim")
-      # host-sim paces bytes: the real gap rule. Its slots get the floor
-      # too: at the real slot rule a loaded tools/test-all (load average
-      # 5-6) saw one super-ID answer out of order in 356 exchanges of the
-      # load run.
-      set(extra --gap-floor-us 0 --slot-floor-us 20000)
-      set(load 10000)
-    endif()
-    string(REPLACE "-" "_" tname "${backend}")
-    add_test(NAME conformance_${tname}
-      COMMAND ${KM_PYTHON3_CONF} ${CMAKE_SOURCE_DIR}/tests/conformance/run_on_bus.py
-              --backend ${backend} ${extra}
-              --slow-baud 9600 --slow super. --slow decision:cmd.multi-read --slow load
-              -- --load ${load})
-    set_tests_properties(conformance_${tname} PROPERTIES
-      LABELS "conformance;bus" TIMEOUT 420 RUN_SERIAL TRUE)
-  endforeach()
-endif()
+km_boards_list(KM_CONF_BOARDS)
+foreach(board ${KM_CONF_BOARDS})
+  km_board_read(${board})
+  if(NOT KM_PYTHON3_CONF OR NOT KM_BOARD_BUS_BACKEND)
+    continue()
+  endif()
+  set(backend ${KM_BOARD_BUS_BACKEND})
+  string(REPLACE "-" "_" tname "${backend}")
+  add_test(NAME conformance_${tname}
+    COMMAND ${KM_PYTHON3_CONF} ${CMAKE_SOURCE_DIR}/tests/conformance/run_on_bus.py
+            --backend ${backend} ${KM_BOARD_BUS_OPTIONS} --slot-floor-us 20000
+            --slow-baud 9600 --slow super. --slow decision:cmd.multi-read --slow load
+            -- --load ${KM_BOARD_BUS_LOAD})
+  set_tests_properties(conformance_${tname} PROPERTIES
+    LABELS "conformance;bus" TIMEOUT 420 RUN_SERIAL TRUE)
+endforeach()

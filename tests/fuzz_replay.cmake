@@ -10,10 +10,8 @@ set(KM_FUZZ_DIR ${CMAKE_CURRENT_SOURCE_DIR}/fuzz)
 
 include(${KM_FUZZ_DIR}/targets.cmake)
 
-file(GLOB KM_FUZZ_SRCS CONFIGURE_DEPENDS ${KM_FUZZ_DIR}/fuzz_*.c)
-list(REMOVE_ITEM KM_FUZZ_SRCS ${KM_FUZZ_DIR}/fuzz_replay_main.c)
-foreach(src ${KM_FUZZ_SRCS})
-  get_filename_component(name ${src} NAME_WE)
+foreach(name ${KM_FUZZ_TARGETS})
+  set(src ${KM_FUZZ_DIR}/${name}.c)
   km_fuzz_inputs(${name} dirs)
   if(KM_FUZZ)
     set(inputs)

@@ -9,3 +9,9 @@ set(KM_BOARD_BUILD_TYPE Debug)
 set(KM_BOARD_COMPILE_OPTIONS)
 set(KM_BOARD_LINK_OPTIONS)
 set(KM_BOARD_HOST_SOURCES)
+# On the emulated bus: the parser's real inter-byte gap rule (its UART paces
+# bytes at line rate and holds its clock for a late byte, so frames reach it
+# whole); a conformance load run of 10,000 transactions.
+set(KM_BOARD_BUS_BACKEND host-sim)
+set(KM_BOARD_BUS_OPTIONS --gap-floor-us 0)
+set(KM_BOARD_BUS_LOAD 10000)

@@ -23,7 +23,7 @@ static bool s_encoder;
 static km_turn_counter_t s_turns; /* the encoder product's multi-turn count */
 static km_scn_player_t s_scenario;
 /* The encoder product's plant: the default motor with no pot and no end
- * stops, as the control tests build it (tests/unit/test_control_motor.c).
+ * stops, as the control tests build it (tests/unit/control/test_control_motor.c).
  * The plant keeps a pointer, so it lives here. */
 static km_plant_config_t s_encoder_config;
 

@@ -3,7 +3,7 @@
  * docs/update.md §3): what km_store_mount() would load for a schema of just
  * those keys, without the mount's page bookkeeping (suspect pages, the
  * first commit's target, the blank/invalid distinction), which only a
- * session that commits needs. tests/unit/test_store_peek.c checks it
+ * session that commits needs. tests/unit/store/test_store_peek.c checks it
  * against km_store_mount() on stores left by random sessions and power
  * cuts. */
 #ifndef KM_STORE_PEEK_H

@@ -8,7 +8,7 @@
  * than the gap drops a candidate that would need a byte from after it. A
  * byte at a time only, with none of the parser's batch shortcuts, counters
  * or checksum-error records (the bootloader reports none of them): a small
- * piece of code for the 4 KiB budget. tests/unit/test_boot_rx.c checks it
+ * piece of code for the 4 KiB budget. tests/unit/update/test_boot_rx.c checks it
  * hands out exactly the parser's frames on random streams. */
 #ifndef KM_BOOT_RX_H
 #define KM_BOOT_RX_H

@@ -218,8 +218,8 @@ def check_move(bus, dev_id):
     """§5.4: torque on, 0x65 to +45.0 deg in 500 ms; 0x46 read until it
     arrives, then 0x66 back to 0 at 180 deg/s, torque off. Wall-clock time
     on a shared machine: the bounds are loose (a stalled emulator integrates
-    its plant over the stall); tests/unit/test_control_servo.c and
-    tests/app/test_app_motion.c hold the tight figures in virtual time."""
+    its plant over the stall); tests/unit/control/test_control_servo.c and
+    tests/unit/app/test_app_motion.c hold the tight figures in virtual time."""
     bus.exchange(kmframe.write(dev_id, 0x64, b"\x02"), 0, timeout=0.1)
     start = read_pos(bus, dev_id)
     t0 = time.monotonic()

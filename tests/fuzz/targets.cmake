@@ -3,6 +3,9 @@
 # tests/fuzz_replay.cmake (replay of the committed inputs in every host build).
 include_guard(GLOBAL)
 
+# The fuzz targets, one fuzz_<name>.c each (named here, not globbed).
+set(KM_FUZZ_TARGETS fuzz_parser fuzz_servo fuzz_store)
+
 # What a fuzz target links besides the pure libraries (shared with
 # tests/fuzz/CMakeLists.txt): fuzz_servo the real main loop over the fake
 # board (the pair twice: each calls the other), fuzz_store the app's

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The fake board behind tests/app/ and the fuzz_app target: every hal
+/* The fake board behind tests/unit/app/ and the fuzz_app target: every hal
  * contract over a discrete-event world in virtual time (see km_fake_hal.h). */
 #define _POSIX_C_SOURCE 200809L /* sigsetjmp, sigaction, alarm */
 #include "km_fake_hal.h"

@@ -121,7 +121,7 @@ static void test_mread_slots_baud_and_delay(void **state)
 
 /* The longest list the frame allows: length 252 = address + 249 IDs. The
  * servo listed last answers in slot 248. (A longer list needs a length above
- * 252: no frame, tests/app/test_app_multi_read.c sends its bytes.) */
+ * 252: no frame, tests/unit/app/test_app_multi_read.c sends its bytes.) */
 static void test_mread_longest_list(void **state)
 {
     (void)state;

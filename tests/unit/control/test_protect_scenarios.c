@@ -3,7 +3,7 @@
  * §5.2 (0x32 enable, 0x33 release mode, 0x34 action, 0x35 self-test, 0x36
  * flags and clear, 0x3C-0x3F thresholds) and §4 status bits 0-4, run through
  * the whole control tick (km_control_step via the plant rig), not the
- * supervisor alone (tests/unit/test_protect.c does that).
+ * supervisor alone (tests/unit/control/test_protect.c does that).
  *
  * The table below is data: each row names its inputs (a stimulus over time on
  * the plant: supply, winding temperature, external load torque, plant faults;

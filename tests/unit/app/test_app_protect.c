@@ -4,7 +4,7 @@
  * 0-4 and 6, §5.4 0x64 = 5; the fault log of docs/protocol-decisions.md,
  * read with 0x7F): the dispatcher and control wired as the boards wire
  * them, sensors set by the test (the plant-level scenarios are in
- * tests/unit/test_protect_scenarios.c). */
+ * tests/unit/control/test_protect_scenarios.c). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>

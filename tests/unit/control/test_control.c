@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* control/km_control.c, the tick without the plant (the plant-backed
- * motion tests are tests/unit/test_control_servo.c):
+ * motion tests are tests/unit/control/test_control_servo.c):
  * docs/protocol.md §5.1 zero offsets 0x16 + 0x17 and direction (0x11 bit 2),
  * §5.1 0x11 bits 0/1 power-on and idle output, §5.4 0x64 torque switch to
  * bridge mode, §5.3 live registers (speed over a 20 ms window, current,
