@@ -1,15 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* HAL contract: the flash region that holds the user-data store.
- *
- * The store sees its region as pages numbered 0..page_count-1 and byte
- * offsets from the region's start. A board (or the NOR simulator in tests)
- * fills one km_flash_t. Rules every implementation keeps, as NOR flash does:
- *  - erase sets a whole page to 0xFF;
- *  - program writes whole cells (`prog_size` bytes, aligned) and only onto
- *    erased cells: programming a cell twice between erases is an error
- *    (a program cut by power loss before any bit moved leaves the cell
- *    reading erased, and the controller's erased check accepts it again);
- *  - read may report an ECC error for a cell whose program was torn. */
+/* HAL contract: the flash region of the user-data store, pages 0..page_count-1, NOR rules
+ * (docs/architecture.md "HAL contracts"). */
 #ifndef KM_HAL_FLASH_H
 #define KM_HAL_FLASH_H
 

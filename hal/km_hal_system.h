@@ -25,11 +25,7 @@ void km_hal_irq_restore(uint32_t state);
  * the PRNG behind the status read's random byte (§5.1 0x01). */
 uint32_t km_hal_entropy(void);
 
-/* Why the MCU last came out of reset, read once at boot (before the
- * hardware flags are cleared for the next one). Reported to the master in
- * this firmware's extension space (docs/protocol-decisions.md, 0x7F), so a
- * servo that rebooted in the field says whether it was the watchdog, a
- * fault, a brown-out or a restart command. */
+/* Why the MCU last came out of reset, read once at boot (reported over 0x7F, docs/protocol-decisions.md). */
 typedef enum {
     KM_RESET_POWER_ON = 0, /* power applied (or no flag the board can read) */
     KM_RESET_PIN = 1,      /* the reset pin / debugger */
@@ -42,10 +38,7 @@ typedef enum {
 
 km_reset_cause_t km_hal_reset_cause(void);
 
-/* Sleep until the next interrupt (WFI) when the main loop has nothing to do.
- * Called with the interrupt lock held (so a byte that arrives between the
- * main loop's last check and the sleep still wakes it). Returns at the
- * latest 1 ms later: the board keeps a periodic wake-up for the control tick. */
+/* Sleep until the next interrupt, called with the interrupt lock held; returns within 1 ms. */
 void km_hal_idle(void);
 
 #endif

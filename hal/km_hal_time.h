@@ -7,9 +7,7 @@
 
 #include <stdint.h>
 
-/* Ticks per second of km_hal_time_now(): a whole number of MHz (at least
- * 1), so the response delay (µs, §5.1 0x12) is resolved and converting
- * microseconds to ticks is one multiply. */
+/* Ticks per second of km_hal_time_now(): a whole number of MHz, at least 1. */
 uint32_t km_hal_time_tick_hz(void);
 
 void km_hal_time_init(void);
@@ -19,9 +17,8 @@ uint32_t km_hal_time_now(void);
 
 typedef void (*km_timer_handler_t)(void *ctx);
 
-/* Arm the one-shot timer to call `handler` (interrupt context) at tick `at`.
- * If `at` is not in the future, it fires as soon as possible. Re-arming
- * replaces a pending shot. */
+/* Arm the one-shot timer for `handler` (interrupt context) at tick `at`; re-arming replaces a pending shot.
+ */
 void km_hal_timer_at(uint32_t at, km_timer_handler_t handler, void *ctx);
 
 void km_hal_timer_cancel(void);

@@ -1,12 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* HAL contract: the half-duplex servo bus UART.
- *
- * RX: the board's receive interrupt calls the handler registered here once per
- * byte, with the tick at which the byte arrived, so the frame end is stamped
- * in interrupt context and the answer delay is measured from it. TX: the board
- * switches the bus to transmit, sends a buffer (interrupt- or DMA-driven) and
- * switches back to receive after the last stop bit. A servo never hears its
- * own answer as input. */
+/* HAL contract: the half-duplex servo bus UART; RX bytes stamped in interrupt context (docs/architecture.md
+ * "HAL contracts"). */
 #ifndef KM_HAL_UART_H
 #define KM_HAL_UART_H
 

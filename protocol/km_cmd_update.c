@@ -1,16 +1,11 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* 0x78 firmware update (docs/update.md), the application's side: the
- * firmware serves it (km_servo_ops_t.update); the dispatcher frames the
- * answer. */
+/* 0x78 firmware update (docs/update.md), the application's side. */
 #include <stddef.h>
 
 #include "km_dispatch.h"
 #include "km_encoder.h"
 
-/* ENTER restarts into the bootloader, STATUS answers state 0, anything
- * else is bit 5 with the short response. A firmware without the op treats
- * 0x78 as any command it does not have (bit 5, no answer). Answered to our
- * own ID only, at the normal response delay. */
+/* ENTER restarts into the bootloader, STATUS answers state 0, else bit 5; own ID only. */
 km_report_t km_cmd_update(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply)
 {
     uint8_t body[KM_UPDATE_ANSWER_MAX];

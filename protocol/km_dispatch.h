@@ -1,8 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The commands of the dispatcher's table (inside protocol/ only): each runs
- * one frame that passed the ID and address rules of km_servo.c and says
- * how its answer dealt with status bits 5 and 6; and what they share
- * (answer timing, reads and writes of one register). */
+/* The commands of the dispatcher's table (inside protocol/ only) and what they share. */
 #ifndef KM_DISPATCH_H
 #define KM_DISPATCH_H
 
@@ -38,9 +35,7 @@ void km_dispatch_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t le
 /* The readable register at `addr`, or -1 (unknown, or write-only). */
 int km_dispatch_readable(uint8_t addr);
 
-/* The answer to a read of register r (-1: bit 5 and the short response),
- * started in slot `slot` (0x02: the own ID at the super ID, else 0; 0x82:
- * the position in the list). */
+/* The answer to a read of register r (-1: bit 5, short response), started in slot `slot`. */
 void km_dispatch_read_answer(km_servo_t *s, int r, uint8_t addr, uint32_t slot, km_reply_t *reply);
 
 /* The answer's start after the frame: 0x12, plus the own ID's slot when

@@ -1,7 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The extension command 0x7F (km_ext.h): a read in this firmware's own
- * address space. The dispatcher keeps 0x01..0x03; what it does not keep
- * (the fault log) the firmware answers through ops->ext_read. */
+/* The extension command 0x7F (km_ext.h): 0x01..0x03 here, the rest through ops->ext_read. */
 #include <stddef.h>
 
 #include "km_dispatch.h"
@@ -29,10 +27,7 @@ static bool prv_ext_value(km_servo_t *s, uint8_t addr, uint8_t *out, uint8_t *n)
     }
 }
 
-/* "Extension command 0x7F": `F9 FF id 03 7F addr cs` answers
- * `F9 F5 id len 7F addr value cs`, at the super ID in the own ID's slot,
- * cut for the value's size (at least 2: every address always answers the
- * same size, so the slots are the same on every servo of the bus). */
+/* "Extension command 0x7F": the answer, at least 2 value bytes, same size for an address on every servo. */
 km_report_t km_cmd_ext(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply)
 {
     uint8_t body[1 + KM_EXT_VALUE_MAX];

@@ -1,10 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* This firmware's extension registers, read with command 0x7F ("customer
- * custom", docs/protocol.md §7) so they stay out of the vendor's register map:
- * `F9 FF id 03 7F addr cs` answers `F9 F5 id len 7F addr value cs`.
- * docs/protocol-decisions.md "Extension command 0x7F" has the frames. The
- * dispatcher keeps 0x01..0x03 (km_ext.c); the fault log's are the
- * firmware's (km_servo_ops_t.ext_read, firmware/app/km_fault_log.h). */
+/* This firmware's extension registers, read with 0x7F (docs/protocol.md §7; docs/protocol-decisions.md
+ * "Extension command 0x7F"). */
 #ifndef KM_EXT_H
 #define KM_EXT_H
 

@@ -39,13 +39,7 @@ static inline __attribute__((always_inline)) uint32_t prv_pack_default(uint32_t 
     return size > 0u && size < 4u ? v & ((1u << (8u * size)) - 1u) : v;
 }
 
-/* The registers a user-data reset writes back and their defaults, straight
- * from the register table at compile time (no loop over the 47 registers,
- * no look-up, no switch per register): persisted and writable from the bus.
- * "User-data reset": factory data (persisted, not writable from the bus:
- * the level-1 zero offset 0x16) is per-unit calibration that no master
- * could write back, so no level resets it; §5.1 0x03 level 1 keeps ID,
- * baud and both zero offsets. Returns how many. */
+/* The registers a user-data reset writes back and their defaults; returns how many ("User-data reset"). */
 static uint8_t prv_reset_list(const km_product_t *p, uint8_t level, uint8_t *regs, uint8_t *addrs,
                               uint32_t *values)
 {
@@ -89,10 +83,7 @@ void km_wr_userdata_reset(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uin
     }
 }
 
-/* "Zeroing": 0x46 written and 0x18 = 0 on encoder products both make the
- * current position zero, and both are refused (bit 6) while a hardware
- * fault is latched: the position sensor may be the fault, and a zero taken
- * from it would survive the restart that clears the fault. */
+/* "Zeroing": 0x46 and 0x18 = 0 refused (bit 6) while a hardware fault is latched. */
 static void prv_zero_position(km_servo_t *s)
 {
     const km_request_t req = {.kind = KM_REQ_ZERO_POSITION};

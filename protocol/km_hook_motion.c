@@ -1,10 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Write hooks of the rotation registers (§5.4): the torque switch 0x64,
- * the servo-mode moves 0x65..0x68 and the motor-mode runs 0x6E..0x70.
- * Every byte they take is decoded here into include/km/km_request.h's
- * types; the preconditions that are register rules ("Motion
- * preconditions", "Encoder-only commands") are checked here too, so
- * control gets only requests it may run. */
+/* Write hooks of the rotation registers (§5.4): 0x64, the moves 0x65..0x68, the runs 0x6E..0x70, decoded into
+ * include/km/km_request.h. */
 #include "km_hooks.h"
 
 #include "km_servo.h"

@@ -1,20 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Register hooks: what a read or a write of one register does (inside
- * protocol/ only). km_registers.def names a read hook km_rd_<rd> and a
- * write hook km_wr_<wr> for every register; the dispatcher calls them
- * through km_reg_read[] and km_reg_write[], generated from the same list.
- *
- *  - A read hook writes the register's value bytes into `out` (at most 16)
- *    and returns how many. It may not fail: the dispatcher has checked the
- *    address is readable.
- *  - A write hook gets the value bytes as sent (`len` of them, not yet
- *    checked) and does everything the write means: checks them (status bit
- *    6 on a bad value: km_regfile_fail), decodes them into a typed request
- *    (include/km/km_request.h) or a value, applies it. All wire decoding of
- *    an action register happens in its hook, nowhere else.
- * `stored` is the hook of plain registers (the value as kept; a write
- * checked for range, consistency, and committed if persisted); `none`
- * stands where the access has no R or no W. */
+/* Register hooks: what a read or a write of one register does (km_registers.def names them;
+ * docs/architecture.md "Register hooks"). */
 #ifndef KM_HOOKS_H
 #define KM_HOOKS_H
 

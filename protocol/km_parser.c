@@ -1,94 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Frame parser (docs/protocol.md §2 frames, §7 inter-byte gap): turns received
- * bytes into validated command frames, skips other servos' responses whole,
- * and resynchronises inside the bytes already seen after any failure.
- *
- * How: the unresolved bytes sit in a 256-byte ring (km_parser_t.window), the
- * oldest at `head`. The head byte is always the start of the candidate being
- * judged. A candidate is judged from its first four bytes (F9, FF|F5, ID,
- * length) and, once length+4 bytes are in, from its checksum, which is one
- * subtraction of two prefix sums. If the candidate fails, only its F9 is
- * discarded and the next byte becomes the head: the rescan of the following
- * bytes is the same judging loop, so a good frame inside a failed
- * candidate's length is found from bytes already seen.
- *
- * Two ways in, one rule. km_parser_feed() takes one byte (prv_feed_one, the
- * rule itself). km_parser_feed_bytes(), what the firmware uses, takes a run
- * of bytes from the RX queue and gives the same result as prv_feed_one on
- * each byte in turn (tests/unit/protocol/test_parser_batch.c checks it byte for
- * byte), with three shortcuts where the result is provably the same:
- *  - on an empty window, bytes up to the next F9 are skipped in a tight
- *    loop (the byte rule keeps nothing before an F9);
- *  - a whole frame found in the run, inside the gap, is judged where it
- *    lies (header checks, one sum) and handed out as a view of the
- *    caller's bytes: no copy into the ring, no copy out of it;
- *  - a candidate of known length that spans runs is appended a run at a
- *    time (a store, a prefix-sum store and an add per byte).
- *  Ticks come from one clock and never go backwards, so a stretch of bytes
- *  has no gap when its last tick is within the gap of the tick before it:
- *  the gap rule costs one test per stretch (prv_gapless), not per byte.
- *  Anything else (a header cut by the run's end, a bad header, a checksum
- *  failure, pending or stale bytes) goes the byte way.
- *
- * Work per byte (the bound an interrupt handler can rely on):
- *  - normal path: O(1). A byte that is not F9 on an idle bus returns at once;
- *    a header byte is checked alone (prv_header_grows); a byte inside a
- *    candidate whose length is known is stored and compared with the length
- *    (need); the byte that completes it costs one checksum check and, for a
- *    command frame that wraps around the ring's end, one copy of its body
- *    (<= 250 bytes; otherwise the body is handed out as a view).
- *  - worst case, after a failure: prv_settle() removes at least one byte
- *    from the window per iteration and the window holds at most 256 bytes,
- *    so one call runs at most 257 iterations of O(1) work (four compares and
- *    one prefix-sum subtraction), plus at most one body copy: one scan of
- *    <= 256 bytes. A batch call does the same per byte it consumes, and
- *    stops at the first frame.
- *  - amortised O(1): every byte enters the window once and leaves it once,
- *    and is copied out at most once, so the iterations over a whole stream
- *    are <= bytes fed + calls. A whole frame judged in place is read twice
- *    (header, sum) and never enters the window.
- *  Measured on the bench mix, Cortex-M0 -Os (tools/bench/bench-m0): about 20
- *  instructions per byte through km_parser_feed_bytes in runs of <= 64
- *  bytes (73 byte by byte through the former single-byte path).
-
- * Only one frame can be handed out per call (there is one `out`), and a
- * call stops at the frame it hands out: bytes after it stay in the window
- * with `pending` set, and the next feed or poll judges them first (so the
- * checksum failures one call reports all precede its frame). The window
- * then cannot overflow: a call that leaves bytes pending has removed the
- * delivered frame (>= 6 bytes), so a pending window holds <= 251 bytes and
- * shrinks by >= 5 per call while frames keep coming out of it; a settled
- * window is one incomplete candidate, <= 255 bytes, so the next byte
- * always fits.
- *
- * A gap longer than gap_ticks (or an overrun) marks every byte in the window
- * stale: complete frames among them are still delivered (they arrived whole),
- * but a candidate that would need a byte from after the cut is dropped.
- *
- * Decisions where the spec is open (see docs/protocol.md):
- *  - F9 followed by anything but FF or F5 is hunting noise, not counted.
- *    After a proper two-byte header, a bad ID or length counts one
- *    framing_error. Command IDs: 0..250, 253, 254. Response IDs: 0..250
- *    (a servo answers with its own ID).
- *  - A response frame with a bad checksum counts a checksum_error but raises
- *    no KM_PARSE_CHECKSUM_ERR and sets no bad_ids bit: status bit 5 is about
- *    commands sent to us.
- *  - end_tick is the tick of the frame's last byte when the frame completes
- *    on its last byte. A frame found by a rescan gets the tick of the newest
- *    byte seen before it was found (before the cut, if a gap or overrun cut
- *    the window): the parser keeps no per-byte ticks, that would be 1 KiB of
- *    RAM. It is never earlier than the true end, so an answer timed from it
- *    cannot overlap the failed candidate's bytes.
- *  - A second cut while frames are still pending drops the bytes received
- *    since the first cut (see prv_cut): rare, and no frame spans a cut.
- *  - timeouts counts a gap once when it makes the parser drop an incomplete
- *    candidate; bytes lost to an overrun are counted in overruns only.
- *  - The gap test is `now - last_tick > gap_ticks` in uint32_t, correct
- *    across wrap-around as long as polls come less than 2^32 ticks apart.
- *
- * Concurrency: one context owns the parser (the UART interrupt, or a main
- * loop fed from a FIFO); km_parser_take_checksum_error() must run in the same
- * context or with that interrupt masked. */
+/* Frame parser (docs/protocol.md §2 frames, §7 inter-byte gap): received bytes to validated command frames;
+ * other servos' responses skipped whole; resynchronised inside the bytes already seen. How it works, its work
+ * per byte and its decisions: docs/architecture.md "Inside the parser". */
 #include "km_parser.h"
 
 #include <stddef.h>
@@ -170,8 +83,7 @@ static prv_verdict_t prv_judge(km_parser_t *p, uint16_t avail, uint16_t *total, 
     if (avail < *total) {
         return PRV_INCOMPLETE;
     }
-    /* Sum of ID .. last parameter = prefix before the checksum byte minus
-     * prefix before the ID (§2). */
+    /* Checksum (§2): prefix sum before the checksum byte minus prefix sum before the ID. */
     const uint8_t sum = (uint8_t)(prv_psum_at(p, (uint16_t)(*total - 1u)) - prv_psum_at(p, 2));
     const uint8_t want = (uint8_t)~sum;
     if (prv_at(p, (uint16_t)(*total - 1u)) != want) {
@@ -185,9 +97,7 @@ static prv_verdict_t prv_judge(km_parser_t *p, uint16_t avail, uint16_t *total, 
     return command ? PRV_COMMAND : PRV_RESPONSE;
 }
 
-/* Hands the command frame of `total` bytes at head out as a view: its body
- * where it lies in the ring, or, if it wraps around the ring's end, copied
- * whole into out->spill (a frame wraps about once per 256 bytes received). */
+/* Hands the command frame at head out: a view in the ring, or copied into out->spill when it wraps. */
 static void prv_deliver(const km_parser_t *p, uint16_t total, km_parser_out_t *out)
 {
     km_frame_view_t *f = &out->frame;
@@ -207,8 +117,7 @@ static void prv_deliver(const km_parser_t *p, uint16_t total, km_parser_out_t *o
     f->end_tick = p->stale ? p->stale_tick : p->last_tick;
 }
 
-/* Judges candidates from head until one is incomplete, the window is empty,
- * or a command frame is handed out. See the bound above. */
+/* Judges candidates from head until one is incomplete, the window is empty, or a frame is handed out. */
 static unsigned prv_settle(km_parser_t *p, km_parser_out_t *out)
 {
     unsigned events = 0u;
@@ -241,10 +150,7 @@ static unsigned prv_settle(km_parser_t *p, km_parser_out_t *out)
             prv_deliver(p, total, out);
             prv_count(&p->stats.frames_ok);
             prv_drop(p, total);
-            /* Stop at the frame: bytes after it are judged by the next call,
-             * so a checksum failure this call reports always came before
-             * the frame it hands out (the caller judges "was it our ID?"
-             * with the ID in force before the frame can change it). */
+            /* Stop at the frame: later bytes wait for the next call. */
             p->pending = p->fill > 0u;
             return events | KM_PARSE_FRAME;
         }
@@ -252,13 +158,7 @@ static unsigned prv_settle(km_parser_t *p, km_parser_out_t *out)
     return events;
 }
 
-/* Every byte in the window precedes a cut: none may join a later byte.
- * Only one cut is tracked (stale). A second cut can only find bytes after
- * the first one still unjudged while frames wait in `pending` (a settle
- * drains the stale bytes otherwise); those bytes since the first cut are
- * dropped, so no frame can ever span a cut. The price, a frame complete
- * among them is lost, needs two frames hidden in one failed candidate and
- * two cuts before they are handed out. */
+/* Marks every byte in the window as before a cut (a second cut drops the bytes since the first). */
 static void prv_cut(km_parser_t *p, bool by_gap)
 {
     if (p->stale == 0u) {
@@ -271,11 +171,7 @@ static void prv_cut(km_parser_t *p, bool by_gap)
     p->need = 0u;
 }
 
-/* Fast path for the first four bytes of a candidate: when nothing waits
- * (not pending, no cut), the window before this byte was a viable candidate,
- * so only the byte just stored needs the check prv_judge() would make at its
- * offset. True if it passes; once the length is in, `need` takes over. On
- * false, prv_settle() judges again and counts the error. */
+/* Fast header check of the byte just stored; false: prv_settle() judges again. */
 static bool prv_header_grows(km_parser_t *p, uint8_t byte)
 {
     switch (p->fill) {
@@ -321,8 +217,7 @@ static inline void prv_push(km_parser_t *p, uint8_t byte, uint32_t now)
     p->last_tick = now;
 }
 
-/* One byte, the rule every entry follows (the batch entry takes shortcuts
- * only where they give the same result). */
+/* One byte, the rule every entry follows. */
 static inline unsigned prv_feed_one(km_parser_t *p, uint8_t byte, uint32_t now, km_parser_out_t *out)
 {
     if (p->fill == 0u) {
@@ -342,11 +237,7 @@ static inline unsigned prv_feed_one(km_parser_t *p, uint8_t byte, uint32_t now, 
     return prv_settle(p, out);
 }
 
-/* Copies n >= 1 bytes to w[] and their prefix sums to w[KM_FRAME_MAX + i]
- * (psum follows window in km_parser_t); returns the running sum. Its own
- * function, with few live values, so that on ARMv6-M the loop keeps all of
- * them in the eight low registers: a load, two stores, an add, the index
- * step and the loop test per byte. */
+/* Copies n >= 1 bytes to w[] and their prefix sums to w[KM_FRAME_MAX + i]; returns the running sum. */
 __attribute__((noinline)) static uint32_t prv_copy_sum(uint8_t *w, const uint8_t *src, uint32_t n,
                                                        uint32_t acc)
 {
@@ -365,15 +256,11 @@ __attribute__((noinline)) static uint32_t prv_copy_sum(uint8_t *w, const uint8_t
 _Static_assert(offsetof(km_parser_t, psum) == offsetof(km_parser_t, window) + KM_FRAME_MAX,
                "prv_copy_sum finds psum right after window");
 
-/* Appends a run of k >= 1 bytes that stays inside the head candidate's
- * known length, split at the ring's end. */
+/* Appends a run of k >= 1 bytes inside the head candidate's known length, split at the ring's end. */
 static void prv_append(km_parser_t *p, const uint8_t *bytes, uint32_t k)
 {
     if (p->fill == 0u) {
-        /* An empty window may start anywhere: at slot 0 a frame (<= 256
-         * bytes) never wraps around the ring's end, and is handed out as a
-         * view, not copied into the spill. Only a frame found by a rescan
-         * inside a failed candidate can wrap. */
+        /* An empty window restarts at slot 0: a frame from it never wraps. */
         p->head = 0u;
     }
     const uint8_t slot = (uint8_t)(p->head + p->fill);
@@ -389,10 +276,7 @@ static void prv_append(km_parser_t *p, const uint8_t *bytes, uint32_t k)
     p->fill = (uint16_t)(p->fill + k);
 }
 
-/* The head candidate just became whole (fill == need, nothing pending, no
- * cut): its header was checked byte by byte as it came, so only the
- * checksum is left. A failure goes the general way (prv_settle counts it
- * and rescans). */
+/* The head candidate just became whole: only its checksum is left to check. */
 static unsigned prv_complete(km_parser_t *p, km_parser_out_t *out)
 {
     const uint16_t total = p->need;
@@ -414,12 +298,7 @@ static unsigned prv_complete(km_parser_t *p, km_parser_out_t *out)
     return 0u;
 }
 
-/* How many of the k >= 1 bytes whose ticks are ticks[0..k-1] follow one
- * another, and the byte before them (at tick prev), with no gap longer
- * than `gap`. Ticks never go backwards (one clock), so a stride of bytes
- * passes whole when its last tick is within the gap of the tick before the
- * stride: one test per stride, not per byte. A stride that fails is halved;
- * a single byte that fails ends the count. */
+/* How many of the k >= 1 bytes ticks[0..k-1] follow tick prev with no gap longer than `gap`. */
 static uint32_t prv_gapless(const uint32_t *ticks, uint32_t k, uint32_t prev, uint32_t gap)
 {
     uint32_t pos = 0u;
@@ -442,9 +321,7 @@ static uint32_t prv_gapless(const uint32_t *ticks, uint32_t k, uint32_t prev, ui
     return pos;
 }
 
-/* A whole viable header at bytes[0..3] (F9 checked by the caller): the
- * checks prv_header_grows() makes byte by byte. Returns the frame size, or
- * 0 if the byte way must judge it. */
+/* Frame size of a whole viable header at bytes[0..3], or 0 for the byte way. */
 static uint32_t prv_header_total(const uint8_t *b)
 {
     const uint8_t id = b[2];
@@ -462,8 +339,7 @@ static uint32_t prv_header_total(const uint8_t *b)
     return length + 4u;
 }
 
-/* Sum of n bytes, four at a time (the checksum of a frame handed out
- * straight from the caller's bytes). */
+/* Sum of n bytes, four at a time. */
 static uint32_t prv_sum(const uint8_t *b, uint32_t n)
 {
     uint32_t sum = 0u;
@@ -478,13 +354,7 @@ static uint32_t prv_sum(const uint8_t *b, uint32_t n)
     return sum;
 }
 
-/* A whole frame of `total` bytes at f, all inside the gap, found on an
- * empty window: judged where it lies, with no copy into the ring. True if
- * its checksum holds (then it is handed out as a view of the caller's
- * bytes, or skipped if it is a response); false leaves it to the ring's
- * way, which counts the failure and rescans. The parser's state ends as
- * the ring's way leaves it: window empty, every byte in `acc`, last_tick
- * the frame's last byte. */
+/* Judges a whole frame at f in place (empty window, inside the gap); false: the ring's way. */
 static bool prv_whole(km_parser_t *p, const uint8_t *f, uint32_t total, uint32_t end_tick, unsigned *events,
                       km_parser_out_t *out)
 {
@@ -517,12 +387,7 @@ typedef enum {
     PRV_IDLE_CANDIDATE, /* a whole header inside the gap: the run takes it */
 } prv_idle_t;
 
-/* Idle, from the F9 at bytes[i]: a whole header already here has its
- * length known before a byte is stored (what the byte way knows after its
- * fourth byte). A whole frame inside the gap is judged where it lies;
- * otherwise the run takes the header into the ring, or the F9 goes the
- * byte way. Returns the next i. Inlined into the batch loop, its only
- * caller. */
+/* Idle, from the F9 at bytes[i]: judges a whole frame in place or starts a candidate; returns the next i. */
 static inline __attribute__((always_inline)) uint32_t prv_idle(km_parser_t *p, const uint8_t *bytes,
                                                                const uint32_t *ticks, uint32_t n, uint32_t i,
                                                                unsigned *events, km_parser_out_t *out,
@@ -546,11 +411,7 @@ static inline __attribute__((always_inline)) uint32_t prv_idle(km_parser_t *p, c
     return i + 1u;
 }
 
-/* Inside a candidate of known length: the bytes of a run toward its end,
- * as long as no gap cuts it (prv_gapless), and never shorter than the
- * rest of a header checked whole by prv_idle; 0 leaves byte i to the byte
- * way (a gap right before it is a cut). *whole: the run completed the
- * candidate (judged, maybe handed out). Inlined into the batch loop. */
+/* Inside a candidate of known length: takes the run's bytes toward its end (0: byte i goes the byte way). */
 static inline __attribute__((always_inline)) uint32_t prv_run(km_parser_t *p, const uint8_t *bytes,
                                                               const uint32_t *ticks, uint32_t n, uint32_t i,
                                                               unsigned *events, km_parser_out_t *out,
@@ -677,10 +538,7 @@ void km_parser_overrun(km_parser_t *p)
 
 bool km_parser_take_checksum_error(km_parser_t *p, uint8_t id)
 {
-    /* Every record is forgotten, not only `id`'s: the caller asks with the
-     * ID it has now, and a record kept for another ID would be claimed
-     * later by a servo that has since taken that ID (a bad frame for ID 5
-     * must not show as bit 5 after an ID change to 5). */
+    /* Every record is forgotten, not only `id`'s (docs/architecture.md "Inside the parser"). */
     const bool set = (p->bad_ids[id >> 3] & (1u << (id & 7u))) != 0u;
     memset(p->bad_ids, 0, sizeof p->bad_ids);
     return set;

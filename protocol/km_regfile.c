@@ -12,9 +12,7 @@ static bool prv_angle_limits_ok(int16_t lo, int16_t hi)
     return lo == 0 || hi == 0 || lo < hi;
 }
 
-/* A stored value passes the checks a write of it would: right bytes, in
- * range, cross-field rules. Anything else (a baud of 0 from a damaged or
- * older store) is replaced by the default rather than run with. */
+/* A stored value passes the checks a write of it would, else the default. */
 static bool prv_persisted_ok(km_reg_index_t r, const km_product_t *p, uint32_t v)
 {
     uint8_t b[4];
@@ -41,9 +39,7 @@ void km_regfile_init(km_regfile_t *rf, const km_product_t *product, const uint32
         k += km_reg_table[i].persisted;
         km_regfile_apply(rf, (km_reg_index_t)i, v);
     }
-    /* §5.4: 0x5B..0x5D start equal to the stored 0x13..0x15. They come later
-     * in the table than their sources, so the loop above set them to the
-     * product defaults after the mirror had been applied: apply it again. */
+    /* §5.4: 0x5B..0x5D start equal to the stored 0x13..0x15: mirror again after the defaults. */
     km_regfile_apply(rf, KM_REG_MAX_TORQUE, rf->value[KM_REG_MAX_TORQUE]);
     km_regfile_apply(rf, KM_REG_MAX_CURRENT, rf->value[KM_REG_MAX_CURRENT]);
     km_regfile_apply(rf, KM_REG_MAX_SPEED, rf->value[KM_REG_MAX_SPEED]);

@@ -1,11 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The register file (docs/protocol.md §4, §5): every register's value, kept as
- * its wire bytes packed little-endian into a u32; the change counter the
- * control parameters follow; what control reported at its last tick (the
- * live registers, status bits 7 and 0..3); the latched hardware faults
- * (0x35, status bit 4); and the status byte's bits 5 and 6 ("Status bits 5
- * and 6", docs/protocol-decisions.md). The dispatcher owns it; its commands
- * and register hooks change it only through these functions. */
+/* The register file (docs/protocol.md §4, §5): values, status bits, control's last report, latched faults;
+ * owned by the dispatcher. */
 #ifndef KM_REGFILE_H
 #define KM_REGFILE_H
 
@@ -48,9 +43,7 @@ static inline void km_regfile_set(km_regfile_t *rf, km_reg_index_t r, uint32_t v
  * 0x13/0x14/0x15. */
 void km_regfile_apply(km_regfile_t *rf, km_reg_index_t r, uint32_t v);
 
-/* "Limits that contradict each other": false for a value that would leave
- * a runtime limit (0x5B..0x5D) above its maximum (0x13..0x15) or the angle
- * limits with min >= max. */
+/* "Limits that contradict each other": false if a runtime limit would exceed its maximum or min >= max. */
 bool km_regfile_consistent(const km_regfile_t *rf, km_reg_index_t r, uint32_t v);
 
 /* Control's report of one tick: the live registers, 0x35's latch, and 0x64

@@ -40,9 +40,7 @@ static uint32_t prv_default_raw(km_reg_index_t reg, const km_product_t *p)
 
 uint32_t km_reg_default(km_reg_index_t reg, const km_product_t *p)
 {
-    /* Packed as the wire bytes: a negative i16 default (an angle limit, a
-     * zero offset) is its two bytes, not a sign-extended u32, the same as
-     * km_reg_validate() packs a written value. */
+    /* Packed as the wire bytes, as km_reg_validate() packs a written value. */
     const uint32_t v = prv_default_raw(reg, p);
     const uint8_t size = km_reg_fixed_size((km_layout_t)km_reg_table[reg].layout);
     return size > 0u && size < 4u ? v & ((1u << (8u * size)) - 1u) : v;
@@ -97,9 +95,7 @@ static bool prv_cross_check(km_reg_index_t reg, uint32_t packed)
     }
 }
 
-/* Bytes a write of `layout` takes: its fixed size, 2 or 4 (`len`) for a
- * move; 0 for a layout no checked write has (computed or action values,
- * checked by their hooks). */
+/* Bytes a write of `layout` takes (0: checked by its hook). */
 static uint8_t prv_write_size(km_layout_t layout, uint8_t len)
 {
     switch (layout) {

@@ -1,8 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The register table (docs/protocol.md §5) generated from km_registers.def:
- * lookup by address, access, persistence, wire layout, default and range.
- * Values are kept as the wire bytes packed little-endian into a u32
- * (an i16 sits in the low 16 bits, two fields side by side). */
+/* The register table (docs/protocol.md §5) generated from km_registers.def; values are wire bytes packed LE
+ * in a u32. */
 #ifndef KM_REGISTERS_H
 #define KM_REGISTERS_H
 
@@ -64,9 +62,7 @@ extern const km_reg_t km_reg_table[KM_REG_COUNT];
  * firmware does not link it). */
 extern const char *const km_reg_names[KM_REG_COUNT];
 
-/* Register index + 1 by address, 0 where there is none (generated from
- * the .def; a repeated address would be a repeated initializer, which
- * -Woverride-init refuses). Every register address is below the span. */
+/* Register index + 1 by address, 0 where there is none. */
 #define KM_REG_ADDR_SPAN 128u
 extern const uint8_t km_reg_by_addr[KM_REG_ADDR_SPAN];
 

@@ -1,9 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The write range [lo, hi] of each register's fields under a product
- * config, from km_registers.def (both 0 for a register without one). One
- * definition for the firmware's validation (km_registers.c) and the
- * register description generator (tools/gen/regdoc_json.c); inline so the
- * firmware keeps it folded into its one caller. */
+/* The write range [lo, hi] of each register's fields under a product config, from km_registers.def. */
 #ifndef KM_REGISTERS_RANGE_H
 #define KM_REGISTERS_RANGE_H
 

@@ -1,12 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Dispatcher: one validated frame in, register changes, typed requests and
- * at most one answer out (docs/protocol.md §3 commands, §4 status, §5
- * registers). A frame passes the ID rules here, then the command table
- * runs it; ping, read, write and the sync write live here, 0x82/0x83 in
- * km_cmd_multi.c, 0x7F in km_ext.c, 0x78 in km_cmd_update.c; what a
- * register does is its hook's (km_hooks.h). Where the spec is open, the
- * choice is documented in docs/protocol-decisions.md and named here by its
- * heading. */
+/* Dispatcher (docs/protocol.md §3 commands, §4 status, §5 registers): ID rules, then the command table; ping,
+ * read, write and the sync write. */
 #include "km_servo.h"
 
 #include <string.h>
@@ -41,12 +35,7 @@ typedef struct {
     km_command_fn run;
 } prv_command_t;
 
-/* §3 and this firmware's own commands, found in one step: the table is
- * indexed by the command byte's bit 7 and low three bits, in which these
- * commands all differ (a new one that clashed would be a repeated
- * initializer, which -Woverride-init refuses at compile time); the entry
- * found must then name the command. 0x7E (factory test) and anything else
- * are not supported: bit 5. */
+/* §3 and this firmware's own commands, indexed by the command byte's bit 7 and low three bits. */
 #define PRV_SLOT(cmd) ((((unsigned)(cmd) >> 4) & 8u) | ((unsigned)(cmd)&7u))
 
 static const prv_command_t s_commands[16] = {
@@ -63,10 +52,7 @@ static const prv_command_t s_commands[16] = {
 
 /* ---- answer timing ------------------------------------------------------ */
 
-/* "Super-ID answer slots": servo i starts response_delay + i * slot after
- * the frame, slot = the longest answer this read can give on the wire at
- * the active baud plus a guard of 2 byte times, rounded up to 1 us; at
- * least the board's slot floor ("Answer slots on emulated buses"). */
+/* "Super-ID answer slots": servo i starts response_delay + i * slot after the frame. */
 static uint32_t prv_slot_us(const km_servo_t *s, uint16_t answer_bytes)
 {
     const uint32_t bits = (uint32_t)(answer_bytes + 2u) * 10u;

@@ -1,17 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The servo as the bus sees it (docs/protocol.md §3, §4, §5): a validated frame
- * in, register changes, typed requests to the rest of the firmware and at
- * most one answer out. Pure logic: no hardware, no heap. Decisions where
- * the spec is open are in docs/protocol-decisions.md; how the pieces fit,
- * docs/architecture.md:
- *   km_servo.c        the command table and the frame's way through it
- *                     (ID rules, bits 5/6), ping, read, write, sync write;
- *   km_regfile.[ch]   the register file and status bits;
- *   km_hook_*.c       one hook per register that is more than a stored
- *                     value (km_registers.def names them): all wire
- *                     decoding of actions happens there;
- *   km_cmd_multi.c    0x82 and 0x83; km_ext.[ch] 0x7F; km_cmd_update.c 0x78;
- *   km_params.c       the control registers in engineering units. */
+/* The servo as the bus sees it (docs/protocol.md §3, §4, §5): a validated frame in, register changes and
+ * typed requests, at most one answer out (docs/architecture.md "The data path"). */
 #ifndef KM_SERVO_H
 #define KM_SERVO_H
 
@@ -35,20 +24,11 @@ typedef struct {
     bool (*commit)(void *ctx, const uint8_t *addrs, const uint32_t *values, uint8_t n);
     /* 0x02 with the exact magic: restart now, no answer. */
     void (*restart)(void *ctx);
-    /* Motion and protection requests; `req` is valid during the call only.
-     * Returns false when control refuses it (a motion the variant cannot do,
-     * a protection latched): the dispatcher then sets status bit 6 and
-     * changes nothing. */
+    /* Motion and protection requests; false: control refuses (status bit 6, nothing changed). */
     bool (*request)(void *ctx, const km_request_t *req);
-    /* 0x78 firmware update, the application's side (docs/update.md §4):
-     * the frame's body in; `answer` (KM_UPDATE_ANSWER_MAX bytes) gets the
-     * answer's body, *answer_len its length (0: none). False: not served
-     * here (status bit 5). NULL: 0x78 is not supported at all. */
+    /* 0x78 firmware update, the application's side (docs/update.md §4); false: bit 5; NULL: unsupported. */
     bool (*update)(void *ctx, const uint8_t *body, uint8_t n, uint8_t *answer, uint8_t *answer_len);
-    /* 0x7F of an extension register the firmware keeps (the fault log,
-     * KM_EXT_FAULT_*): its value into `out` (KM_EXT_VALUE_MAX bytes), *n
-     * its length, always the same for an address. False: no such register
-     * (bit 5). NULL: none. */
+    /* 0x7F of an extension register the firmware keeps (the fault log); false: bit 5; NULL: none. */
     bool (*ext_read)(void *ctx, uint8_t addr, uint8_t *out, uint8_t *n);
     void *ctx;
 } km_servo_ops_t;
@@ -93,10 +73,7 @@ void km_servo_handle_view(km_servo_t *s, const km_frame_view_t *frame, km_reply_
  * answer reports it ("Status bits 5 and 6"). */
 void km_servo_note_checksum_error(km_servo_t *s);
 
-/* Control's live state, every tick: the live registers, status bits 7
- * and 0..3, 0x35's latch (until restart); 0x64 shows live->torque_switch
- * whenever control set it by itself (live->torque_forced: 5 while a
- * protection acts, §5.4, and what it returned to after). */
+/* Control's live state, every tick: the live registers, status bits 7 and 0..3, 0x35's latch, 0x64 (§5.4). */
 void km_servo_set_live(km_servo_t *s, const km_live_t *live);
 
 /* The control registers decoded into engineering units (km_params.h). */
@@ -123,10 +100,8 @@ void km_servo_set_reset_cause(km_servo_t *s, uint8_t cause);
  * the super-ID slots and extension 0x03 follow the baud in force. */
 void km_servo_set_active_baud(km_servo_t *s, uint32_t baud);
 
-/* docs/protocol-decisions.md "Answer slots on emulated buses": the super-ID
- * and 0x82 slots are at least `us` (an emulated board's km_app_set_bus_floors();
- * 0 on real boards: the slot rule alone). Capped at KM_SLOT_FLOOR_MAX_US, so the
- * last slot (250 x floor) still fits the 32-bit delay. */
+/* Slot floor of the super-ID and 0x82 answers, capped at KM_SLOT_FLOOR_MAX_US (docs/protocol-decisions.md
+ * "Answer slots on emulated buses"). */
 #define KM_SLOT_FLOOR_MAX_US 1000000u
 void km_servo_set_slot_floor_us(km_servo_t *s, uint32_t us);
 

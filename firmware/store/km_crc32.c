@@ -1,8 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* CRC-32 by nibbles: a 64-byte table instead of a 1 KiB one in the M0
- * image, and a quarter of the bitwise loop's steps. Records are short, but
- * mount checks every snapshot and delta at each boot, and the host's
- * power-cut runner checks millions of mounts. */
+/* CRC-32 by nibbles: a 64-byte table. */
 #include "km_crc32.h"
 
 static const uint32_t k_nibble[16] = {

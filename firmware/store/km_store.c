@@ -1,21 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Commit, reset and idle compaction of the user-data store.
- *
- * Why each step is safe at a power cut is argued in docs/store.md; in short:
- *  - the store programs only cells of a page this session erased (and
- *    blank-checked), each once: a cut ends the session, so no cell that a
- *    past session's cut may have left weak (reading erased now, programmed
- *    later; on the STM32G0 with its ECC partly written) is ever programmed;
- *  - so the first commit of every session compacts: it erases a page (the
- *    one mount chose), writes a snapshot of the new state there, reads it
- *    back, then programs the confirmation cell K after it and reads that
- *    back; only then is the commit acknowledged. Later commits of the
- *    session append deltas after K in that page;
- *  - a snapshot counts only once its commit cell (last, all zeros) reads
- *    back; a dense delta (8 bytes for one register whose value fits 16
- *    bits) once its CRC matches. Each record is read back before the next
- *    is started, so only a page's last delta can be torn: a cut mid-record
- *    leaves the previous state. */
+/* Commit, reset and idle compaction of the user-data store (why each step is safe at a power cut:
+ * docs/store.md). */
 #include <string.h>
 
 #include "km_store.h"
@@ -56,10 +41,7 @@ static bool prv_cell(const km_flash_t *f, uint32_t addr, const uint8_t *cell)
            f->read(f->ctx, addr, back, f->prog_size) == KM_FLASH_OK && memcmp(back, cell, f->prog_size) == 0;
 }
 
-/* Programs a record one cell at a time and reads it back. A snapshot ends
- * in a commit cell, programmed only once the body read back good (K after
- * it then proves the body solid); a dense delta is whole when its CRC
- * matches, so it is programmed in one pass and then read back. */
+/* Programs a record one cell at a time and reads it back (a snapshot's commit cell last). */
 static bool prv_write(km_store_t *s, uint32_t page, uint32_t offset, const uint8_t *rec, uint32_t size,
                       bool commit_cell)
 {
@@ -81,11 +63,7 @@ static bool prv_write(km_store_t *s, uint32_t page, uint32_t offset, const uint8
     return !commit_cell || prv_cell(f, base + body, &rec[body]);
 }
 
-/* Writes state as a snapshot of the next generation at the start of
- * target, erased first unless this session erased it and left it untouched,
- * then its confirmation cell K. On the session's first compaction every
- * page without a valid snapshot is erased too, so no page can hold a torn
- * snapshot of a generation as high as the new one. */
+/* Writes state as a snapshot of the next generation at the start of target, then its confirmation cell K. */
 static bool prv_compact(km_store_t *s, uint32_t target, const uint32_t *state)
 {
     const km_flash_t *f = s->flash;
@@ -132,10 +110,7 @@ static km_store_status_t prv_commit_state(km_store_t *s, const uint32_t *next)
     }
     bool ok;
     if (!s->own) {
-        /* First commit of the session (or after a failure): even when
-         * nothing changed, since what mount read may read otherwise at the
-         * next mount; an acknowledgement must be durable for the whole
-         * state. */
+        /* First commit of the session (or after a failure): always writes. */
         ok = prv_compact(s, s->target, next);
     } else if (changed == 0u) {
         return KM_STORE_OK;
@@ -202,10 +177,7 @@ km_store_status_t km_store_reset(km_store_t *s, const uint8_t *keep, uint32_t n_
 bool km_store_maintain(km_store_t *s)
 {
     if (!s->mounted || !s->own) {
-        /* Before the session's first commit nothing here is safe to erase
-         * (and a session that commits nothing touches no flash). After it,
-         * the session's page is confirmed and read back: every other page
-         * is history, and the next one of the ring may be erased early. */
+        /* Nothing to erase before the session's first commit. */
         return false;
     }
     const km_flash_t *f = s->flash;

@@ -1,18 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* User-data store: the persisted (P) registers in a power-loss-safe journal
- * over the hal flash contract. Knows nothing of the protocol: the firmware
- * hands it a schema (key = register address, default value).
- *
- * Guarantees (see docs/store.md for the format and the proof):
- *  - km_store_commit() acknowledges only after the record is read back;
- *    a multi-key commit is all-or-nothing, at any power cut;
- *  - after a cut, mount shows the last acknowledged state or the one being
- *    committed, never a mix, never older;
- *  - mount, and a session that commits nothing, do zero flash operations
- *    (km_store_maintain() stays idle until the first commit of the session);
- *  - the store programs only cells of a page this session erased, so no
- *    cell a past session's cut may have left weak is ever programmed.
- * Not thread-safe: call from the main loop only. */
+/* User-data store: the persisted (P) registers in a power-loss-safe journal over the hal flash contract; main
+ * loop only (guarantees: docs/store.md "Notes on the code"). */
 #ifndef KM_STORE_H
 #define KM_STORE_H
 
@@ -78,22 +66,13 @@ km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash, const km
 /* True if the mount result means product defaults are in force. */
 bool km_store_mount_is_defaults(km_store_mount_t m);
 
-/* Commits n key/value pairs, all or nothing. KM_STORE_OK once they are in
- * flash and read back. The session's first commit always writes (one erase
- * and a snapshot in a page this session erased: what a past session left
- * may read differently at the next mount); after it, unchanged values cost
- * no flash op. On any error the old values stay in force. Commit an ID or
- * baud change before applying it. */
+/* Commits n key/value pairs, all or nothing; KM_STORE_OK once in flash and read back. */
 km_store_status_t km_store_commit(km_store_t *s, const uint8_t *keys, const uint32_t *values, uint32_t n);
 
 /* User data reset: commits the default of every key not listed in keep. */
 km_store_status_t km_store_reset(km_store_t *s, const uint8_t *keep, uint32_t n_keep);
 
-/* Idle work: when the session's page is nearly full, erases the next page
- * and compacts into it ahead of time, so a commit rarely waits on an erase.
- * At most one erase or one record per call, nothing before the session's
- * first commit succeeded. Returns true if it did flash work (call again on
- * a later idle tick; a failing flash keeps it returning true). */
+/* Idle work: early erase and compaction, one flash step per call; true if it did flash work. */
 bool km_store_maintain(km_store_t *s);
 
 /* Idle work before the session's first commit, so that commit is one

@@ -40,11 +40,7 @@ static void prv_defaults(const km_store_schema_t *schema, uint32_t *values)
     }
 }
 
-/* Applies a record's entries whose keys the schema still has (apply false:
- * none, the values of another schema version mean something else). Keys
- * dropped from the schema are ignored. Dense deltas name a key by its index
- * in the page's snapshot (snap_keys, snap_count): the snapshot may predate
- * a change of the key list. */
+/* Applies a record's entries whose keys the schema still has (apply false: none). */
 static void prv_apply(const km_store_schema_t *schema, const km_rec_t *rec, uint32_t *values, bool apply,
                       const uint8_t *snap_keys, uint32_t snap_count)
 {
@@ -67,11 +63,7 @@ static void prv_apply(const km_store_schema_t *schema, const km_rec_t *rec, uint
     }
 }
 
-/* Reads a page once: the snapshot at offset 0, its confirmation cell K
- * right after it, and, under a confirmed snapshot, the deltas after K up to
- * the first one that is not valid. values becomes the page's state. Each
- * cell is read once: a weak cell may read differently at each read, so the
- * choice of page and its state must come from the same reads. */
+/* Reads a page once: its snapshot, its K and, under a confirmed snapshot, its valid deltas. */
 static void prv_scan(const km_store_t *s, uint32_t page, prv_page_t *pi, uint32_t *values)
 {
     const km_flash_t *f = s->flash;
@@ -100,10 +92,7 @@ static void prv_scan(const km_store_t *s, uint32_t page, prv_page_t *pi, uint32_
     const bool same = (rec.version == s->schema->version);
     prv_apply(s->schema, &rec, values, same, snap_keys, snap_count);
     uint32_t off = rec.size;
-    /* K is programmed only after the snapshot's commit cell was read back:
-     * any K that does not read erased proves the snapshot solid. Deltas
-     * are written only after K was read back, so none follow a K that
-     * reads erased. The geometry check leaves room for K. */
+    /* A K that does not read erased proves the snapshot solid. */
     pi->confirmed = !km_rec_cell_erased(f, base + off);
     if (!pi->confirmed) {
         return;
@@ -135,19 +124,7 @@ static bool prv_geometry_ok(const km_flash_t *f, const km_store_schema_t *schema
     return f->page_size >= 3u * km_rec_snapshot_size(schema->count, c);
 }
 
-/* The page the session's first commit erases and writes its snapshot into.
- * It must not be a page whose loss could leave a later mount without the
- * last acknowledged state (docs/store.md, "Why every cut is safe"):
- *  - the active page is confirmed (its K reads programmed, so its snapshot
- *    is solid and reads valid until it is erased): any other page, the next
- *    one of the ring;
- *  - the active page is not confirmed and no other page is valid: the next
- *    page (the active one may be the only solid copy, its K weak);
- *  - the active page is not confirmed and another page is valid: the
- *    active page may be a torn snapshot read valid by chance while the last
- *    solid state is in another page. With three pages or more, a page that
- *    is neither the active nor the highest confirmed one; with two, the
- *    active page itself (the residual case of docs/store.md). */
+/* The page the session's first commit erases and writes into (docs/store.md "Why every cut is safe"). */
 static uint8_t prv_target(uint32_t pages, uint8_t active, bool confirmed, uint32_t valid, uint8_t anchor)
 {
     /* pages >= 2 after the geometry check; said again for the analyzers,
@@ -221,10 +198,7 @@ km_store_mount_t km_store_mount(km_store_t *s, const km_flash_t *flash, const km
                 anchor_gen = pi.gen;
             }
         } else {
-            /* May hold a torn snapshot of any generation that a later read
-             * finds valid, even if it reads erased now (a cut erase leaves
-             * weak cells): erased before the session acknowledges anything,
-             * so no page can ever outrank the one it writes. */
+            /* May hold a torn snapshot: erased before the session acknowledges anything. */
             s->suspect |= 1u << p;
         }
         all_erased = all_erased && pi.erased;

@@ -1,9 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* km_store_peek (km_store_peek.h): the mount's page choice and replay
- * (km_store_mount.c prv_scan and the active-page rule), reads only, each
- * record read once. A weak cell may read differently at each read, for
- * the mount as here; what a valid record proves (docs/store.md) holds for
- * any read of it, so both still land on an acknowledged state. */
+/* km_store_peek (km_store_peek.h): the mount's page choice and replay, reads only, each record read once. */
 #include "km_store_peek.h"
 
 #include <string.h>

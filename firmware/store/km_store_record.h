@@ -58,11 +58,7 @@ uint32_t km_rec_delta_max_size(uint32_t count, uint32_t cell);
 uint32_t km_rec_encode(uint8_t *buf, const km_rec_t *rec, const km_store_schema_t *schema,
                        const uint32_t *values, uint32_t keys_mask, uint32_t cell);
 
-/* Reads the record at byte offset of page into buf, one cell at a time and
- * never past its end (a cell after it may be torn with an ECC error).
- * Returns true and fills rec if it is whole: known type, inside the page,
- * no ECC error, CRC good, commit cell zero (snapshot, legacy delta), dense
- * entries in increasing index order. */
+/* Reads the record at byte offset of page, one cell at a time; true and rec filled if it is whole. */
 bool km_rec_read(const km_flash_t *f, uint32_t page, uint32_t offset, uint8_t *buf, km_rec_t *rec);
 
 /* Entry i of a valid record, walked in order: *at starts at 0 and is

@@ -18,15 +18,11 @@ typedef struct {
     uint8_t hw_found; /* hardware faults found (KM_HW_* bits) */
 } km_protect_events_t;
 
-/* Live state from control, copied in every control tick. The byte fields
- * first: on the M0 a byte store or load reaches only 32 bytes into a
- * struct, and control writes all of them every tick. */
+/* Live state from control, copied in every control tick; byte fields first. */
 typedef struct {
     bool running;               /* status bit 7 */
     bool protecting;            /* a protection acts on the output (torque_switch is PROTECTED) */
-    bool torque_forced;         /* control set the torque switch by itself at this tick (a protection
-                                 * acts or just ended, a hardware fault stopped the output): 0x64
-                                 * shows torque_switch; otherwise 0x64 keeps what the master wrote */
+    bool torque_forced;         /* control set the torque switch itself this tick: 0x64 shows torque_switch */
     uint8_t torque_switch;      /* km_torque_t as control runs it */
     uint8_t protections;        /* active protections, 0x36 bits / status bits 0..3 */
     uint8_t hw_faults;          /* 0x35 bits found by the self-test (latched) */

@@ -12,10 +12,7 @@ typedef enum {
     KM_VARIANT_ENCODER = 1,       /* multi-turn, speed control, zeroing */
 } km_variant_t;
 
-/* Position-loop gains and profile limits (control/, docs/tuning.md): the
- * product's, since they depend on its motor, gearbox and supply. Tuned on
- * the simulated plant (sim/plant/km_plant_default.c); a servo maker tunes
- * their own as docs/tuning.md says. */
+/* Position-loop gains and profile limits, the product's (control/, docs/tuning.md). */
 typedef struct {
     uint16_t kp_q8;        /* PWM per 0.1 deg of position error, Q8 */
     uint16_t kd_q8;        /* PWM per deg/s of speed error (profile - measured), Q8 */
@@ -57,12 +54,8 @@ typedef struct {
     uint16_t speed_max_dps;  /* upper bound of 0x15, 0x5D */
     int16_t travel_min;      /* lowest angle limit / target, 0.1 deg */
     int16_t travel_max;      /* highest angle limit / target, 0.1 deg */
-    /* Potentiometer products: the position readings the mechanics can give
-     * (0.1 deg, the sensor's frame, before zero offsets): the end stops and
-     * a tolerance. The pot's electrical range must reach beyond them, so a
-     * sound pot never reads a rail and a shaft resting on a stop reads
-     * inside; a reading outside is an open or shorted wiper (0x35 bit 5,
-     * control/km_selftest.h). Unused on encoder products. */
+    /* Potentiometer products: the readings the mechanics can give (0.1 deg, sensor frame); unused on
+     * encoders. */
     int16_t pos_read_min;
     int16_t pos_read_max;
     int16_t zero_offset2_max;        /* |0x17| bound, 0.1 deg */

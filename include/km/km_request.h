@@ -1,10 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* What the dispatcher asks of control, decoded: every wire byte of a
- * motion, torque or protection register is turned into these types by the
- * register's hook in protocol/, so control never sees a control byte, a
- * nibble or a register value. Control answers accepted or refused; the
- * dispatcher sets status bit 6 on a refusal (docs/protocol.md §4, §6).
- * Shared by protocol/ and control/; a leaf header. */
+/* What the dispatcher asks of control, decoded by the registers' hooks (docs/protocol.md §4, §6); a leaf
+ * header. */
 #ifndef KM_REQUEST_H
 #define KM_REQUEST_H
 
@@ -85,10 +81,8 @@ typedef struct {
     } u;
 } km_request_t;
 
-/* A request for less motion: one that only stops the shaft or lets it go
- * (torque FREE or BRAKE; a motor stop, or a run with nothing to run: a PWM
- * or speed of 0, or a bound of 0). Never refused for a protection acting
- * or a hardware fault latched (docs/protocol-decisions.md "Protections"). */
+/* A request for less motion: never refused for a protection or a fault (docs/protocol-decisions.md
+ * "Protections"). */
 static inline bool km_request_less_motion(const km_request_t *r)
 {
     switch (r->kind) {
