@@ -18,7 +18,7 @@ set(KM_BOARD_LINK_OPTIONS -mcpu=cortex-m0plus -mthumb --specs=nano.specs --specs
 set(KM_BOARD_HOST_SOURCES sensor_convert.c board_config.c usart_brr.c reset_cause.c)
 # Link-time optimisation (docs/footprint.md "LTO"): the images shrink by
 # inlining and dropping across objects. The link repeats the section and
-# section flags for the link-time partitions; tools/image-check then takes
+# section flags for the link-time partitions; tools/check/image-check then takes
 # frames from the disassembly and tells functions apart by the source file
 # the debug line table (-g: no code change) gives for them.
 set(KM_G031_LTO ON CACHE BOOL "stm32g031: build and link with -flto")
@@ -29,7 +29,7 @@ endif()
 # Flash size of the part (docs/footprint.md "STM32G031F6"): 64 (G031x8,
 # bootloader region 8 KiB) or 32 (G031x6 such as the 20-pin F6, bootloader
 # region 4 KiB). The linker scripts and boot/boot_layout.h take the layout
-# from it; tools/image-check prints the 32 KiB budget after every link and,
+# from it; tools/check/image-check prints the 32 KiB budget after every link and,
 # in a 32 KiB build, fails an image over it.
 set(KM_G031_FLASH_KB 64 CACHE STRING "stm32g031: flash of the part in KiB (64 or 32)")
 set_property(CACHE KM_G031_FLASH_KB PROPERTY STRINGS 64 32)
