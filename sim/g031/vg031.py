@@ -175,6 +175,7 @@ class Machine:
         self.reset_request = None
         self.slice_ns = 1000        # interrupts are taken between slices
         self.wfi_sites = set()
+        self.unmask_sites = set()   # the instruction after each CPSIE i / MSR PRIMASK
         self.watches = {addr: [] for addr in watch}   # address: [(time, instructions before the slice)]
         for path in elves:
             self.find_wfi(path)
@@ -231,6 +232,8 @@ class Machine:
             uc.hook_add(UC_HOOK_CODE, self._watch_hook, addr, addr, addr)
         for site in self.wfi_sites:
             uc.hook_add(UC_HOOK_CODE, self._wfi_hook, None, site, site)
+        for site in self.unmask_sites:
+            uc.hook_add(UC_HOOK_CODE, self._unmask_hook, None, site, site)
         self.uc = uc
 
     def find_wfi(self, elf_path):
@@ -243,6 +246,11 @@ class Machine:
                     for i in range(0, len(data) - 1, 2):
                         if data[i] == 0x30 and data[i + 1] == 0xBF:
                             self.wfi_sites.add(base + i)
+                        elif data[i] == 0x62 and data[i + 1] == 0xB6:          # cpsie i
+                            self.unmask_sites.add(base + i + 2)
+                        elif (data[i + 1] == 0xF3 and data[i] & 0xF0 == 0x80 and i + 3 < len(data)
+                              and data[i + 2] == 0x10 and data[i + 3] == 0x88):  # msr primask, rN
+                            self.unmask_sites.add(base + i + 4)
 
     def mem_write(self, addr, data):
         """A bus master (DMA) writes memory."""
@@ -302,6 +310,14 @@ class Machine:
 
     def _wfi_hook(self, uc, addr, size, _):
         self.wfi_at = addr
+
+    def _unmask_hook(self, uc, addr, size, _):
+        """Right after PRIMASK may have been cleared: a pending interrupt is
+        taken before the next instruction (ARMv6-M B1.5.3), so the slice ends
+        here and the next one starts in the handler (a lock right after an
+        unlock would otherwise hide it until the next slice boundary)."""
+        if not uc.reg_read(A.UC_ARM_REG_PRIMASK) & 1 and (self.scs.pending & self.scs.enabled or self.scs.pend_sys):
+            uc.emu_stop()
 
     # ---- reset and exceptions -------------------------------------------------
 
