@@ -543,3 +543,23 @@ bool km_parser_take_checksum_error(km_parser_t *p, uint8_t id)
     memset(p->bad_ids, 0, sizeof p->bad_ids);
     return set;
 }
+
+void km_rx_track_sync(km_rx_track_t *t, const km_parser_t *p)
+{
+    if (p->fill == 0u) {
+        t->state = KM_TRACK_HUNT;
+    } else if (p->pending || p->stale != 0u) {
+        t->state = KM_TRACK_EVERY;
+    } else if (p->need > p->fill) {
+        t->state = KM_TRACK_COUNT;
+        t->left = (uint16_t)(p->need - p->fill);
+    } else if (p->fill == 1u) {
+        t->state = KM_TRACK_F9; /* a settled window starts with a viable header */
+    } else if (p->fill == 2u) {
+        t->state = prv_at(p, 1) == KM_HDR1_COMMAND ? KM_TRACK_COMMAND : KM_TRACK_RESPONSE;
+    } else if (p->fill == 3u) {
+        t->state = KM_TRACK_ID;
+    } else {
+        t->state = KM_TRACK_EVERY;
+    }
+}

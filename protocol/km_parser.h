@@ -70,6 +70,102 @@ unsigned km_parser_poll(km_parser_t *p, uint32_t now, km_frame_t *out);
 /* km_parser_poll() handing the frame out as a view, like km_parser_feed_bytes. */
 unsigned km_parser_poll_view(km_parser_t *p, uint32_t now, km_parser_out_t *out);
 
+/* Frame-end tracker for the receive interrupt (docs/benchmarks.md "Per
+ * byte"): follows the parser's framing a byte at a time (F9, FF|F5, ID,
+ * length, then `length` more bytes) so that the main loop runs the parser
+ * only when a frame may have ended, not on every byte. It never misses a
+ * frame end the parser would find: where the parser's state leaves the
+ * simple framing (a bad length, a gap inside a frame, a lost byte, bytes
+ * left after a failed frame) it asks for the main loop on every byte until
+ * km_rx_track_sync() re-aligns it with the parser. */
+enum {
+    KM_TRACK_HUNT = 0u,     /* waiting for an F9 */
+    KM_TRACK_F9 = 1u,       /* F9 seen */
+    KM_TRACK_COMMAND = 2u,  /* F9 FF seen */
+    KM_TRACK_RESPONSE = 3u, /* F9 F5 seen */
+    KM_TRACK_ID = 4u,       /* the ID seen: the length comes next */
+    KM_TRACK_COUNT = 5u,    /* counting `left` bytes to the frame's end */
+    KM_TRACK_EVERY = 6u,    /* out of step with the parser: wake on every byte */
+};
+
+typedef struct {
+    uint32_t last_tick; /* tick of the newest byte */
+    uint32_t gap_ticks; /* the parser's inter-byte gap */
+    uint16_t left;      /* KM_TRACK_COUNT: bytes to the frame's end */
+    uint8_t state;      /* KM_TRACK_* */
+} km_rx_track_t;
+
+/* Re-aligns the tracker with the parser once every received byte has been
+ * fed to it (the receive interrupt masked). */
+void km_rx_track_sync(km_rx_track_t *t, const km_parser_t *p);
+
+/* km_rx_track_byte() for every state but counting (the header, a lost
+ * byte, a gap): `since` is the time since the previous byte. Inline too:
+ * the interrupt's code must stay where the board puts it (in RAM on the
+ * stm32g031, so that a flash erase does not stall it). */
+static inline bool km_rx_track_other(km_rx_track_t *t, uint8_t byte, uint32_t since, bool lost)
+{
+    unsigned state = t->state;
+    if (state == KM_TRACK_HUNT && byte != KM_HDR0) {
+        return lost; /* idle bus: the parser keeps nothing but an F9 */
+    }
+    if (lost || (state != KM_TRACK_HUNT && since > t->gap_ticks) || state == KM_TRACK_EVERY) {
+        t->state = KM_TRACK_EVERY; /* a cut: the parser may rescan */
+        return true;
+    }
+    switch (state) {
+    case KM_TRACK_HUNT:
+        state = KM_TRACK_F9;
+        break;
+    case KM_TRACK_F9: /* the parser drops the F9 and judges this byte alone */
+        state = byte == KM_HDR1_COMMAND    ? KM_TRACK_COMMAND
+                : byte == KM_HDR1_RESPONSE ? KM_TRACK_RESPONSE
+                : byte == KM_HDR0          ? KM_TRACK_F9
+                                           : KM_TRACK_HUNT;
+        break;
+    case KM_TRACK_COMMAND:
+    case KM_TRACK_RESPONSE:
+        /* A bad ID is never F9 (249 is a valid ID of both kinds), so the
+         * parser's rescan of FF|F5 and the ID finds nothing. */
+        state = (state == KM_TRACK_COMMAND ? km_id_is_addressable(byte) != 0 : byte <= KM_ID_MAX)
+                    ? KM_TRACK_ID
+                    : KM_TRACK_HUNT;
+        break;
+    default: /* KM_TRACK_ID: the length */
+        if (byte < KM_LENGTH_MIN || byte > KM_LENGTH_MAX) {
+            t->state = KM_TRACK_EVERY; /* the rescan may find an F9 in the ID */
+            return true;
+        }
+        t->left = byte;
+        state = KM_TRACK_COUNT;
+        break;
+    }
+    t->state = (uint8_t)state;
+    return false;
+}
+
+/* The parser's framing rule for one received byte; true when the parser
+ * must look: a frame may be complete, 64 bytes of a long frame are waiting
+ * (the queue holds 128), or the tracker lost step. Inline: it runs in the
+ * receive interrupt, and a byte inside a frame takes the first branch. */
+static inline bool km_rx_track_byte(km_rx_track_t *t, uint8_t byte, uint32_t tick, bool lost)
+{
+    const uint32_t since = tick - t->last_tick;
+    t->last_tick = tick;
+    if (t->state == KM_TRACK_COUNT && since <= t->gap_ticks && !lost) {
+        const uint32_t left = (uint32_t)t->left - 1u;
+        t->left = (uint16_t)left;
+        if ((left & 63u) != 0u) {
+            return false;
+        }
+        if (left == 0u) {
+            t->state = KM_TRACK_HUNT;
+        }
+        return true;
+    }
+    return km_rx_track_other(t, byte, since, lost);
+}
+
 /* The caller (UART driver) lost bytes: the partial frame is dropped. */
 void km_parser_overrun(km_parser_t *p);
 

@@ -44,6 +44,14 @@
 #define KM_APP_CONFIRM_US 1000000u
 
 static km_rx_queue_t s_rxq;
+/* Where the RX interrupt thinks the frame ends (docs/benchmarks.md "Per
+ * byte"): owned by the interrupt, re-aligned by the main loop with the
+ * interrupt masked before it sleeps. */
+static km_rx_track_t s_rx_track;
+/* Set by the RX interrupt when the main loop must parse (a frame may be
+ * complete, half the queue holds one frame's bytes); cleared by the main loop before it
+ * looks. */
+static volatile bool s_wake;
 static km_parser_t s_parser;
 static km_parser_out_t s_out; /* the frame the parser hands out: a view */
 static km_servo_t s_servo;
@@ -91,6 +99,9 @@ static void ISR_rx_byte(void *ctx, uint8_t byte, uint32_t tick, bool lost)
 {
     (void)ctx;
     km_rx_queue_push(&s_rxq, byte, tick, lost);
+    if (km_rx_track_byte(&s_rx_track, byte, tick, lost)) {
+        s_wake = true;
+    }
 }
 
 static void ISR_answer_due(void *ctx)
@@ -110,13 +121,22 @@ static void ISR_answer_due(void *ctx)
 }
 
 /* Ticks per microsecond, fixed at init: the hal tick is a whole number of
- * MHz, so the per-tick conversions below are one 32-bit multiply or divide
- * (a 64-bit divide is a libgcc call on Cortex-M0, and this runs every tick). */
+ * MHz, so microseconds to ticks is one 32-bit multiply, and ticks to
+ * microseconds a shift when the tick is a power of two MHz (every board
+ * here: on the M0 a 32-bit divide is a libgcc call, and the control tick
+ * needs one each tick), a divide otherwise. */
 static uint32_t s_ticks_per_us = 1u;
+static uint32_t s_ticks_us_shift; /* log2(s_ticks_per_us), or 32: not a power of two */
 
 static uint32_t prv_us_to_ticks(uint32_t us)
 {
     return us * s_ticks_per_us;
+}
+
+/* Ticks to whole microseconds, without a division on the usual boards. */
+static uint32_t prv_ticks_to_us(uint32_t ticks)
+{
+    return s_ticks_us_shift < 32u ? ticks >> s_ticks_us_shift : ticks / s_ticks_per_us;
 }
 
 /* Hands s_reply to the TX path; false if the UART is still sending the
@@ -210,6 +230,7 @@ static void prv_drain_rx(void)
 {
     uint32_t budget = KM_APP_RX_BUDGET;
     km_rx_run_t run;
+    s_wake = false; /* before looking: a later byte's wake-up is kept */
     while (budget > 0u && !prv_rx_blocked() && km_rx_queue_peek(&s_rxq, &run)) {
         if (run.lost) {
             km_parser_overrun(&s_parser);
@@ -273,7 +294,7 @@ static void prv_control_tick(uint32_t now)
     const uint32_t dt_ticks = now - s_last_control_tick;
     s_last_control_tick = now;
     km_hal_sensors_read(&sensors);
-    km_control_step(&s_control, &sensors, prv_params(), dt_ticks / s_ticks_per_us, &live, &bridge);
+    km_control_step(&s_control, &sensors, prv_params(), prv_ticks_to_us(dt_ticks), &live, &bridge);
     km_servo_set_live(&s_servo, &live);
     km_fault_log_record(&s_fault_log, &live);
     prv_apply_bridge(&bridge);
@@ -451,6 +472,12 @@ void km_app_init(void)
     km_hal_motor_init();
     km_hal_sensors_init();
     s_ticks_per_us = km_hal_time_tick_hz() / 1000000u;
+    s_ticks_us_shift = 32u;
+    for (uint32_t shift = 0u; shift < 32u; shift++) {
+        if ((1u << shift) == s_ticks_per_us) {
+            s_ticks_us_shift = shift;
+        }
+    }
 
     const km_product_t *product = km_board_product();
     uint32_t persisted[KM_USERDATA_MAX];
@@ -474,6 +501,7 @@ void km_app_init(void)
      * emulated board raises it with km_app_set_bus_floors()). The slot
      * floor is 0, the real rule: km_servo_init() cleared it. */
     km_parser_init(&s_parser, prv_us_to_ticks(km_parser_default_gap_us(baud)));
+    s_rx_track.gap_ticks = s_parser.gap_ticks;
 
     s_last_control_tick = km_hal_time_now();
     s_tick_period = prv_us_to_ticks(KM_APP_TICK_US);
@@ -491,6 +519,31 @@ void km_app_set_bus_floors(uint32_t gap_floor_us, uint32_t slot_floor_us)
         gap_us = gap_floor_us;
     }
     km_parser_set_gap(&s_parser, prv_us_to_ticks(gap_us));
+    s_rx_track.gap_ticks = s_parser.gap_ticks;
+}
+
+/* Sleeps, under the caller's lock, until something needs a pass of the
+ * main loop: the control tick, a frame that may be complete, 64 bytes of a
+ * long frame waiting, an answer started. A byte inside a frame wakes the core for its
+ * interrupt alone (docs/benchmarks.md "Per byte"). With an answer waiting
+ * for TX or a restart pending every interrupt ends the sleep, as before. */
+static void prv_sleep(uint32_t irq)
+{
+    const bool blocked = prv_rx_blocked();
+    if (!blocked) {
+        km_rx_track_sync(&s_rx_track, &s_parser); /* the queue is empty: every byte is parsed */
+    }
+    for (;;) {
+        km_hal_idle();
+        if (blocked) {
+            return;
+        }
+        km_hal_irq_restore(irq); /* the interrupt that woke the core runs */
+        (void)km_hal_irq_lock(); /* the caller's state again: it restores irq */
+        if (s_wake || s_answer_started || (int32_t)(km_hal_time_now() - s_next_tick) >= 0) {
+            return;
+        }
+    }
 }
 
 /* noinline: one pass of the main loop stays a function under LTO, the
@@ -519,7 +572,7 @@ __attribute__((noinline)) void km_app_poll(void)
         const bool rx_work = !prv_rx_blocked() && !km_rx_queue_empty(&s_rxq);
         const bool tx_work = s_reply_waiting && !km_hal_uart_tx_busy();
         if (!rx_work && !tx_work && !prv_restart_ready()) {
-            km_hal_idle();
+            prv_sleep(irq);
         }
         km_hal_irq_restore(irq);
     }

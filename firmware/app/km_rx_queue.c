@@ -13,7 +13,7 @@ void km_rx_queue_init(km_rx_queue_t *q)
     q->pending_loss = false;
 }
 
-void km_rx_queue_push(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost)
+void km_rx_queue_push_marked(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost)
 {
     const unsigned head = atomic_load_explicit(&q->head, memory_order_relaxed);
     const unsigned tail = atomic_load_explicit(&q->tail, memory_order_acquire);

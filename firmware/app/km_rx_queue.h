@@ -56,9 +56,28 @@ typedef struct {
 
 void km_rx_queue_init(km_rx_queue_t *q);
 
+/* Interrupt context, the rare cases of km_rx_queue_push: a full queue, a
+ * byte after a loss. */
+void km_rx_queue_push_marked(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost);
+
 /* Interrupt context. A full queue drops the byte and marks the next one
- * stored as following a loss, so the parser drops the broken frame. */
-void km_rx_queue_push(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost);
+ * stored as following a loss, so the parser drops the broken frame.
+ * Inline: the receive interrupt pays it on every byte. */
+static inline void km_rx_queue_push(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost)
+{
+    const unsigned head = atomic_load_explicit(&q->head, memory_order_relaxed);
+    const unsigned tail = atomic_load_explicit(&q->tail, memory_order_acquire);
+    if (head - tail >= KM_RX_QUEUE_SIZE || lost || q->pending_loss) {
+        km_rx_queue_push_marked(q, byte, tick, lost);
+        return;
+    }
+    const unsigned slot = head & (KM_RX_QUEUE_SIZE - 1u);
+    q->byte[slot] = byte;
+    q->tick[slot] = tick;
+    q->flags[slot] = 0u;
+    /* Release: the entry is complete before the consumer can see it. */
+    atomic_store_explicit(&q->head, head + 1u, memory_order_release);
+}
 
 /* Main loop: true when nothing is waiting. */
 bool km_rx_queue_empty(km_rx_queue_t *q);

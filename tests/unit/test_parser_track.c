@@ -1,0 +1,244 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* The receive interrupt's frame-end tracker (km_rx_track_*, km_parser.h)
+ * against the parser it stands in for (docs/protocol.md §2 frames, §7 gap;
+ * docs/benchmarks.md "Per byte").
+ *
+ * The firmware runs the parser only when the tracker asks (or on a control
+ * tick), then re-aligns the tracker with the parser. Modelled here: a
+ * reference parser fed every byte at once; a second parser fed the queued
+ * bytes only when the tracker asks or a random "tick" comes, the tracker
+ * re-aligned after each drain. Checked on seeded streams of good and
+ * corrupted frames, other servos' responses, truncated frames, bad headers,
+ * noise, gaps and lost bytes:
+ *  - no frame late: on every byte on which the reference hands a frame out
+ *    the tracker asked, so the firmware's parser hands it out on that byte;
+ *  - both parsers hand out the same frames;
+ *  - no pass for nothing: on a stream of whole frames with no gap, the
+ *    tracker asks on each frame's last byte and otherwise only every 64
+ *    bytes of a long frame. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include "parser_rig.h"
+
+#define GAP 8u
+#define STREAM 100000u
+
+static uint32_t s_rng;
+
+static uint32_t rnd(void) /* xorshift32 */
+{
+    s_rng ^= s_rng << 13;
+    s_rng ^= s_rng >> 17;
+    s_rng ^= s_rng << 5;
+    return s_rng;
+}
+
+static uint8_t s_bytes[STREAM + 512u];
+static uint32_t s_ticks[STREAM + 512u];
+static uint8_t s_lost[STREAM + 512u];
+static uint8_t s_last[STREAM + 512u]; /* 1: the last byte of a whole frame */
+static size_t s_len;
+
+static void put(uint8_t b)
+{
+    s_bytes[s_len] = b;
+    s_last[s_len] = 0u;
+    s_len++;
+}
+
+/* A frame (command FF or response F5) with a random body; broken on request. */
+static void put_frame(uint8_t hdr1, uint8_t id, size_t body_len, bool corrupt, bool truncate)
+{
+    uint8_t f[KM_FRAME_MAX];
+    uint8_t body[KM_BODY_MAX];
+    for (size_t i = 0; i < body_len; i++) {
+        body[i] = (rnd() % 16u == 0u) ? (uint8_t)((i & 1u) ? 0xFFu : 0xF9u) : (uint8_t)rnd();
+    }
+    size_t n = rig_command(f, id, (uint8_t)rnd(), body, body_len);
+    f[1] = hdr1;
+    if (corrupt) {
+        f[n - 1u] = (uint8_t)(f[n - 1u] ^ (1u + rnd() % 255u));
+    }
+    if (truncate) {
+        n = 1u + rnd() % (n - 1u);
+    }
+    for (size_t i = 0; i < n; i++) {
+        put(f[i]);
+    }
+    s_last[s_len - 1u] = (uint8_t)(!corrupt && !truncate);
+}
+
+static uint8_t any_id(void)
+{
+    const uint32_t r = rnd() % 16u;
+    return r == 0u ? 0xFDu : r == 1u ? 0xFEu : r == 2u ? (uint8_t)rnd() : (uint8_t)(r - 3u);
+}
+
+/* A stream; `clean`: whole frames only, back to back, no gap, no loss. */
+static void make_stream(bool clean)
+{
+    s_len = 0;
+    while (s_len < STREAM) {
+        const uint32_t kind = clean ? rnd() % 4u : rnd() % 10u;
+        const size_t body_len = (rnd() % 8u == 0u) ? rnd() % (KM_BODY_MAX + 1u) : rnd() % 12u;
+        if (kind <= 2u) {
+            put_frame(0xFF, clean ? (uint8_t)(rnd() % 251u) : any_id(), body_len, false, false);
+        } else if (kind == 3u) {
+            put_frame(0xF5, (uint8_t)(rnd() % 12u), body_len, false, false);
+        } else if (kind <= 5u) {
+            put_frame(kind == 4u ? 0xFFu : 0xF5u, any_id(), body_len, true, false);
+        } else if (kind == 6u) {
+            put_frame(rnd() % 2u ? 0xFFu : 0xF5u, any_id(), body_len, false, true);
+        } else if (kind == 7u) { /* a bad length or ID after a real header */
+            put(0xF9);
+            put(rnd() % 2u ? 0xFFu : 0xF5u);
+            put(rnd() % 2u ? (uint8_t)(251u + rnd() % 5u) : 1u);
+            put((uint8_t)(rnd() % 2u ? rnd() % 2u : 253u + rnd() % 3u));
+        } else { /* noise, F9 and F9 FF in it */
+            for (uint32_t i = 1u + rnd() % 6u; i > 0u; i--) {
+                const uint32_t r = rnd() % 8u;
+                put(r == 0u ? 0xF9u : r == 1u ? 0xFFu : (uint8_t)rnd());
+            }
+        }
+    }
+    uint32_t t = rnd(); /* anywhere, so the 32-bit wrap is crossed at times */
+    for (size_t i = 0; i < s_len; i++) {
+        const uint32_t r = rnd() % 64u;
+        t += clean ? 1u : r == 0u ? GAP + 1u + rnd() % 20u : r == 1u ? GAP : r < 8u ? 0u : 1u;
+        s_ticks[i] = t;
+        s_lost[i] = !clean && rnd() % 997u == 0u;
+    }
+}
+
+/* Runs one stream through both; returns the tracker's wake-ups. */
+static size_t run_stream(uint32_t seed, bool clean, size_t *frames_out)
+{
+    static km_parser_t ref;
+    static km_parser_t fw;
+    km_rx_track_t track = {0};
+    s_rng = seed;
+    make_stream(clean);
+    km_parser_init(&ref, GAP);
+    km_parser_init(&fw, GAP);
+    track.gap_ticks = GAP;
+    track.last_tick = s_ticks[0];
+    size_t queued = 0; /* bytes received, not yet fed to fw */
+    size_t wakes = 0;
+    size_t frames_ref = 0;
+    size_t frames_fw = 0;
+    km_frame_t f_ref;
+    km_frame_t f_fw;
+    for (size_t i = 0; i < s_len; i++) {
+        if (s_lost[i]) {
+            km_parser_overrun(&ref);
+        }
+        const unsigned ev_ref = km_parser_feed(&ref, s_bytes[i], s_ticks[i], &f_ref);
+        const bool wake = km_rx_track_byte(&track, s_bytes[i], s_ticks[i], s_lost[i] != 0u);
+        wakes += wake;
+        if (clean && s_last[i]) {
+            assert_true(wake);
+        } else if (clean) { /* no pass for a byte inside a frame but every 64 of a long one */
+            assert_true(!wake || (track.state == KM_TRACK_COUNT && (track.left & 63u) == 0u));
+        }
+        if (ev_ref & KM_PARSE_FRAME) {
+            frames_ref++;
+            assert_true(wake); /* a frame the firmware would hand out late */
+        }
+        if (wake || rnd() % 50u == 0u) { /* a pass of the main loop */
+            for (size_t k = queued; k <= i; k++) {
+                if (s_lost[k]) {
+                    km_parser_overrun(&fw);
+                }
+                const unsigned ev = km_parser_feed(&fw, s_bytes[k], s_ticks[k], &f_fw);
+                if (ev & KM_PARSE_FRAME) {
+                    frames_fw++;
+                    assert_int_equal(k, i); /* only on the byte the reference did */
+                    assert_true(ev_ref & KM_PARSE_FRAME);
+                    assert_int_equal(f_fw.id, f_ref.id);
+                    assert_int_equal(f_fw.cmd, f_ref.cmd);
+                    assert_int_equal(f_fw.body_len, f_ref.body_len);
+                    assert_memory_equal(f_fw.body, f_ref.body, f_fw.body_len);
+                    assert_int_equal(f_fw.end_tick, f_ref.end_tick);
+                }
+            }
+            queued = i + 1u;
+            km_rx_track_sync(&track, &fw);
+        }
+    }
+    assert_int_equal(frames_fw, frames_ref);
+    *frames_out = frames_ref;
+    return wakes;
+}
+
+static void test_tracker_never_late_on_rough_streams(void **state)
+{
+    (void)state;
+    for (uint32_t seed = 1; seed <= 6; seed++) {
+        size_t frames = 0;
+        const size_t wakes = run_stream(0x9E3779B9u * seed, false, &frames);
+        assert_true(frames > 1000u);
+        assert_true(wakes < s_len / 2u); /* a rough stream still skips most bytes */
+    }
+}
+
+static void test_tracker_wakes_once_per_frame_on_clean_streams(void **state)
+{
+    (void)state;
+    for (uint32_t seed = 1; seed <= 3; seed++) {
+        size_t frames = 0;
+        const size_t wakes = run_stream(0x7F4A7C15u * seed, true, &frames);
+        assert_true(frames > 1000u);
+        assert_true(wakes >= frames); /* responses wake too: the parser skips them */
+    }
+}
+
+/* A byte that never completes a frame (a bad length) puts the tracker out
+ * of step: it asks on every byte until it is re-aligned (§2 lengths 2..252). */
+static void test_tracker_bad_length_asks_until_sync(void **state)
+{
+    (void)state;
+    km_parser_t p;
+    km_parser_init(&p, GAP);
+    km_rx_track_t t = {.gap_ticks = GAP};
+    const uint8_t bad[] = {0xF9, 0xFF, 0x01, 0x01};
+    for (size_t i = 0; i < 3u; i++) {
+        assert_false(km_rx_track_byte(&t, bad[i], 1u, false));
+    }
+    assert_true(km_rx_track_byte(&t, bad[3], 1u, false));
+    assert_true(km_rx_track_byte(&t, 0x00, 1u, false));
+    km_rx_track_sync(&t, &p); /* an empty parser: hunting again */
+    assert_false(km_rx_track_byte(&t, 0x00, 1u, false));
+}
+
+/* 64 bytes of a long frame wake the main loop (the queue holds 128), and a
+ * gap inside a frame hands the byte to the parser (§7). */
+static void test_tracker_long_frame_and_gap(void **state)
+{
+    (void)state;
+    km_rx_track_t t = {.gap_ticks = GAP};
+    const uint8_t head[] = {0xF9, 0xFF, 0xFE, 200};
+    for (size_t i = 0; i < 4u; i++) {
+        assert_false(km_rx_track_byte(&t, head[i], 1u, false));
+    }
+    unsigned woke = 0;
+    for (unsigned i = 0; i < 199u; i++) {
+        woke += km_rx_track_byte(&t, 0x00, 1u, false);
+    }
+    assert_int_equal(woke, 3); /* 192, 128 and 64 left */
+    assert_true(km_rx_track_byte(&t, 0x00, 1u + GAP + 1u, false));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_tracker_never_late_on_rough_streams),
+        cmocka_unit_test(test_tracker_wakes_once_per_frame_on_clean_streams),
+        cmocka_unit_test(test_tracker_bad_length_asks_until_sync),
+        cmocka_unit_test(test_tracker_long_frame_and_gap),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
