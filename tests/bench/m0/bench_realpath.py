@@ -1,0 +1,390 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
+"""The firmware's hot paths measured on the path the bytes really take, in
+ARMv6-M instructions and estimated Cortex-M0+ cycles (docs/benchmarks.md).
+
+Runs the shipped stm32g031 image (km-servo-stm32g031.elf, unmodified) on
+the virtual STM32G031 (sim/g031, unicorn) in virtual time: bytes reach the
+USART1 receiver at their real bit timing and go through the real receive
+interrupt, queue and main loop; the control tick runs with the board's
+ADC/DMA sensor read and TIM3 motor drive. During each measured window a
+code hook records every instruction executed; the window is cut into
+idle-to-idle segments at the image's WFI instructions:
+
+  per byte      a byte that does not end a frame, at 115200 baud: every
+                instruction from the WFI before its interrupt to the next
+                WFI (interrupt, and whatever main-loop work it causes);
+  last byte     from the WFI before a frame's last byte to the entry of
+                km_hal_timer_at (the answer timer armed), or to the next WFI
+                for a frame with no answer;
+  control tick  the segment that runs km_control_step (SysTick wake-up,
+                sensor read, step, live values, motor drive), with the
+                inclusive counts of the sensor read and the motor drive.
+
+Cycles: each instruction's Cortex-M0+ count (ARM DDI 0484C §3.3: loads and
+stores 2, taken branches 2, BL 3, PUSH/POP 1+N, POP {pc} 3+N, MSR/MRS/DMB
+3, MULS 1), plus the board's flash wait states at its clock (64 MHz: 2)
+for each taken branch into flash and each load from flash (the prefetch
+hides sequential fetches; the cache is not modelled, so this is an upper
+estimate), plus 15 cycles per interrupt entry and 13 per return (not
+instructions, done by the core). Method: docs/benchmarks.md.
+
+    bench_realpath.py BUILD_DIR [--base DIR] [--json OUT]
+
+BUILD_DIR holds km-servo-stm32g031.elf (the stm32g031 preset's
+build/stm32g031/boards/stm32g031). Prints a table; --json writes the figures
+for tools that generate docs. Fails only on a missing measurement or an
+answer the image did not give."""
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.normpath(os.path.join(HERE, "..", "..", ".."))
+sys.path.insert(0, os.path.join(ROOT, "sim", "g031"))
+import g031_deps  # noqa: E402
+g031_deps.require()
+import vg031  # noqa: E402
+from unicorn import UC_HOOK_CODE  # noqa: E402
+
+MS = 1_000_000
+BAUD = 115200
+FLASH_LO, FLASH_HI = 0x08000000, 0x08010000
+FLASH_WS = 2          # 64 MHz: FLASH_ACR.LATENCY = 2 (boards/stm32g031/system.c)
+IRQ_ENTRY, IRQ_EXIT = 15, 13
+OWN_ID = 0            # a fresh servo (docs/protocol.md §1)
+TARGET_BYTE, TARGET_LAST, TARGET_TICK = 60, 1500, 2000
+
+_LIT = re.compile(r"\[pc")
+
+
+def frame(servo_id, cmd, body=b"", response=False):
+    """A frame with its checksum (docs/protocol.md §2)."""
+    inner = bytes([servo_id, 2 + len(body), cmd]) + body
+    return (b"\xf9\xf5" if response else b"\xf9\xff") + inner + bytes([~sum(inner) & 0xFF])
+
+
+class Disasm:
+    """Each instruction of the image: its mnemonic and cycle class."""
+
+    def __init__(self, elf):
+        out = subprocess.run(["arm-none-eabi-objdump", "-d", "--no-show-raw-insn", elf],
+                             check=True, capture_output=True, text=True).stdout
+        self.op = {}
+        for line in out.splitlines():
+            m = re.match(r"^\s*([0-9a-f]+):\s+(\S+)\s*(.*)$", line)
+            if m and not m.group(2).startswith("."):
+                self.op[int(m.group(1), 16)] = (m.group(2).split(".")[0], m.group(3))
+        self.sym = {}
+        out = subprocess.run(["arm-none-eabi-nm", "--defined-only", elf], check=True,
+                             capture_output=True, text=True).stdout
+        for line in out.splitlines():
+            f = line.split()
+            if len(f) == 3 and f[1] in "tTwW":
+                self.sym.setdefault(f[2], int(f[0], 16) & ~1)
+
+    def cycles(self, addr, nxt):
+        """Estimated M0+ cycles of the instruction at addr, the next one
+        executed being at nxt."""
+        op, args = self.op.get(addr, ("?", ""))
+        in_flash = FLASH_LO <= addr < FLASH_HI
+        jumped = nxt is not None and nxt != addr + (4 if op in ("bl", "mrs", "msr", "dmb", "dsb", "isb") else 2)
+        refill = FLASH_WS if (jumped and nxt is not None and FLASH_LO <= nxt < FLASH_HI) else 0
+        if op in ("push", "pop", "ldmia", "stmia", "ldm", "stm"):
+            n = len([r for r in args[args.find("{") + 1:args.find("}")].split(",") if r.strip()])
+            if op == "pop" and "pc" in args:
+                return 3 + n + refill
+            return 1 + n
+        if op.startswith(("ldr", "str")):
+            lit = FLASH_WS if (op.startswith("ldr") and _LIT.search(args) and in_flash) else 0
+            if op.startswith("ldr") and "pc" in args.split(",")[0]:
+                return 2 + lit + refill
+            return 2 + lit
+        if op == "bl":
+            return 3 + refill
+        if op in ("bx", "blx"):
+            return 2 + refill
+        if op == "b" or re.fullmatch(r"b(eq|ne|cs|cc|hs|lo|mi|pl|vs|vc|hi|ls|ge|lt|gt|le)", op):
+            return (2 + refill) if jumped else 1
+        if op in ("mrs", "msr", "dmb", "dsb", "isb"):
+            return 3
+        if op == "wfi":
+            return 2
+        return 1
+
+
+class Bench:
+    """The machine, its recorder and the image's landmarks."""
+
+    def __init__(self, elf):
+        self.d = Disasm(elf)
+        self.m = vg031.Machine(vg031.flash_from_images(elf=elf), elves=[elf])
+        self.trace = []         # executed PCs, while recording
+        self.entries = []       # trace index of each exception entry while recording
+        self.hook = None
+        self.wfi = self.m.wfi_sites
+        enter = self.m._enter
+
+        def counting_enter(exc, ret_pc):
+            if self.hook is not None:
+                self.entries.append(len(self.trace))
+            return enter(exc, ret_pc)
+        self.m._enter = counting_enter
+        self.poll = self.d.sym["km_app_poll"]
+        # libgcc's division entries (ARM EABI names and their aliases)
+        self.divs = {a for n, a in self.d.sym.items()
+                     if re.fullmatch(r"__(aeabi_u?i?l?div(mod)?|u?div[sd]i3|u?divmod[sd]i4|u?mod[sd]i3)", n)}
+
+    def record(self, on):
+        uc = self.m.uc
+        if on and self.hook is None:
+            self.trace, self.entries = [], []
+            tr = self.trace
+            self.hook = uc.hook_add(UC_HOOK_CODE, lambda _uc, a, _s, _u: tr.append(a))
+            uc.ctl_remove_cache(FLASH_LO, FLASH_HI)
+            uc.ctl_remove_cache(0x20000000, 0x20002000)
+        elif not on and self.hook is not None:
+            uc.hook_del(self.hook)
+            self.hook = None
+            uc.ctl_remove_cache(FLASH_LO, FLASH_HI)
+            uc.ctl_remove_cache(0x20000000, 0x20002000)
+
+    def boot(self):
+        seen = []
+        self.m.watches[self.poll] = seen
+        self.m.uc.hook_add(UC_HOOK_CODE, lambda *a: seen.append(1) if not seen else None, None,
+                           self.poll, self.poll)
+        if not self.m.run_until(self.m.now + 200 * MS, stop=lambda: bool(seen)):
+            sys.exit("bench_realpath: the image never reached km_app_poll")
+        self.m.run_until(self.m.now + 20 * MS)
+
+    def segments(self):
+        """(start, end) trace indices of each idle-to-idle segment: a WFI
+        ends one, the instruction after it starts the next."""
+        cuts = [i for i, a in enumerate(self.trace) if a in self.wfi]
+        out, start = [], 0
+        for c in cuts:
+            out.append((start, c + 1))
+            start = c + 1
+        return out
+
+    def cost(self, lo, hi):
+        """(instructions, estimated cycles) of trace[lo:hi] with its interrupt entries."""
+        tr = self.trace
+        cyc = sum(self.d.cycles(tr[i], tr[i + 1] if i + 1 < len(tr) else None) for i in range(lo, hi))
+        irqs = sum(1 for e in self.entries if lo <= e < hi)
+        return hi - lo, cyc + irqs * (IRQ_ENTRY + IRQ_EXIT)
+
+    def first(self, name, lo, hi):
+        a = self.d.sym.get(name)
+        for i in range(lo, hi):
+            if self.trace[i] == a:
+                return i
+        return None
+
+    def inclusive(self, name, lo, hi):
+        """Instructions and cycles from the entry of `name` to its return
+        (the instruction after its call site), inside trace[lo:hi]."""
+        i = self.first(name, lo, hi)
+        if i is None:
+            return None
+        ret = self.trace[i - 1] + 4  # after the bl that called it
+        for j in range(i, hi):
+            if self.trace[j] == ret:
+                return self.cost(i, j)
+        return None
+
+    def exchange(self, data, wait_ms):
+        """Sends data at BAUD, records until wait_ms after its last stop bit,
+        returns (answer bytes)."""
+        self.m.take_output()
+        self.record(True)
+        end = self.m.send(data, BAUD)
+        self.m.run_until(end + wait_ms * MS)
+        self.record(False)
+        return bytes(b for _t, b in self.m.take_output())
+
+
+def per_byte(b, rows, figs):
+    """Bytes that do not end a frame, one at a time at 115200, and the
+    frames' last bytes to the answer armed."""
+    mix = [frame(OWN_ID, 0x01), frame(OWN_ID, 0x02, b"\x13"), frame(5, 0x02, b"\x13"),
+           frame(5, 0x02, bytes([0x13, 0x34, 0x12]), response=True), frame(OWN_ID, 0x03, b"\x5b\x01"),
+           frame(OWN_ID, 0x02, b"\x0a")]
+    inner, lasts, parsed = [], [], 0
+    rx = b.d.sym["ISR_rx_byte"]
+    for rep in range(3):
+        for f in mix:
+            ans = b.exchange(f, 3)
+            ours = f[1] == 0xFF and f[2] == OWN_ID and f[4] in (0x01, 0x02)
+            if ours and not ans:
+                sys.exit("bench_realpath: no answer to %s" % f.hex())
+            seen = 0  # bytes of f received before the segment
+            for lo, hi in b.segments():
+                nrx = sum(1 for i in range(lo, hi) if b.trace[i] == rx)
+                irq = [e for e in b.entries if lo <= e < hi]
+                index, seen = seen, seen + nrx
+                if nrx != 1 or len(irq) != 1 or b.first("km_control_step", lo, hi) is not None:
+                    continue  # no byte, or a byte sharing its wake-up with the tick
+                if index == len(f) - 1:
+                    armed = b.first("km_hal_timer_at", lo, hi)
+                    lasts.append(b.cost(lo, armed if armed is not None else hi) + (f[4], f[1], armed is not None))
+                else:
+                    inner.append(b.cost(lo, hi))
+                    parsed += b.first("km_parser_feed_bytes", lo, hi) is not None
+    figs["byte_parsed"] = parsed
+    if not inner:
+        sys.exit("bench_realpath: no byte measured alone")
+    n = len(inner)
+    ins = sum(c[0] for c in inner) / n
+    cyc = sum(c[1] for c in inner) / n
+    figs["byte_instructions"], figs["byte_cycles"] = round(ins, 1), round(cyc, 1)
+    figs["byte_max_instructions"] = max(c[0] for c in inner)
+    busy = cyc * (BAUD / 10) / 16e6 * 100
+    figs["byte_busy_percent_16mhz"] = round(busy, 1)
+    rows.append(("per byte inside a frame, idle to idle, 115200 baud (%d bytes): mean / max" % n,
+                 "%.1f / %d" % (ins, figs["byte_max_instructions"]), "%.0f" % cyc, "<= %d" % TARGET_BYTE))
+    rows.append(("listening to a busy 115200 bus (11,520 B/s): share of a 16 MHz M0+", "",
+                 "%.1f %%" % busy, "<= 10 %"))
+    worst = {}
+    for ins_, cyc_, cmd, hdr1, armed in lasts:
+        k = (cmd if hdr1 == 0xFF else None, armed)
+        if k not in worst or ins_ > worst[k][0]:
+            worst[k] = (ins_, cyc_)
+    for (cmd, armed), (ins_, cyc_) in sorted(worst.items(), key=lambda kv: (kv[0][0] is None, kv[0])):
+        what = "answer armed" if armed else "next WFI (no answer)"
+        kind = "command 0x%02X" % cmd if cmd is not None else "another servo's answer"
+        rows.append(("last byte -> %s: %s, worst of the mix" % (what, kind),
+                     "%d" % ins_, "%d" % cyc_, "<= %d" % TARGET_LAST))
+        figs["last_%s_%s" % ("0x%02X" % cmd if cmd is not None else "answer", "armed" if armed else "idle")] = [
+            ins_, cyc_]
+    rows.append(("bytes inside a frame that ran the parser (should be none)", "%d of %d" % (parsed, n), "",
+                 "0"))
+
+
+def lists(b, rows, figs, step):
+    """0x83 and 0x82 at every list length (every `step`-th), this servo last
+    or absent: the last byte to the answer armed or to the next WFI."""
+    out = {}
+    for kind, k, maxn in (("0x83 of 0x64", 1, 125), ("0x83 of 0x65", 4, 50), ("0x82 of 0x46", 0, 250)):
+        for n in list(range(1, maxn + 1, step)) + [maxn]:
+            for ours in (True, False):
+                if kind.startswith("0x83"):
+                    body = bytes([0x64 if k == 1 else 0x65, k])
+                    for i in range(n):
+                        sid = OWN_ID if (ours and i == n - 1) else i + 1
+                        body += bytes([sid]) + (b"\x00" if k == 1 else b"\x00\x00\xe8\x03")
+                    f = frame(0xFE, 0x83, body)
+                else:
+                    ids = [i + 1 for i in range(n)]
+                    if ours:
+                        ids[-1] = OWN_ID
+                    f = frame(0xFE, 0x82, bytes([0x46] + ids))
+                if len(f) > 256:
+                    continue
+                b.exchange(f, 2)
+                got = None
+                for lo, hi in b.segments():
+                    if b.first("km_servo_handle_view", lo, hi) is not None:
+                        if b.first("km_control_step", lo, hi) is not None:
+                            break
+                        armed = b.first("km_hal_timer_at", lo, hi)
+                        got = b.cost(lo, armed if armed is not None else hi)
+                if got is not None:
+                    out[(kind, ours, n)] = got
+    for kind in ("0x83 of 0x64", "0x83 of 0x65", "0x82 of 0x46"):
+        for ours in (True, False):
+            pts = sorted((n, v) for (kd, o, n), v in out.items() if kd == kind and o == ours)
+            if not pts:
+                continue
+            n, (ins, cyc) = max(pts, key=lambda p: p[1][0])
+            (n0, (i0, _)), (n1, (i1, _)) = pts[0], pts[-1]
+            slope = (i1 - i0) / (n1 - n0) if n1 != n0 else 0.0
+            key = "%s_%s" % (kind.replace(" ", "_"), "ours" if ours else "absent")
+            figs[key] = {"worst_n": n, "instructions": ins, "cycles": cyc, "per_entry": round(slope, 2)}
+            rows.append(("%s, %s, %d list lengths: worst (at %d) / per entry" %
+                         (kind, "this servo last" if ours else "this servo not listed", len(pts), n),
+                         "%d / %.2f" % (ins, slope), "%d" % cyc,
+                         "<= %d%s" % (TARGET_LAST, "" if ours else " / <= 2")))
+
+
+def ticks(b, rows, figs):
+    """Control ticks, torque off and moving, with the real sensor read and
+    motor drive."""
+    for label, setup in (("torque off", []),
+                         ("moving (0x64 = 2, 0x65 to +45.0 deg in 500 ms)",
+                          [frame(OWN_ID, 0x03, b"\x64\x02"), frame(OWN_ID, 0x03, b"\x65\xc2\x01\xf4\x01")])):
+        for f in setup:
+            b.exchange(f, 2)
+        b.record(True)
+        b.m.run_until(b.m.now + 10 * MS)
+        b.record(False)
+        got = []
+        for lo, hi in b.segments():
+            if b.first("km_control_step", lo, hi) is None:
+                continue
+            all_ = b.cost(lo, hi)
+            sens = b.inclusive("km_hal_sensors_read", lo, hi)
+            step = b.inclusive("km_control_step", lo, hi)
+            divs = sum(1 for i in range(lo, hi) if b.trace[i] in b.divs)
+            got.append((all_, sens, step, divs))
+        if not got:
+            sys.exit("bench_realpath: no control tick measured (%s)" % label)
+        w = max(got, key=lambda g: g[0][0])
+        key = "tick_" + label.split()[0] + "_" + label.split()[1].strip("(,")
+        divs = max(g[3] for g in got)
+        figs[key] = {"instructions": w[0][0], "cycles": w[0][1], "library_divisions": divs,
+                     "sensors": list(w[1]) if w[1] else None, "step": list(w[2]) if w[2] else None}
+        rows.append(("control tick all in, idle to idle, %s, worst of %d (sensor read %s, "
+                     "km_control_step %s; library divisions %d)" % (label, len(got), w[1][0] if w[1] else "?",
+                                                                    w[2][0] if w[2] else "?", divs),
+                     "%d" % w[0][0], "%d" % w[0][1], "<= %d" % TARGET_TICK))
+
+
+def measure(elf, only=("byte", "tick", "lists"), step=1):
+    """Every figure: (rows of (figure, instructions, cycles, target), a
+    dict of the values by key)."""
+    b = Bench(elf)
+    b.boot()
+    rows, figs = [], {}
+    if "byte" in only:
+        per_byte(b, rows, figs)
+    if "tick" in only:
+        ticks(b, rows, figs)
+    if "lists" in only:
+        lists(b, rows, figs, step)
+    return rows, figs
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("build", help="directory holding km-servo-stm32g031.elf")
+    ap.add_argument("--json", help="write the figures here")
+    ap.add_argument("--step", type=int, default=1, help="list lengths: every N-th (default 1: all)")
+    ap.add_argument("--only", default="byte,lists,tick")
+    ap.add_argument("--check", action="store_true",
+                    help="fail if a byte inside a frame ran the parser (docs/benchmarks.md \"Per byte\")")
+    a = ap.parse_args()
+    elf = os.path.join(a.build, "km-servo-stm32g031.elf")
+    if not os.path.exists(elf):
+        sys.exit("bench_realpath: missing %s (cmake --build --preset stm32g031)" % elf)
+    rows, figs = measure(elf, a.only.split(","), a.step)
+    w = max(len(r[0]) for r in rows)
+    print("%-*s | %14s | %10s | %s" % (w, "figure (stm32g031 image on sim/g031)", "instructions",
+                                      "M0+ cycles", "target (instructions)"))
+    for r in rows:
+        print("%-*s | %14s | %10s | %s" % (w, r[0], r[1], r[2], r[3]))
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump(figs, f, indent=1, sort_keys=True)
+    if a.check and figs.get("byte_parsed", 0):
+        print("bench_realpath: %d bytes inside a frame ran the parser" % figs["byte_parsed"], file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
