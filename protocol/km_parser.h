@@ -99,13 +99,29 @@ typedef struct {
  * fed to it (the receive interrupt masked). */
 void km_rx_track_sync(km_rx_track_t *t, const km_parser_t *p);
 
+/* The header byte after F9 (FF or F5), or after F9 FF|F5 (the ID): the
+ * state the parser's judging leads to. */
+static inline unsigned km_rx_track_header(unsigned state, uint8_t byte)
+{
+    if (state == KM_TRACK_F9) { /* the parser drops the F9 and judges this byte alone */
+        return byte == KM_HDR1_COMMAND    ? KM_TRACK_COMMAND
+               : byte == KM_HDR1_RESPONSE ? KM_TRACK_RESPONSE
+               : byte == KM_HDR0          ? KM_TRACK_F9
+                                          : KM_TRACK_HUNT;
+    }
+    /* A bad ID is never F9 (249 is a valid ID of both kinds), so the
+     * parser's rescan of FF|F5 and the ID finds nothing. */
+    const bool id_ok = state == KM_TRACK_COMMAND ? km_id_is_addressable(byte) != 0 : byte <= KM_ID_MAX;
+    return id_ok ? KM_TRACK_ID : KM_TRACK_HUNT;
+}
+
 /* km_rx_track_byte() for every state but counting (the header, a lost
  * byte, a gap): `since` is the time since the previous byte. Inline too:
  * the interrupt's code must stay where the board puts it (in RAM on the
  * stm32g031, so that a flash erase does not stall it). */
 static inline bool km_rx_track_other(km_rx_track_t *t, uint8_t byte, uint32_t since, bool lost)
 {
-    unsigned state = t->state;
+    const unsigned state = t->state;
     if (state == KM_TRACK_HUNT && byte != KM_HDR0) {
         return lost; /* idle bus: the parser keeps nothing but an F9 */
     }
@@ -113,34 +129,20 @@ static inline bool km_rx_track_other(km_rx_track_t *t, uint8_t byte, uint32_t si
         t->state = KM_TRACK_EVERY; /* a cut: the parser may rescan */
         return true;
     }
-    switch (state) {
-    case KM_TRACK_HUNT:
-        state = KM_TRACK_F9;
-        break;
-    case KM_TRACK_F9: /* the parser drops the F9 and judges this byte alone */
-        state = byte == KM_HDR1_COMMAND    ? KM_TRACK_COMMAND
-                : byte == KM_HDR1_RESPONSE ? KM_TRACK_RESPONSE
-                : byte == KM_HDR0          ? KM_TRACK_F9
-                                           : KM_TRACK_HUNT;
-        break;
-    case KM_TRACK_COMMAND:
-    case KM_TRACK_RESPONSE:
-        /* A bad ID is never F9 (249 is a valid ID of both kinds), so the
-         * parser's rescan of FF|F5 and the ID finds nothing. */
-        state = (state == KM_TRACK_COMMAND ? km_id_is_addressable(byte) != 0 : byte <= KM_ID_MAX)
-                    ? KM_TRACK_ID
-                    : KM_TRACK_HUNT;
-        break;
-    default: /* KM_TRACK_ID: the length */
-        if (byte < KM_LENGTH_MIN || byte > KM_LENGTH_MAX) {
-            t->state = KM_TRACK_EVERY; /* the rescan may find an F9 in the ID */
-            return true;
-        }
-        t->left = byte;
-        state = KM_TRACK_COUNT;
-        break;
+    if (state == KM_TRACK_HUNT) {
+        t->state = KM_TRACK_F9;
+        return false;
     }
-    t->state = (uint8_t)state;
+    if (state != KM_TRACK_ID) {
+        t->state = (uint8_t)km_rx_track_header(state, byte);
+        return false;
+    }
+    if (byte < KM_LENGTH_MIN || byte > KM_LENGTH_MAX) {
+        t->state = KM_TRACK_EVERY; /* the rescan may find an F9 in the ID */
+        return true;
+    }
+    t->left = byte;
+    t->state = KM_TRACK_COUNT;
     return false;
 }
 

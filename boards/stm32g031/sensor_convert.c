@@ -66,3 +66,108 @@ int32_t km_conv_temperature_c10(const km_board_config_t *cfg, uint16_t raw)
     }
     return cfg->ntc_first_c10 + (int32_t)(KM_NTC_POINTS - 1u) * cfg->ntc_step_c10;
 }
+
+/* num/den as (mul, shift) with max_x * mul < 2^31, the longest shift that
+ * allows, by long division one bit at a time (one 32-bit division, at
+ * preparation only). */
+static km_conv_ratio_t prv_ratio(uint32_t num, uint32_t den, uint32_t max_x)
+{
+    km_conv_ratio_t r = {0u, 0u};
+    if (den == 0u) {
+        return r;
+    }
+    uint32_t q = num / den;
+    uint32_t rem = num % den;
+    const uint32_t limit = 0x7FFFFFFFu / (max_x ? max_x : 1u);
+    while (r.shift < 30u && q * 2u + 1u <= limit) {
+        rem *= 2u;
+        q *= 2u;
+        if (rem >= den) {
+            rem -= den;
+            q++;
+        }
+        r.shift++;
+    }
+    /* Rounded to nearest: the last bit's remainder decides. */
+    if (rem * 2u >= den && q + 1u <= limit) {
+        q++;
+    }
+    r.mul = q;
+    return r;
+}
+
+/* (x * num / den) rounded to nearest, x <= the ratio's max_x. */
+static uint32_t prv_apply_round(km_conv_ratio_t r, uint32_t x)
+{
+    const uint32_t half = r.shift ? 1u << (r.shift - 1u) : 0u;
+    return (x * r.mul + half) >> r.shift;
+}
+
+void km_conv_prepare(const km_board_config_t *cfg, km_conv_t *conv)
+{
+    int32_t span = (int32_t)cfg->pot_raw_max - (int32_t)cfg->pot_raw_min;
+    conv->pot_none = span == 0;
+    conv->pot_reversed = span < 0;
+    conv->pot_min = cfg->pot_raw_min;
+    conv->pot = prv_ratio(2700u, (uint32_t)(span < 0 ? -span : span), KM_ADC_FULL_SCALE);
+    conv->shunt_offset = cfg->shunt_offset_raw;
+    /* I[mA] = raw * vref / 4095 * 1000 / (R * gain) */
+    const uint32_t div = (uint32_t)cfg->shunt_mohm * cfg->shunt_gain;
+    conv->current = div ? prv_ratio(cfg->vref_mv * 1000u, KM_ADC_FULL_SCALE * div, KM_ADC_FULL_SCALE)
+                        : (km_conv_ratio_t){0u, 0u};
+    conv->voltage = cfg->vdiv_den ? prv_ratio((uint32_t)cfg->vref_mv * cfg->vdiv_num,
+                                              KM_ADC_FULL_SCALE * cfg->vdiv_den, KM_ADC_FULL_SCALE)
+                                  : (km_conv_ratio_t){0u, 0u};
+    conv->ntc_mul[0] = 0u;
+    for (uint32_t i = 1u; i < KM_NTC_POINTS; i++) {
+        /* into <= seg, so into * mul <= step << 16 whatever the segment */
+        const uint32_t seg = (uint32_t)cfg->ntc_raw[i - 1u] - cfg->ntc_raw[i];
+        const int32_t c10 = cfg->ntc_step_c10;
+        const uint32_t step = (uint32_t)(c10 < 0 ? -c10 : c10) << KM_CONV_NTC_SHIFT;
+        conv->ntc_mul[i] = seg ? (step + seg / 2u) / seg : 0u;
+    }
+}
+
+int32_t km_conv_fast_position(const km_conv_t *conv, uint16_t raw)
+{
+    if (conv->pot_none) {
+        return 0;
+    }
+    int32_t x = (int32_t)raw - conv->pot_min;
+    if (conv->pot_reversed) {
+        x = -x;
+    }
+    /* Rounded half away from zero, as km_conv_position. */
+    const int32_t q = x >= 0 ? (int32_t)prv_apply_round(conv->pot, (uint32_t)x)
+                             : -(int32_t)prv_apply_round(conv->pot, (uint32_t)-x);
+    return q - 1350;
+}
+
+int32_t km_conv_fast_current_ma(const km_conv_t *conv, uint16_t raw)
+{
+    const int32_t net = (int32_t)raw - (int32_t)conv->shunt_offset;
+    return net <= 0 ? 0 : (int32_t)((uint32_t)net * conv->current.mul >> conv->current.shift);
+}
+
+int32_t km_conv_fast_voltage_mv(const km_conv_t *conv, uint16_t raw)
+{
+    return (int32_t)((uint32_t)raw * conv->voltage.mul >> conv->voltage.shift);
+}
+
+int32_t km_conv_fast_temperature_c10(const km_board_config_t *cfg, const km_conv_t *conv, uint16_t raw)
+{
+    const uint16_t *t = cfg->ntc_raw;
+    if (raw >= t[0]) {
+        return cfg->ntc_first_c10;
+    }
+    for (uint32_t i = 1u; i < KM_NTC_POINTS; i++) {
+        if (raw >= t[i]) {
+            const int32_t lo_c = cfg->ntc_first_c10 + (int32_t)(i - 1u) * cfg->ntc_step_c10;
+            const uint32_t into = (uint32_t)t[i - 1u] - raw;
+            const int32_t q =
+                (int32_t)((into * conv->ntc_mul[i] + (1u << (KM_CONV_NTC_SHIFT - 1u))) >> KM_CONV_NTC_SHIFT);
+            return lo_c + (cfg->ntc_step_c10 < 0 ? -q : q);
+        }
+    }
+    return cfg->ntc_first_c10 + (int32_t)(KM_NTC_POINTS - 1u) * cfg->ntc_step_c10;
+}

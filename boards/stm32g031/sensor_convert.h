@@ -33,4 +33,36 @@ int32_t km_conv_temperature_c10(const km_board_config_t *cfg, uint16_t raw);
 /* True when the reading sits within rail_margin of 0 or full scale. */
 bool km_conv_at_rail(const km_board_config_t *cfg, uint16_t raw);
 
+/* A ratio num/den as a multiplier and a shift: x * num / den is
+ * (x * mul) >> shift for every x up to the max_x it was made for. */
+typedef struct {
+    uint32_t mul;
+    uint32_t shift;
+} km_conv_ratio_t;
+
+/* The conversions above with every division done once, here: per reading
+ * they are multiplies and shifts (on the M0+ a 32-bit division is a
+ * library call, __aeabi_idiv / __aeabi_uidiv, and these run every control
+ * tick). Each result is within 1 of the function above (tests/board/
+ * test_stm32g031_convert.c checks every raw count). */
+#define KM_CONV_NTC_SHIFT 16u
+
+typedef struct {
+    int32_t pot_min;
+    bool pot_reversed;
+    bool pot_none; /* span 0: position 0 */
+    km_conv_ratio_t pot;
+    uint16_t shunt_offset;
+    km_conv_ratio_t current;
+    km_conv_ratio_t voltage;
+    /* [i]: ntc_step_c10 / (ntc_raw[i-1] - ntc_raw[i]) << KM_CONV_NTC_SHIFT, rounded */
+    uint32_t ntc_mul[KM_NTC_POINTS];
+} km_conv_t;
+
+void km_conv_prepare(const km_board_config_t *cfg, km_conv_t *conv);
+int32_t km_conv_fast_position(const km_conv_t *conv, uint16_t raw);
+int32_t km_conv_fast_current_ma(const km_conv_t *conv, uint16_t raw);
+int32_t km_conv_fast_voltage_mv(const km_conv_t *conv, uint16_t raw);
+int32_t km_conv_fast_temperature_c10(const km_board_config_t *cfg, const km_conv_t *conv, uint16_t raw);
+
 #endif

@@ -12,8 +12,12 @@
 #include "km_board.h"
 #include "sensor_convert.h"
 
+/* The calibration's divisions, done once (sensor_convert.h). */
+static km_conv_t s_conv;
+
 void km_hal_sensors_init(void)
 {
+    km_conv_prepare(&km_board_config, &s_conv);
     km_adc_start();
 }
 
@@ -37,9 +41,9 @@ void km_hal_sensors_read(km_sensors_t *out)
         faults |= KM_FAULT_TEMPERATURE;
     }
 
-    out->position = km_conv_position(cfg, raw[ADC_CH_POT]);
-    out->current_ma = km_conv_current_ma(cfg, raw[ADC_CH_SHUNT]) * km_board_motor_direction();
-    out->voltage_mv = km_conv_voltage_mv(cfg, raw[ADC_CH_VSUPPLY]);
-    out->temperature_c10 = km_conv_temperature_c10(cfg, raw[ADC_CH_NTC]);
+    out->position = km_conv_fast_position(&s_conv, raw[ADC_CH_POT]);
+    out->current_ma = km_conv_fast_current_ma(&s_conv, raw[ADC_CH_SHUNT]) * km_board_motor_direction();
+    out->voltage_mv = km_conv_fast_voltage_mv(&s_conv, raw[ADC_CH_VSUPPLY]);
+    out->temperature_c10 = km_conv_fast_temperature_c10(cfg, &s_conv, raw[ADC_CH_NTC]);
     out->faults = faults;
 }

@@ -64,6 +64,55 @@ static void test_rails(void **state)
     assert_false(km_conv_at_rail(cfg, 2048u));
 }
 
+/* The prepared conversions (multiplies and shifts, no division per
+ * reading) against the exact ones for every raw count: position and
+ * temperature within 1 (0.1 deg, 0.1 C) of the rounded exact quotient;
+ * current and voltage within 1 of the true value truncated (the exact
+ * functions round the ADC millivolts first, so they sit up to half a
+ * millivolt times the divider ratio away). */
+static void check_fast_against_exact(const km_board_config_t *c)
+{
+    km_conv_t conv;
+    km_conv_prepare(c, &conv);
+    for (uint32_t raw = 0; raw <= KM_ADC_FULL_SCALE; raw++) {
+        const uint16_t r = (uint16_t)raw;
+        const int32_t dp = km_conv_fast_position(&conv, r) - km_conv_position(c, r);
+        assert_true(dp >= -1 && dp <= 1);
+        const int32_t dt = km_conv_fast_temperature_c10(c, &conv, r) - km_conv_temperature_c10(c, r);
+        assert_true(dt >= -1 && dt <= 1);
+        const int64_t net = (int64_t)raw - c->shunt_offset_raw;
+        const int64_t div = (int64_t)c->shunt_mohm * c->shunt_gain;
+        const int64_t ma_true = net <= 0 ? 0 : net * c->vref_mv * 1000 / ((int64_t)KM_ADC_FULL_SCALE * div);
+        const int64_t di = km_conv_fast_current_ma(&conv, r) - ma_true;
+        assert_true(di >= -1 && di <= 1);
+        const int64_t mv_true =
+            (int64_t)raw * c->vref_mv * c->vdiv_num / ((int64_t)KM_ADC_FULL_SCALE * c->vdiv_den);
+        const int64_t dv = km_conv_fast_voltage_mv(&conv, r) - mv_true;
+        assert_true(dv >= -1 && dv <= 1);
+    }
+}
+
+static void test_prepared_conversions_match(void **state)
+{
+    (void)state;
+    check_fast_against_exact(cfg);
+    km_board_config_t other = *cfg;
+    other.pot_raw_min = 3700u; /* reversed, a shorter span */
+    other.pot_raw_max = 600u;
+    other.shunt_mohm = 33u;
+    other.shunt_gain = 50u;
+    other.shunt_offset_raw = 40u;
+    other.vdiv_num = 47u;
+    other.vdiv_den = 4u;
+    other.vref_mv = 3000u;
+    check_fast_against_exact(&other);
+    other.pot_raw_min = 1000u;
+    other.pot_raw_max = 1200u;  /* a short travel: a large multiplier */
+    other.ntc_first_c10 = 1500; /* a table from hot to cold */
+    other.ntc_step_c10 = -75;
+    check_fast_against_exact(&other);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -72,6 +121,7 @@ int main(void)
         cmocka_unit_test(test_current_voltage),
         cmocka_unit_test(test_ntc_table_and_interpolation),
         cmocka_unit_test(test_rails),
+        cmocka_unit_test(test_prepared_conversions_match),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
