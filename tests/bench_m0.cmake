@@ -10,3 +10,24 @@ if(KM_PYTHON3_BENCH_M0)
   add_test(NAME bench_m0_qemu COMMAND ${KM_PYTHON3_BENCH_M0} ${CMAKE_SOURCE_DIR}/tools/bench/bench-m0)
   set_tests_properties(bench_m0_qemu PROPERTIES LABELS bench TIMEOUT 300)
 endif()
+# The real path on the shipped stm32g031 image (tests/bench/m0/bench_realpath.py,
+# docs/benchmarks.md): bytes through USART1's interrupt, queue and main loop,
+# the control tick with the board's sensors, 0x83/0x82 lists, on sim/g031, in
+# instructions and estimated M0+ cycles. Needs the stm32g031 preset built
+# first; fails when a byte inside a frame runs the parser.
+find_program(KM_DEBIAN_PYTHON_BENCH NAMES python3 PATHS /usr/bin NO_DEFAULT_PATH)
+if(KM_DEBIAN_PYTHON_BENCH)
+  add_test(NAME bench_realpath_g031
+    COMMAND ${KM_DEBIAN_PYTHON_BENCH} ${CMAKE_SOURCE_DIR}/tests/bench/m0/bench_realpath.py
+            ${CMAKE_SOURCE_DIR}/build/stm32g031/boards/stm32g031 --check --step 8
+            --json ${CMAKE_BINARY_DIR}/bench-realpath.json)
+  set_tests_properties(bench_realpath_g031 PROPERTIES LABELS bench TIMEOUT 900)
+endif()
+# docs/figures.md is generated (tests/bench/m0/figures.py, goal 7 of issue 21):
+# fails when the committed file is not what the stm32g031 image measures now.
+if(KM_DEBIAN_PYTHON_BENCH)
+  add_test(NAME figures_doc_current
+    COMMAND ${KM_DEBIAN_PYTHON_BENCH} ${CMAKE_SOURCE_DIR}/tests/bench/m0/figures.py
+            --build ${CMAKE_SOURCE_DIR}/build/stm32g031 --check)
+  set_tests_properties(figures_doc_current PROPERTIES LABELS bench TIMEOUT 900)
+endif()
