@@ -68,12 +68,6 @@ static uint32_t s_params_gen; /* km_servo_params_gen() they were decoded at */
 static uint32_t s_last_control_tick;
 static uint32_t s_next_tick;
 static uint32_t s_tick_period;
-/* How early a wake-up may run the tick: the board's 1 kHz wake-up and the
- * tick's time grid come from one clock at a fixed phase; a wake-up just
- * before the grid would otherwise leave the tick to the next one, 1 ms
- * late, and two ticks would then run back to back (docs/benchmarks.md
- * "Control tick"). */
-static uint32_t s_tick_early;
 
 /* The answer being sent: owned by the TX path from arming until tx_busy ends. */
 static uint8_t s_tx[KM_FRAME_MAX];
@@ -511,7 +505,6 @@ void km_app_init(void)
 
     s_last_control_tick = km_hal_time_now();
     s_tick_period = prv_us_to_ticks(KM_APP_TICK_US);
-    s_tick_early = s_tick_period / 4u;
     s_next_tick = s_last_control_tick;
     s_confirm_at = s_last_control_tick + prv_us_to_ticks(KM_APP_CONFIRM_US);
 }
@@ -529,10 +522,10 @@ void km_app_set_bus_floors(uint32_t gap_floor_us, uint32_t slot_floor_us)
     s_rx_track.gap_ticks = s_parser.gap_ticks;
 }
 
-/* True when the control tick is due at `now` (or a quarter period before). */
+/* True when the control tick is due at `now`. */
 static bool prv_tick_due(uint32_t now)
 {
-    return (int32_t)(now - s_next_tick) >= -(int32_t)s_tick_early;
+    return (int32_t)(now - s_next_tick) >= 0;
 }
 
 /* Sleeps, under the caller's lock, until something needs a pass of the
