@@ -110,8 +110,11 @@ static inline unsigned km_rx_track_header(unsigned state, uint8_t byte)
                                           : KM_TRACK_HUNT;
     }
     /* A bad ID is never F9 (249 is a valid ID of both kinds), so the
-     * parser's rescan of FF|F5 and the ID finds nothing. */
-    const bool id_ok = state == KM_TRACK_COMMAND ? km_id_is_addressable(byte) != 0 : byte <= KM_ID_MAX;
+     * parser's rescan of FF|F5 and the ID finds nothing. The test of
+     * km_id_is_addressable() written out: a call could land outside the
+     * interrupt's RAM code (LTO outlines it). */
+    const bool id_ok =
+        byte <= KM_ID_MAX || (state == KM_TRACK_COMMAND && (byte == KM_ID_SUPER || byte == KM_ID_BROADCAST));
     return id_ok ? KM_TRACK_ID : KM_TRACK_HUNT;
 }
 

@@ -57,6 +57,17 @@ FLASH_WS = 2          # 64 MHz: FLASH_ACR.LATENCY = 2 (boards/stm32g031/system.c
 IRQ_ENTRY, IRQ_EXIT = 15, 13
 OWN_ID = 0            # a fresh servo (docs/protocol.md §1)
 TARGET_BYTE, TARGET_LAST, TARGET_TICK = 60, 1500, 2000
+# Landmarks that survive LTO's inlining: a control tick calls km_control_step,
+# or, inlined, prv_params once; a main-loop pass asks prv_restart_ready; a
+# frame handed to the dispatcher goes through km_servo_handle_view or
+# prv_on_events.
+TICK = ("km_control_step", "prv_params")
+# What tells a tick sharing a byte's or a frame's wake-up (prv_params alone
+# would not: a control request calls it too): the tick itself, or the 1 kHz
+# wake-up that makes it due.
+SHARED = ("km_control_step", "SysTick_Handler")
+PASS = ("km_parser_feed_bytes", "prv_restart_ready")
+DISPATCH = ("km_servo_handle_view", "prv_on_events")
 
 _LIT = re.compile(r"\[pc")
 
@@ -84,7 +95,10 @@ class Disasm:
         for line in out.splitlines():
             f = line.split()
             if len(f) == 3 and f[1] in "tTwW":
+                # a clone under LTO or IPA (name.lto_priv.0, .constprop.0) answers to its name
+                base = re.sub(r"(\.(lto_priv|constprop|isra|part)\.\d+)+$", "", f[2])
                 self.sym.setdefault(f[2], int(f[0], 16) & ~1)
+                self.sym.setdefault(base, int(f[0], 16) & ~1)
 
     def cycles(self, addr, nxt):
         """Estimated M0+ cycles of the instruction at addr, the next one
@@ -179,11 +193,26 @@ class Bench:
         return hi - lo, cyc + irqs * (IRQ_ENTRY + IRQ_EXIT)
 
     def first(self, name, lo, hi):
-        a = self.d.sym.get(name)
+        """Trace index of the first entry of `name` (or of the first of a
+        tuple of names the image has: LTO inlines some) in trace[lo:hi]."""
+        names = name if isinstance(name, tuple) else (name,)
+        want = {self.d.sym[n] for n in names if n in self.d.sym}
         for i in range(lo, hi):
-            if self.trace[i] == a:
+            if self.trace[i] in want:
                 return i
         return None
+
+    def armed(self, lo, hi):
+        """Where the answer is armed: the entry of km_hal_timer_at, or, with
+        it inlined (LTO), the return of prv_try_schedule_answer."""
+        i = self.first("km_hal_timer_at", lo, hi)
+        if i is not None or "km_hal_timer_at" in self.d.sym:
+            return i
+        i = self.first("prv_try_schedule_answer", lo, hi)
+        if i is None:
+            return None
+        ret = self.trace[i - 1] + 4
+        return next((j for j in range(i, hi) if self.trace[j] == ret), None)
 
     def inclusive(self, name, lo, hi):
         """Instructions and cycles from the entry of `name` to its return
@@ -227,14 +256,16 @@ def per_byte(b, rows, figs):
                 nrx = sum(1 for i in range(lo, hi) if b.trace[i] == rx)
                 irq = [e for e in b.entries if lo <= e < hi]
                 index, seen = seen, seen + nrx
-                if nrx != 1 or len(irq) != 1 or b.first("km_control_step", lo, hi) is not None:
+                if nrx != 1 or len(irq) != 1 or b.first(SHARED, lo, hi) is not None:
                     continue  # no byte, or a byte sharing its wake-up with the tick
+                if index != len(f) - 1 and b.first(TICK, lo, hi) is not None:
+                    continue  # a byte inside a frame dispatches nothing: prv_params is a tick
                 if index == len(f) - 1:
-                    armed = b.first("km_hal_timer_at", lo, hi)
+                    armed = b.armed(lo, hi)
                     lasts.append(b.cost(lo, armed if armed is not None else hi) + (f[4], f[1], armed is not None))
                 else:
                     inner.append(b.cost(lo, hi))
-                    parsed += b.first("km_parser_feed_bytes", lo, hi) is not None
+                    parsed += b.first(PASS, lo, hi) is not None
     figs["byte_parsed"] = parsed
     if not inner:
         sys.exit("bench_realpath: no byte measured alone")
@@ -288,10 +319,10 @@ def lists(b, rows, figs, step):
                 b.exchange(f, 2)
                 got = None
                 for lo, hi in b.segments():
-                    if b.first("km_servo_handle_view", lo, hi) is not None:
-                        if b.first("km_control_step", lo, hi) is not None:
+                    if b.first(DISPATCH, lo, hi) is not None:
+                        if b.first(SHARED, lo, hi) is not None:
                             break
-                        armed = b.first("km_hal_timer_at", lo, hi)
+                        armed = b.armed(lo, hi)
                         got = b.cost(lo, armed if armed is not None else hi)
                 if got is not None:
                     out[(kind, ours, n)] = got
@@ -323,7 +354,7 @@ def ticks(b, rows, figs):
         b.m.run_until(b.m.now + 20 * MS)
         b.record(False)
         got = []
-        step_at = b.d.sym["km_control_step"]
+        step_at = b.d.sym[TICK[0]] if TICK[0] in b.d.sym else b.d.sym[TICK[1]]
         counts = {seg: sum(1 for i in range(seg[0], seg[1]) if b.trace[i] == step_at) for seg in b.segments()}
         ks = [k for k in counts.values() if k]
         # ticks per wake-up: 1, or 2 where a late tick caught up (docs/benchmarks.md)
