@@ -31,7 +31,7 @@ if(KM_PYTHON3)
   add_test(NAME py_tools
     COMMAND ${KM_PYTHON3} -m unittest discover -s ${CMAKE_SOURCE_DIR}/tests/tools -v)
   set_tests_properties(py_tools PROPERTIES
-    LABELS tools TIMEOUT 300
+    LABELS tools TIMEOUT 900
     FAIL_REGULAR_EXPRESSION "Ran 0 tests;FAILED")
   # test_run_on_bus.py also imports the conformance wrapper (tests/conformance/)
   set_property(TEST py_tools APPEND PROPERTY ENVIRONMENT_MODIFICATION
