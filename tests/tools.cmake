@@ -16,7 +16,8 @@
 # test_kmx_url_ctrl_c.py: rfc2217:// and socket:// buses, Ctrl-C anywhere in
 # kmx (16 runs interrupted at random), about 15 s; test_servo_update.py:
 # servo-update's one-line refusals and its checks before touching a servo,
-# about 5 s; test_servo_bus_sched.py: SCHED_FIFO by default where allowed,
+# about 5 s; test_kmx_update.py: the same through `kmx update`, `kmx trace`
+# and `kmx --trace`'s decoded answers, about 8 s; test_servo_bus_sched.py: SCHED_FIFO by default where allowed,
 # --no-realtime, the fallback, policies read back from the kernel, three
 # QEMU servos in the polling update bootloader put back to plain scheduling
 # and answering, about 7 s; test_run_on_bus.py: the conformance wrapper runs every check it

@@ -19,7 +19,7 @@ transact() and send_bytes() send raw frames and check nothing.
 import time
 
 from . import frame as fr
-from .errors import BadAnswer, IdTaken, NoAnswer
+from .errors import BadAnswer, IdTaken, InUpdateMode, NoAnswer
 from .transport import open_transport
 
 DEFAULT_TIMEOUT = 0.1      # one answer at any standard baud, with host slack
@@ -145,6 +145,7 @@ class Bus:
                     if problem is None:
                         return f
                     last = BadAnswer("%s: %s" % (what, problem))
+                    last.status = getattr(problem, "status", None)
                 # a stray (a late answer to an earlier frame): keep listening
                 left = deadline - time.monotonic()
                 frames = self.listen(left, 1, {bytes(data)}) if left > 0 else []
@@ -162,12 +163,46 @@ class Bus:
                       "ping ID %d" % dev_id, timeout)
         return f.status
 
+    def update_state(self, dev_id, timeout=None):
+        """0x78 STATUS (docs/update.md §4): the update state of dev_id, 0 for
+        an application, 1..5 for its bootloader (idle, receiving, verified,
+        committed, failed); None when no STATUS answer comes (firmware
+        without 0x78, or nobody on dev_id)."""
+        data = fr.encode_command(dev_id, fr.UPDATE, fr.UPDATE_STATUS, b"\x00\x00")
+        for _ in range(1 + self.retries):
+            for f in self.transact(data, 1, self.timeout if timeout is None else timeout):
+                if f.id == dev_id and not f.is_status and f.cmd == fr.UPDATE and f.addr == fr.UPDATE_STATUS \
+                        and len(f.params) >= 1:
+                    return f.params[0]
+        return None
+
+    def check_update_mode(self, dev_id):
+        """Raises InUpdateMode when dev_id answers from its bootloader: the
+        reason a servo refuses every read and write but 0x01 and 0x0C."""
+        state = self.update_state(dev_id)
+        if state:
+            raise InUpdateMode(
+                "ID %d is in update mode (its bootloader runs, state %s; no application): run `kmx --bus %s "
+                "update --ids %d IMAGE.kmfw` to finish the update (docs/update.md)"
+                % (dev_id, fr.UPDATE_STATES.get(state, state), self.transport.spec, dev_id))
+
     def read_frame(self, dev_id, addr, timeout=None):
-        """Read (0x02): the whole answer frame (for its arrival time)."""
+        """Read (0x02): the whole answer frame (for its arrival time). A
+        servo that answers "not supported" (§4 bit 5) from its bootloader
+        raises InUpdateMode."""
+        try:
+            return self._read_frame(dev_id, addr, timeout)
+        except BadAnswer as e:
+            if getattr(e, "status", 0) & 0x20:
+                self.check_update_mode(dev_id)
+            raise
+
+    def _read_frame(self, dev_id, addr, timeout=None):
+        """Read (0x02) as it is, without the update-mode check."""
         def accept(f):
             if f.is_status:
-                return "a status 0x%02X instead of the value (%s)" % (
-                    f.status, ", ".join(fr.status_words(f.status)))
+                return _StatusInstead("a status 0x%02X instead of the value (%s)" % (
+                    f.status, ", ".join(fr.status_words(f.status))), f.status)
             if f.cmd != fr.READ or f.addr != addr:
                 return "answer to command 0x%02X address 0x%02X, asked a read of 0x%02X" % (
                     f.cmd, f.addr if f.addr is not None else 0, addr)
@@ -374,6 +409,15 @@ class Bus:
                 if shared:
                     out[i] = shared
         return out
+
+
+class _StatusInstead(str):
+    """An accept() complaint about a short response: its words and its status byte."""
+
+    def __new__(cls, text, status):
+        obj = super().__new__(cls, text)
+        obj.status = status
+        return obj
 
 
 def _twice(randoms):

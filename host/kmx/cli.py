@@ -15,6 +15,9 @@ by name, with units (names, units and ranges from docs/registers.json).
   kmx [--bus SPEC] rescue               find servos of unknown ID and baud, say how to reach them
   kmx [--bus SPEC] fault-log ID         the last protection and self-test events
   kmx [--bus SPEC] plot ID --out F.png [--seconds S] [--step ANGLE [--time MS | --speed DPS]]
+  kmx [--bus SPEC] update --ids 1,2,3 IMAGE.kmfw   firmware update (0x78), checked first
+  kmx [--bus SPEC] update --rescue IMAGE.kmfw      one servo alone on the bus, any ID
+  kmx [--bus SPEC] trace [--move]       a session with every frame printed and decoded
 
 SPEC: tcp:HOST:PORT (tools/servo-bus, host-sim), serial:/dev/ttyUSB0@115200,
 pty:/dev/pts/N, rfc2217:HOST:PORT@BAUD (tools/servo-bus as a serial port whose
@@ -42,8 +45,10 @@ from . import baud as kbaud
 from . import faultlog
 from . import frame as fr
 from . import plot
+from . import session as ksession
+from . import update as kupdate
 from .bus import Bus
-from .errors import KmxError, NoAnswer, RegisterError
+from .errors import InUpdateMode, KmxError, NoAnswer, RegisterError
 from .registers import RegisterMap, Registers
 
 DEFAULT_BUS = "tcp:127.0.0.1:7000"
@@ -114,7 +119,8 @@ def cmd_scan(bus, regs, args):
     window = bus.scan_window() if args.scan_ms is None else args.scan_ms / 1000.0
     found = bus.scan(timeout=window)
     if not found:
-        raise NoAnswer("no servo answered the super-ID ping within %.0f ms on %s"
+        raise NoAnswer("no servo answered the super-ID ping within %.0f ms on %s (a servo in update mode "
+                       "does not answer it: `kmx ping ID` names one, `kmx update --rescue` reaches one alone)"
                        % (1000 * window, bus.transport.spec))
     rows = []
     for dev_id, status in found:
@@ -154,6 +160,10 @@ def cmd_ping(bus, regs, args):
     status = bus.ping(args.id)
     print("ID %d: status 0x%02X (%s), answered in %.1f ms" % (
         args.id, status, ", ".join(fr.status_words(status)), 1000 * (time.monotonic() - t0)))
+    try:
+        bus.check_update_mode(args.id)
+    except InUpdateMode as e:
+        print(str(e))
     return 0
 
 
@@ -191,6 +201,8 @@ def cmd_set(bus, regs, args):
             raise NoAnswer("wrote %s = %s to ID %d, but nothing answers at ID %d"
                            % (reg.name, " ".join(args.value), args.id, now_id)) from None
         raise
+    if status & 0x20:
+        bus.check_update_mode(now_id)  # a bootloader supports no register write
     if status & 0x60:
         raise KmxError("ID %d refused %s (0x%02X) = %s: status 0x%02X (%s)" % (
             args.id, reg.name, reg.address, " ".join(args.value), status, ", ".join(fr.status_words(status))))
@@ -230,6 +242,8 @@ def _write_checked(bus, dev_id, reg, data, what):
     """Writes and pings: §4 bit 6 (refused) or bit 5 (not supported) -> KmxError."""
     bus.write(dev_id, reg.address, data)
     status = bus.ping(dev_id)
+    if status & 0x20:
+        bus.check_update_mode(dev_id)  # a bootloader supports no register write
     if status & 0x60:
         raise KmxError("ID %d refused %s: status 0x%02X (%s)" % (
             dev_id, what, status, ", ".join(fr.status_words(status))))
@@ -361,8 +375,29 @@ def cmd_plot(bus, regs, args):
 
 
 def trace_to_stderr(direction, item):
-    data = item if direction == "tx" else item.to_bytes()
-    print("%s %s" % (">" if direction == "tx" else "<", data.hex(" ").upper()), file=sys.stderr)
+    """--trace: every frame on stderr, answers decoded as kmx trace prints them."""
+    print(ksession.trace_line(direction, item), file=sys.stderr)
+
+
+def cmd_update(args):
+    """kmx update: servo-update's checks and pass (kmx/update.py) on kmx's bus."""
+    args.prog = "kmx"
+    me = sys.argv[0] if not sys.argv[0].endswith("__main__.py") else "kmx"
+    args.finish_argv = [me, "--bus", args.bus, "update"]
+    args.trace = trace_to_stderr if args.trace else None
+    try:
+        kupdate.check_args(args)
+    except kupdate.Refused as e:
+        print("kmx: %s" % e.args[0], file=sys.stderr)
+        return e.args[1]
+    return kupdate.run(args)
+
+
+def cmd_trace(args):
+    """kmx trace: the readable session of kmx/session.py (servo-session's)."""
+    ksession.load_registers()
+    ksession.run(ksession.Session(args.bus), args.move)
+    return 0
 
 
 def build_parser():
@@ -512,6 +547,20 @@ def build_parser():
     g.add_argument("--time", type=float, metavar="MS", help="the step takes this long, ms")
     g.add_argument("--speed", type=float, metavar="DPS", help="the step at this speed, °/s")
     p.set_defaults(run=cmd_plot)
+
+    p = sub.add_parser("update", help="firmware update of servos on the bus (0x78), checked before it starts",
+                       description=kupdate.__doc__.split("\n\n", 1)[1],
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    kupdate.add_update_arguments(p, False)
+    p.set_defaults(standalone=cmd_update)
+
+    p = sub.add_parser("trace", help="scan and read every servo, printing each frame decoded (--move: also move)",
+                       description=ksession.__doc__.split("\n\n", 1)[1],
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--move", action="store_true",
+                   help="also write a setting (restored afterwards) and move the servos: only with "
+                        "nothing attached to them")
+    p.set_defaults(standalone=cmd_trace)
     return ap
 
 
@@ -561,6 +610,8 @@ class _CtrlC:
 def run(argv, ctrl_c):
     """Parses the command line, opens the bus, runs the command, closes the bus."""
     args = build_parser().parse_args(argv)
+    if getattr(args, "standalone", None):
+        return run_standalone(args, ctrl_c)
     bus = None
     try:
         regs_map = RegisterMap.load()
@@ -580,6 +631,19 @@ def run(argv, ctrl_c):
             ctrl_c.closing = True
             bus.close()
             ctrl_c.closing = False
+
+
+def run_standalone(args, ctrl_c):
+    """A command that opens the bus itself (update, trace): its status;
+    KmxError one line and 1, Ctrl-C one line and 130."""
+    try:
+        return args.standalone(args)
+    except KmxError as e:
+        print("kmx: %s" % e, file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        ctrl_c.say()
+        return 130
 
 
 def main(argv=None):

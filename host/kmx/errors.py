@@ -55,3 +55,8 @@ class RangeError(KmxError):
 class IdTaken(KmxError):
     """A write that changes a servo's ID (0x0F, or a 0x03 level-2 reset)
     would leave two servos on one ID: refused before anything is sent."""
+
+
+class InUpdateMode(KmxError):
+    """The servo answers from its bootloader (0x78 STATUS state 1..5,
+    docs/update.md §4): no application runs, only an update finishes it."""

@@ -25,6 +25,9 @@ SYNC_WRITE = 0x04
 MULTI_READ = 0x82    # our extension (docs/): broadcast, listed servos answer in list order
 MULTI_WRITE = 0x83
 SYNC_EXECUTE = 0x84
+UPDATE = 0x78        # firmware update (docs/update.md §4); sub 0x04 = STATUS
+UPDATE_STATUS = 0x04
+UPDATE_STATES = {0: "application", 1: "idle", 2: "receiving", 3: "verified", 4: "committed", 5: "failed"}
 EXTENSION = 0x7F     # our extension reads (docs/protocol-decisions.md "Extension command 0x7F")
 NO_ADDRESS = (PING, SYNC_EXECUTE)  # commands without an address byte (§2)
 MULTI_WRITE_ADDRESSES = (0x64, 0x65, 0x66, 0x68, 0x6E, 0x6F)  # §3: 0x83 only these

@@ -24,7 +24,7 @@ from kmx import cli, deps  # noqa: E402  (host/ is on sys.path through test_kmx)
 
 KMX = os.path.join(REPO, "tools", "kmx")
 SUBCOMMANDS = ("scan", "ping", "get", "set", "dump", "torque", "move", "monitor", "set-id", "set-baud", "rescue",
-               "fault-log", "plot")
+               "fault-log", "plot", "update", "trace")
 
 
 class Result:

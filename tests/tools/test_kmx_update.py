@@ -1,0 +1,154 @@
+# SPDX-License-Identifier: Apache-2.0
+"""`kmx update` and `kmx trace` (issue 19: servo-update and servo-session
+become kmx subcommands, host/kmx/update.py and host/kmx/session.py; the old
+names stay as thin wrappers, tests/tools/test_servo_update.py): the update's
+one-line refusals (image, command line, bus spec: status 2) and its checks
+before touching a servo (an ID that does not answer, no bootloader in 0x0C,
+docs/update.md §10: status 1, both servos still run their application);
+`kmx trace` prints the session servo-session prints; `kmx --trace` decodes
+every answer with register names and units. A servo in update mode, the
+Ctrl-C of `kmx update` and the command it prints: tests/tools/
+servo_update_qemu.py (CTest update_qemu_interrupt). About 8 s."""
+import os
+import re
+import struct
+import subprocess
+import sys
+import tempfile
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from test_kmx import REPO, HostSim, ServoBus  # noqa: E402
+from test_servo_update import make_image  # noqa: E402
+from kmx.bus import Bus  # noqa: E402
+
+KMX = os.path.join(REPO, "tools", "kmx")
+
+
+def run_kmx(*args):
+    """tools/kmx ARGS as a process; a traceback fails the test."""
+    r = subprocess.run([KMX, *args], capture_output=True, text=True, timeout=120)
+    if "Traceback" in r.stderr:
+        raise AssertionError("kmx %s printed a traceback:\n%s" % (" ".join(args), r.stderr))
+    return r
+
+
+class UpdateBadInput(unittest.TestCase):
+    """Refused before the bus is opened: one line `kmx: ...`, status 2."""
+
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+        self.addCleanup(self.dir.cleanup)
+        self.good = os.path.join(self.dir.name, "good.kmfw")
+        with open(self.good, "wb") as f:
+            f.write(make_image())
+
+    def refused(self, message, *args):
+        r = run_kmx("--bus", "tcp:127.0.0.1:9", "update", *args)
+        self.assertEqual((r.returncode, r.stdout, r.stderr), (2, "", "kmx: %s\n" % message), args)
+
+    def test_image_and_ids(self):
+        missing = os.path.join(self.dir.name, "missing.kmfw")
+        self.refused("cannot read the image %s: No such file or directory" % missing, "--ids", "1", missing)
+        image = bytearray(make_image())
+        image[0x200] ^= 0x55
+        bad = os.path.join(self.dir.name, "body.kmfw")
+        with open(bad, "wb") as f:
+            f.write(bytes(image))
+        self.refused("%s: body CRC does not match (a damaged image)" % bad, "--ids", "1", bad)
+        self.refused("give --ids (the servos to update) or --rescue (one servo alone on the bus)", self.good)
+        self.refused("give --ids (the servos to update) or --rescue (one servo alone on the bus), not both",
+                     "--ids", "1", "--rescue", self.good)
+        r = run_kmx("--bus", "tcp:127.0.0.1:9", "update", "--ids", "1,x", self.good)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("argument --ids: 'x' is not a servo ID (0..250)", r.stderr)
+
+    def test_bus(self):
+        r = run_kmx("--bus", "tcp:7000", "update", "--ids", "1", self.good)
+        self.assertEqual((r.returncode, r.stderr), (2, "kmx: bus 'tcp:7000': tcp wants HOST:PORT, e.g. "
+                                                       "tcp:127.0.0.1:7000\n"))
+        r = run_kmx("--bus", "tcp:127.0.0.1:9", "update", "--ids", "1", self.good)
+        self.assertEqual(r.returncode, 2)
+        self.assertRegex(r.stderr, r"^kmx: tcp:127.0.0.1:9: connection refused .*\n$")
+
+    def test_help_names_update_and_trace(self):
+        out = run_kmx("--help").stdout
+        self.assertRegex(out, r"\n\s+update\s+firmware update")
+        self.assertRegex(out, r"\n\s+trace\s+scan and read every servo")
+        self.assertIn("--rescue", run_kmx("update", "--help").stdout)
+
+
+class UpdateOnHostSim(unittest.TestCase):
+    """Two host-sim servos: applications without a bootloader (0x0C's
+    bootloader byte 0): kmx update refuses them, and an absent ID, naming
+    them, before any frame that changes a servo."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.dir = tempfile.TemporaryDirectory()
+        cls.image = os.path.join(cls.dir.name, "v2.kmfw")
+        with open(cls.image, "wb") as f:
+            f.write(make_image())
+        cls.wire = ServoBus(ids=(1, 2))
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.wire.close()
+        cls.dir.cleanup()
+
+    def untouched(self):
+        """Both servos answer with status 0 and still report their 0x0C."""
+        with Bus(self.wire.spec) as bus:
+            for i in (1, 2):
+                self.assertEqual(bus.ping(i), 0, "ID %d" % i)
+                self.assertEqual(bus.read(i, 0x0C), struct.pack("<I", 0x00100100))
+                self.assertEqual(bus.update_state(i), 0, "ID %d: 0x78 STATUS says application" % i)
+
+    def test_no_bootloader_and_absent(self):
+        r = run_kmx("--bus", self.wire.spec, "update", "--ids", "2,7", self.image)
+        self.assertEqual((r.returncode, r.stderr),
+                         (1, "kmx: refused, nothing sent to any servo: ID 7 does not answer on %s (kmx --bus %s "
+                             "scan lists the IDs there); ID 2 has no bootloader (0x0C 0x00100100, bootloader "
+                             "byte 0; docs/update.md §10): flash one with a programmer first\n"
+                          % (self.wire.spec, self.wire.spec)))
+        self.untouched()
+
+    def test_ping_of_an_application_says_nothing_of_update_mode(self):
+        r = run_kmx("--bus", self.wire.spec, "ping", "1")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertRegex(r.stdout, r"^ID 1: status 0x00 \(ok\), answered in \d+\.\d ms\n$")
+
+
+class Trace(unittest.TestCase):
+    """kmx trace is servo-session's session; kmx --trace decodes answers."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.wire = ServoBus()
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.wire.close()
+
+    def test_trace_read_only_as_servo_session(self):
+        r = run_kmx("--bus", self.wire.spec, "trace")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        sent = [line.split(" > ")[1].split() for line in r.stdout.splitlines() if " > " in line]
+        self.assertTrue(sent)
+        self.assertEqual([f for f in sent if len(f) > 4 and f[1] == "FF" and f[4] == "03"], [])
+        self.assertIn("-- read only: nothing written, nothing moved", r.stdout)
+        for i in (1, 2, 3):
+            self.assertRegex(r.stdout, r"< F9 F5 0%d 02 00 ..   id %d status 0x00 ok" % (i, i))
+            self.assertIn("id %d voltage (0x4B) = 7.400 V" % i, r.stdout)
+
+    def test_global_trace_decodes(self):
+        r = run_kmx("--bus", self.wire.spec, "--trace", "get", "2", "voltage")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual(r.stdout, "voltage (0x4B) = 7.400 V\n")
+        self.assertRegex(r.stderr, re.compile(r"^> F9 FF 02 03 02 4B AD$", re.M))
+        self.assertRegex(r.stderr, re.compile(r"^< F9 F5 02 05 02 4B E8 1C A7   id 2 voltage \(0x4B\) = 7.400 V$",
+                                              re.M))
+
+
+if __name__ == "__main__":
+    unittest.main()
