@@ -50,7 +50,7 @@ def spec_at(spec, baud):
 
 
 def _need_baud_control(bus, what):
-    if not hasattr(bus.transport, "set_baud"):
+    if not getattr(bus.transport, "can_set_baud", False):
         kind = parse_spec(bus.transport.spec)[0] if ":" in bus.transport.spec else "?"
         hint = ("use --bus rfc2217:HOST:PORT@BAUD: servo-bus takes RFC 2217 on the same port"
                 if kind == "tcp" else "use a serial port: --bus serial:DEV@BAUD")

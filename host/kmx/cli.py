@@ -19,11 +19,13 @@ by name, with units (names, units and ranges from docs/registers.json).
   kmx [--bus SPEC] update --rescue IMAGE.kmfw      one servo alone on the bus, any ID
   kmx [--bus SPEC] trace [--move]       a session with every frame printed and decoded
 
-SPEC: tcp:HOST:PORT (tools/servo-bus, host-sim), serial:/dev/ttyUSB0@115200,
-pty:/dev/pts/N, rfc2217:HOST:PORT@BAUD (tools/servo-bus as a serial port whose
-baud kmx can change: set-baud, scan --all-bauds, rescue); pyserial's URLs
-rfc2217://HOST:PORT[@BAUD] and socket://HOST:PORT name the same two; default
-$KMX_BUS, else tcp:127.0.0.1:7000. Failures print one line `kmx: ...` and
+SPEC: tcp:HOST:PORT (tools/servo-bus, host-sim), a device path
+/dev/ttyUSB0[@BAUD] (or serial:/dev/ttyUSB0@115200, pty:/dev/pts/N),
+rfc2217:HOST:PORT@BAUD (tools/servo-bus as a serial port whose baud kmx can
+change: set-baud, scan --all-bauds, rescue), or any pyserial URL:
+socket://HOST:PORT, rfc2217://HOST:PORT[@BAUD], loop://, spy://DEVICE (a hex
+trace of every byte), hwgrep://REGEXP (an adapter by its description);
+default $KMX_BUS, else tcp:127.0.0.1:7000. Failures print one line `kmx: ...` and
 exit 1 (2 for a bad command line), Ctrl-C one line `kmx: interrupted` and
 exit 130, never a traceback.
 
@@ -405,8 +407,9 @@ def build_parser():
                                  epilog=__doc__.split("\n\n", 1)[1],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--bus", default=os.environ.get("KMX_BUS", DEFAULT_BUS),
-                    help="the bus: tcp:HOST:PORT, serial:DEVICE@BAUD, pty:PATH, rfc2217:HOST:PORT@BAUD, "
-                         "rfc2217://HOST:PORT or socket://HOST:PORT (default $KMX_BUS or %s)"
+                    help="the bus: tcp:HOST:PORT, a device path /dev/ttyUSB0[@BAUD], rfc2217:HOST:PORT@BAUD, "
+                         "or a pyserial URL socket://, rfc2217://, loop://, spy://, hwgrep:// "
+                         "(default $KMX_BUS or %s)"
                     % DEFAULT_BUS)
     ap.add_argument("--timeout", type=positive_ms, default=100, metavar="MS",
                     help="wait for one answer, ms (default 100)")
