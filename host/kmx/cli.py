@@ -187,6 +187,7 @@ def cmd_get(bus, regs, args):
 def cmd_set(bus, regs, args):
     reg = regs.map.find(args.name)
     data = reg.encode(args.value if len(args.value) > 1 else args.value[0])
+    regs.check(args.id, reg, data)
     bus.write(args.id, reg.address, data)
     # §3: the new ID applies right after the write (a 0x03 level-2 reset's ID
     # 0 too, docs/protocol-decisions.md); §4: bit 6 = the write was refused,
@@ -270,6 +271,7 @@ def cmd_move(bus, regs, args):
     else:
         reg = regs.map.find("move_time")  # §5.4: time omitted = fastest
         data = reg.encode([args.angle])
+    regs.check(args.id, reg, data)
     t0 = time.monotonic()
     _write_checked(bus, args.id, reg, data, "%s = %s" % (reg.name, reg.decode(data)))
     if not args.wait:
@@ -294,35 +296,61 @@ def cmd_move(bus, regs, args):
 MONITOR = ("position", "speed", "current", "temperature", "voltage")
 
 
+def monitor_sample(bus, regs, names, ids):
+    """One sample of registers `names` of every servo in ids: one multi-ID
+    read (0x82) per register for all of them; a servo missing from one is
+    read on its own (0x02). {id: [Value per name]}."""
+    out = {i: [] for i in ids}
+    for name in names:
+        got = regs.get_many(ids, name)
+        for i in ids:
+            out[i].append(got[i] if got[i] is not None else regs.get(i, name))
+    return out
+
+
+def _monitor_rows(args, regs_shown, sample, t):
+    """The rows of one sample: CSV lines, or table rows."""
+    rows = []
+    for dev_id in args.ids:
+        *values, status = sample[dev_id]
+        code = status.raw[0]
+        if args.csv:
+            words = " ".join(w.replace(" ", "-") for w in fr.status_words(code))
+            rows.append(",".join(["%.3f" % t, str(dev_id)] + ["%.*f" % (r.decimals(), v.value)
+                                                             for r, v in zip(regs_shown, values)] + [words]))
+        else:
+            rows.append([dev_id] + [str(v) for v in values] + [", ".join(fr.status_words(code))])
+    return rows
+
+
 def cmd_monitor(bus, regs, args):
+    """Samples on a fixed schedule (t0 + n x interval, so the interval is
+    the real sample period), each sample by 0x82 reads; a sample that takes
+    longer than the interval is said in the table (the next one starts at once)."""
     regs_shown = [regs.map.find(n) for n in MONITOR]
     header = ["t_s", "id"] + ["%s_%s" % (r.name, r.unit().replace("°/s", "dps").replace("°C", "c")
                                          .replace("°", "deg").lower()) for r in regs_shown] + ["status"]
     live = not args.csv and sys.stdout.isatty()
     if args.csv:
         print(",".join(header), flush=True)
+    period = args.interval / 1000.0
     t0 = time.monotonic()
     n = 0
     try:
         while args.count is None or n < args.count:
-            rows = []
             t = time.monotonic() - t0
-            for dev_id in args.ids:
-                values = [r.decode(bus.read(dev_id, r.address)) for r in regs_shown]
-                status = bus.read(dev_id, fr.REG_STATUS)[0]
-                words = " ".join(w.replace(" ", "-") for w in fr.status_words(status))
-                if args.csv:
-                    rows.append(",".join(["%.3f" % t, str(dev_id)] + ["%.*f" % (r.decimals(), v.value) for r, v in zip(regs_shown, values)] + [words]))
-                else:
-                    rows.append([dev_id] + [str(v) for v in values] + [", ".join(fr.status_words(status))])
+            sample = monitor_sample(bus, regs, MONITOR + ("status",), args.ids)
+            took = time.monotonic() - t0 - t
+            rows = _monitor_rows(args, regs_shown, sample, t)
             if args.csv:
                 print("\n".join(rows), flush=True)
             else:
-                table = _table(rows, ["ID"] + list(MONITOR) + ["status"])
-                print(("\033[H\033[J" if live else "") + "t = %.2f s\n%s" % (t, table), flush=True)
+                late = "" if took <= period else "; a sample takes %.0f ms, longer than --interval" % (1000 * took)
+                print(("\033[H\033[J" if live else "") + "t = %.2f s (sample every %.0f ms, 0x82%s)\n%s"
+                      % (t, args.interval, late, _table(rows, ["ID"] + list(MONITOR) + ["status"])), flush=True)
             n += 1
             if args.count is None or n < args.count:
-                time.sleep(args.interval / 1000.0)
+                time.sleep(max(0.0, t0 + n * period - time.monotonic()))
     except KeyboardInterrupt:
         pass  # the normal way out of a live monitor
     return 0
@@ -361,6 +389,7 @@ def cmd_plot(bus, regs, args):
         else:
             reg, vals = regs.map.find("move_time"), [args.step] + ([args.time] if args.time is not None else [])
         data = reg.encode(vals)
+        regs.check(args.id, reg, data)
         t0 = time.monotonic()
         _write_checked(bus, args.id, reg, data, "%s = %s" % (reg.name, reg.decode(data)))
         target = reg.decode(data).value

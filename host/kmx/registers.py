@@ -16,6 +16,7 @@ import json
 import math
 import os
 
+from . import frame as fr
 from .errors import RangeError, RegisterError
 from .frame import status_words
 
@@ -301,6 +302,7 @@ class Registers:
     def __init__(self, bus, regmap=None):
         self.bus = bus
         self.map = regmap or RegisterMap.load()
+        self._limits = None
 
     def get(self, dev_id, key, timeout=None):
         reg = self.map.find(key)
@@ -308,7 +310,61 @@ class Registers:
             raise RegisterError("%s (0x%02X) is write-only" % (reg.name, reg.address))
         return reg.decode(self.bus.read(dev_id, reg.address, timeout))
 
-    def set(self, dev_id, key, value, answer=False):
-        """Encodes (checks first) and writes; returns the status if answer=True."""
+    def set(self, dev_id, key, value, answer=False, check=True):
+        """Encodes (checks first) and writes; returns the status if answer=True.
+        check=True also checks the value against what the servo's product
+        allows and a move target against its angle limits (kmx/products.py):
+        RangeError naming the limit, nothing sent."""
         reg = self.map.find(key)
-        return self.bus.write(dev_id, reg.address, reg.encode(value), answer=answer)
+        data = reg.encode(value)
+        if check:
+            self.check(dev_id, reg, data)
+        return self.bus.write(dev_id, reg.address, data, answer=answer)
+
+    def get_many(self, ids, key, timeout=None):
+        """One register of many servos in one multi-ID read (0x82,
+        docs/protocol-decisions.md): {id: Value}, None for a servo that did
+        not answer."""
+        reg = self.map.find(key)
+        if not reg.readable:
+            raise RegisterError("%s (0x%02X) is write-only" % (reg.name, reg.address))
+        got = self.bus.multi_read(reg.address, ids, timeout)
+        return {i: None if data is None else reg.decode(data) for i, data in got.items()}
+
+    def _encode_many(self, reg, values, check):
+        """{id: value in units} -> [(id, bytes)], every value checked first."""
+        entries = []
+        for dev_id, value in (values.items() if isinstance(values, dict) else values):
+            data = reg.encode(value)
+            if check:
+                self.check(dev_id, reg, data)
+            entries.append((dev_id, data))
+        return entries
+
+    def set_many(self, key, values, check=True):
+        """Each servo its own value of one register in one multi-ID write
+        (0x83, §3: 0x64, 0x65, 0x66, 0x68, 0x6E, 0x6F): values {id: value in
+        units}. Every value is encoded and checked before the frame goes out."""
+        reg = self.map.find(key)
+        if reg.address not in fr.MULTI_WRITE_ADDRESSES:
+            raise RegisterError("%s (0x%02X) cannot go in a multi-ID write (0x83 takes %s); use sync_set"
+                                % (reg.name, reg.address, ", ".join("0x%02X" % a for a in fr.MULTI_WRITE_ADDRESSES)))
+        self.bus.multi_write(reg.address, self._encode_many(reg, values, check))
+
+    def sync_set(self, key, values, check=True, execute=True):
+        """Each servo its own value of any writable register, acted on at
+        once: a sync write (0x04) to each, then one broadcast execute (0x84)
+        unless execute=False."""
+        reg = self.map.find(key)
+        for dev_id, data in self._encode_many(reg, values, check):
+            self.bus.sync_write(dev_id, reg.address, data)
+        if execute:
+            self.bus.execute()
+
+    def check(self, dev_id, reg, data):
+        """RangeError when the servo would refuse data for reg (a product
+        bound) or clamp it (a move target outside its angle limits)."""
+        if self._limits is None:
+            from .products import Limits
+            self._limits = Limits(self.bus, self.map)
+        self._limits.check_write(dev_id, reg, data)

@@ -129,7 +129,7 @@ class KmxOverTcp(unittest.TestCase):
             self.assertRegex(pos, r"^-?\d+\.\d$")
             self.assertRegex(volt, r"^\d+\.\d{3}$")
         out = self.ok("monitor", "0", "--count", "2", "--interval", "50")
-        self.assertEqual(len(re.findall(r"^t = \d+\.\d\d s\nID\s+position\s+speed\s+current\s+temperature"
+        self.assertEqual(len(re.findall(r"^t = \d+\.\d\d s \(sample every 50 ms, 0x82[^)]*\)\nID\s+position\s+speed\s+current\s+temperature"
                                         r"\s+voltage\s+status\n0\s+0\.0 °\s+0 °/s", out, re.M)), 2, out)
 
     def test_set_id_survives_restart(self):
@@ -205,8 +205,11 @@ class KmxOverTcp(unittest.TestCase):
         self.assertEqual((p.returncode, out, err), (130, "", "kmx: interrupted\n"))
 
     def test_errors(self):
-        self.fails(1, "kmx: ID 0 refused max_current (0x14) = 60000: status 0x40 (command failed)",
-                   "set", "0", "max_current", "60000")
+        self.fails(1, "kmx: max_current: 60000 mA is above ID 0's limit 3000 mA (current_max_ma of KM-SIM-P135); "
+                      "nothing sent", "set", "0", "max_current", "60000")
+        # a cross-field rule only the servo knows (hysteresis above the trip): its own refusal, bit 6
+        self.fails(1, "kmx: ID 0 refused temp_limits (0x3D) = 50 60: status 0x40 (command failed)",
+                   "set", "0", "temp_limits", "50", "60")
         self.fails(1, "kmx: torque_switch: 9 is outside 0..3", "set", "0", "torque_switch", "9")
         self.fails(1, "kmx: firmware_version (0x0C) is read-only", "set", "0", "firmware_version", "1")
         self.fails(1, "kmx: move_time (0x65) is write-only", "get", "0", "move_time")
@@ -237,6 +240,23 @@ class KmxOnThreeServos(unittest.TestCase):
         self.assertEqual([line.split(",")[1] for line in r.stdout.splitlines()[1:]], ["1", "2", "3"])
         r = kmx(self.wire.spec, "set-id", "1", "2")
         self.assertEqual((r.returncode, r.stderr), (1, "kmx: ID 2 is taken: another servo answers there\n"))
+
+    def test_monitor_reads_by_0x82_on_a_schedule(self):
+        """monitor: one multi-ID read (0x82) per register for all servos (6
+        per sample: position, speed, current, temperature, voltage, status),
+        and sample n starts at n x --interval, not after it plus the reads."""
+        r = kmx(self.wire.spec, "--trace", "monitor", "1", "2", "3", "--csv", "--count", "4", "--interval", "150",
+                process=True)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        sent = [line.split()[1:] for line in r.stderr.splitlines() if line.startswith("> ")]
+        multi = [f for f in sent if f[2] == "FE" and f[4] == "82"]
+        self.assertEqual(len(multi), 6 * 4, r.stderr)
+        self.assertEqual(sorted({f[5] for f in multi}), ["01", "46", "47", "48", "4A", "4B"])
+        times = sorted({float(line.split(",")[0]) for line in r.stdout.splitlines()[1:]})
+        self.assertEqual(len(times), 4, r.stdout)
+        for n, t in enumerate(times):
+            self.assertGreaterEqual(t, n * 0.150 - 0.002, times)  # never before its slot
+        self.assertLess(times[-1], 3 * 0.150 + 1.0, times)  # a schedule, not 4 x (interval + reads) piling up
 
 
     def session(self, *args):
