@@ -11,6 +11,7 @@ import sys
 from .errors import MissingPackage
 
 DEBIAN_DIST_PACKAGES = "/usr/lib/python3/dist-packages"
+PIP_NAMES = {"serial": "pyserial"}  # module -> its name on PyPI, where they differ
 
 
 def import_debian(module, package, why):
@@ -28,4 +29,5 @@ def import_debian(module, package, why):
             return importlib.import_module(module)
         except Exception:  # a compiled package built for another interpreter fails in many ways
             pass
-    raise MissingPackage("%s: apt-get install %s (and run with /usr/bin/python3)" % (why, package))
+    raise MissingPackage("%s: apt-get install %s (and run with /usr/bin/python3), or pip install %s"
+                         % (why, package, PIP_NAMES.get(module.split(".")[0], module)))

@@ -15,6 +15,7 @@ import difflib
 import json
 import math
 import os
+from importlib import resources
 
 from . import frame as fr
 from .errors import RangeError, RegisterError
@@ -22,10 +23,19 @@ from .frame import status_words
 
 ENV_PATH = "KMX_REGISTERS"  # overrides where registers.json is read from
 _HERE = os.path.dirname(os.path.abspath(__file__))
-DEFAULT_PATHS = (
-    os.path.join(_HERE, "registers.json"),                     # shipped beside the package
-    os.path.join(_HERE, "..", "..", "docs", "registers.json"),  # the checkout (host/kmx -> docs)
-)
+CHECKOUT_PATH = os.path.join(_HERE, "..", "..", "docs", "registers.json")  # the checkout (host/kmx -> docs)
+
+
+def _package_description():
+    """registers.json shipped in the package (importlib.resources: an
+    installed wheel, a zip, the checkout's symlink to docs/): (where, text)
+    or None."""
+    try:
+        res = resources.files("kmx").joinpath("registers.json")
+        return str(res), res.read_text(encoding="utf-8")
+    except (FileNotFoundError, OSError, ModuleNotFoundError):
+        return None
+
 
 _INT_TYPES = {  # wire type -> (bytes, signed)
     "u8": (1, False), "bits8": (1, False), "i8": (1, True),
@@ -255,16 +265,37 @@ class RegisterMap:
 
     @classmethod
     def load(cls, path=None):
-        paths = [path] if path else ([os.environ[ENV_PATH]] if os.environ.get(ENV_PATH) else list(DEFAULT_PATHS))
-        for p in paths:
-            if os.path.isfile(p):
-                try:
-                    with open(p, encoding="utf-8") as f:
-                        return cls(json.load(f))
-                except (OSError, ValueError, KeyError) as e:
-                    raise RegisterError("register description %s is unreadable: %s" % (p, e)) from None
-        raise RegisterError("no register description found (looked in %s); set %s or regenerate "
-                            "docs/registers.json with km_regdoc --json" % (", ".join(paths), ENV_PATH))
+        """The register description: `path`, else $KMX_REGISTERS, else the
+        package's registers.json (package data), else the checkout's
+        docs/registers.json. RegisterError naming where it looked."""
+        if path or os.environ.get(ENV_PATH):
+            return cls._load_file(path or os.environ[ENV_PATH])
+        shipped = _package_description()
+        if shipped is not None:
+            return cls._parse(shipped[0], shipped[1])
+        if os.path.isfile(CHECKOUT_PATH):
+            return cls._load_file(CHECKOUT_PATH)
+        raise RegisterError("no register description found (kmx/registers.json is missing from the package "
+                            "and no checkout at %s); reinstall kmx or set %s" % (CHECKOUT_PATH, ENV_PATH))
+
+    @classmethod
+    def _load_file(cls, p):
+        """A register description from a file; RegisterError when it is absent or unreadable."""
+        try:
+            with open(p, encoding="utf-8") as f:
+                return cls._parse(p, f.read())
+        except OSError as e:
+            raise RegisterError("register description %s is unreadable: %s" % (p, e.strerror or e)) from None
+
+    @classmethod
+    def _parse(cls, where, text):
+        """A RegisterMap from JSON text read from `where` (kept in .source)."""
+        try:
+            out = cls(json.loads(text))
+        except (ValueError, KeyError, TypeError) as e:
+            raise RegisterError("register description %s is unreadable: %s" % (where, e)) from None
+        out.source = where
+        return out
 
     def __iter__(self):
         return iter(self.registers)

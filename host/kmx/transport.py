@@ -124,7 +124,7 @@ def _parse_colon_form(spec, kind, rest):
 
 def import_serial():
     """pyserial, from this interpreter or Debian's python3-serial (kmx/deps.py)."""
-    return import_debian("serial", "python3-serial", "serial ports and ptys need pyserial")
+    return import_debian("serial", "python3-serial", "kmx opens every bus through pyserial")
 
 
 class Transport:

@@ -307,8 +307,9 @@ class TransportSpecs(unittest.TestCase):
     def test_missing_pyserial_names_the_package(self):
         with mock.patch.dict(sys.modules, {"serial": None}), \
                 mock.patch.object(deps, "DEBIAN_DIST_PACKAGES", "/nonexistent"):
-            with self.assertRaisesRegex(MissingPackage, "^serial ports and ptys need pyserial: apt-get install "
-                                                        r"python3-serial \(and run with /usr/bin/python3\)$"):
+            with self.assertRaisesRegex(MissingPackage, "^kmx opens every bus through pyserial: apt-get install "
+                                                        r"python3-serial \(and run with /usr/bin/python3\), or "
+                                                        r"pip install pyserial$"):
                 tp.open_transport("serial:/dev/ttyUSB0@115200")
 
     def test_every_error_is_a_kmx_error(self):

@@ -186,7 +186,8 @@ class KmxOverTcp(unittest.TestCase):
             code = cli.main(["--bus", self.sim.spec, "plot", "0", "--out", os.path.join(d, "x.png"),
                              "--seconds", "0.05"])
         self.assertEqual((code, err.getvalue()), (1, "kmx: plot needs matplotlib: apt-get install "
-                                                      "python3-matplotlib (and run with /usr/bin/python3)\n"))
+                                                      "python3-matplotlib (and run with /usr/bin/python3), or pip install "
+                                                      "matplotlib\n"))
 
     def test_ctrl_c(self):
         """Ctrl-C ends a live monitor quietly (exit 0) and any other command
