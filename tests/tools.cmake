@@ -49,3 +49,12 @@ if(EXISTS /usr/bin/python3)
   set_tests_properties(kmx_pip_install PROPERTIES LABELS tools TIMEOUT 400
     PASS_REGULAR_EXPRESSION "kmx_pip_install: ok")
 endif()
+
+# The example scripts of docs/python-api.md (host/examples/) run against three
+# host-sim servos on tools/servo-bus and print what the tutorial says
+# (tests/tools/kmx_examples_check.py; needs the host-sim preset), about 10 s.
+if(KM_PYTHON3)
+  add_test(NAME kmx_examples COMMAND ${KM_PYTHON3} ${CMAKE_SOURCE_DIR}/tests/tools/kmx_examples_check.py -v)
+  set_tests_properties(kmx_examples PROPERTIES LABELS tools TIMEOUT 300
+    FAIL_REGULAR_EXPRESSION "Ran 0 tests;FAILED")
+endif()

@@ -1,0 +1,14 @@
+# SPDX-License-Identifier: Apache-2.0
+"""What every example shares: kmx importable from the checkout, and the bus
+spec from --bus, else $KMX_BUS, else the emulated bus of tools/servo-bus."""
+import os
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))  # host/: kmx uninstalled
+
+
+def bus_spec():
+    """--bus SPEC from the command line, else $KMX_BUS, else tcp:127.0.0.1:7000."""
+    if "--bus" in sys.argv[1:-1]:
+        return sys.argv[sys.argv.index("--bus") + 1]
+    return os.environ.get("KMX_BUS", "tcp:127.0.0.1:7000")
