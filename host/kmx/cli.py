@@ -18,6 +18,7 @@ by name, with units (names, units and ranges from docs/registers.json).
   kmx [--bus SPEC] update --ids 1,2,3 IMAGE.kmfw   firmware update (0x78), checked first
   kmx [--bus SPEC] update --rescue IMAGE.kmfw      one servo alone on the bus, any ID
   kmx [--bus SPEC] trace [--move]       a session with every frame printed and decoded
+  kmx [--bus SPEC] web [--port N]       the servo wizard: a page on http://127.0.0.1:8765/
 
 SPEC: tcp:HOST:PORT (tools/servo-bus, host-sim), a device path
 /dev/ttyUSB0[@BAUD] (or serial:/dev/ttyUSB0@115200, pty:/dev/pts/N),
@@ -424,6 +425,12 @@ def cmd_update(args):
     return kupdate.run(args)
 
 
+def cmd_web(args):
+    """kmx web: the wizard page (kmx/web.py)."""
+    from . import web
+    return web.cmd_web(args)
+
+
 def cmd_trace(args):
     """kmx trace: the readable session of kmx/session.py (servo-session's)."""
     ksession.load_registers()
@@ -593,6 +600,16 @@ def build_parser():
                    help="also write a setting (restored afterwards) and move the servos: only with "
                         "nothing attached to them")
     p.set_defaults(standalone=cmd_trace)
+
+    p = sub.add_parser("web", help="the servo wizard: a local web page (scan, control table, plots, update)",
+                       description="Serves the servo wizard on http://127.0.0.1:PORT/ (python3-aiohttp): "
+                                   "connect to a bus, scan, the control table by name with units, torque, "
+                                   "moves and jog, live plots by 0x82, the fault log, set-id, set-baud, "
+                                   "rescue and the firmware update. Opens --bus at start when it answers.")
+    p.add_argument("--port", type=int, default=8765, help="TCP port on 127.0.0.1 (default 8765; 0 = any free)")
+    p.add_argument("--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1)")
+    p.add_argument("--any-host", action="store_true", help="allow --host other than this machine")
+    p.set_defaults(standalone=cmd_web)
     return ap
 
 
