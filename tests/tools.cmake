@@ -58,3 +58,15 @@ if(KM_PYTHON3)
   set_tests_properties(kmx_examples PROPERTIES LABELS tools TIMEOUT 300
     FAIL_REGULAR_EXPRESSION "Ran 0 tests;FAILED")
 endif()
+
+# kmx web in Debian's Chromium, headless, through Selenium: scan, an edit read
+# back, a refused value's limit, a move on the live plot (three host-sim servos),
+# an update to its end state (two QEMU bootloader servos: needs the qemu
+# preset); screenshots into docs/web/. Exit 77 = skipped, with the reason, when
+# chromium, chromium-driver or python3-selenium is missing (tools/install-deps).
+# tests/tools/kmx_web_check.py, about 60 s.
+if(EXISTS /usr/bin/python3)
+  add_test(NAME kmx_web COMMAND /usr/bin/python3 ${CMAKE_SOURCE_DIR}/tests/tools/kmx_web_check.py -v)
+  set_tests_properties(kmx_web PROPERTIES LABELS tools TIMEOUT 400 RUN_SERIAL TRUE SKIP_RETURN_CODE 77
+    FAIL_REGULAR_EXPRESSION "Ran 0 tests;FAILED")
+endif()

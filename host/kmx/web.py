@@ -33,7 +33,6 @@ import os
 import re
 import struct
 import sys
-import threading
 import time
 
 from . import baud as kbaud
@@ -44,10 +43,13 @@ from . import update as kupdate
 from .bus import Bus
 from .deps import import_debian
 from .errors import KmxError
+from .products import Limits
 from .registers import RegisterMap, Registers
 
 HERE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "web")
 CHART_JS = "/usr/share/javascript/chart.js"
+LIVE_KEEP = 2000  # samples kept for the page (100 s at 20 Hz)
+UPDATE_PASSES = 6  # a pass that loses a servo's STATUS starts again from ENTER
 LIVE = ("position", "speed", "current", "pwm", "temperature", "voltage", "status")
 ENUM = re.compile(r"^(\d+) (?:= )?([a-z][^,;]*)$")
 
@@ -100,6 +102,12 @@ class WebUpdater(kupdate.Updater):
             self.blocks_sent += 1
             self.job.progress = min(0.95, 0.1 + 0.8 * self.blocks_sent / max(1, self.blocks))
         return super().send(data, answers, timeout)
+
+    def ask(self, dev_id, sub, params=b"", timeout=2.0, tries=6):
+        """As the command's, with more patience: the page's user waits anyway,
+        and an emulated servo on a loaded machine can take seconds to work
+        through the blocks before it answers."""
+        return super().ask(dev_id, sub, params, timeout, tries)
 
     def status(self, dev_id, first=0):
         st = super().status(dev_id, first)
@@ -174,11 +182,19 @@ class Wizard:
     def registers(self, dev_id):
         """The control table of one servo, every readable register read."""
         self.need_bus()
+        limits = Limits(self.bus, self.map)
+        model, numbers = limits.product(dev_id)
         rows = []
         for reg in self.map:
             value = self.regs.get(dev_id, reg.address) if reg.readable else None
-            rows.append(register_row(reg, value))
-        return {"registers": rows}
+            row = register_row(reg, value)
+            bound = limits.table["bounds"].get("0x%02X" % reg.address)
+            if numbers is not None and bound is not None:  # "product" -> this servo's model's numbers
+                for f in row["fields"]:
+                    f["min"] = limits._bound(numbers, bound[0]) if f["min"] == "product" else f["min"]
+                    f["max"] = limits._bound(numbers, bound[1]) if f["max"] == "product" else f["max"]
+            rows.append(row)
+        return {"registers": rows, "model": model}
 
     def set(self, dev_id, body):
         """A register by name, value in units; read back when readable."""
@@ -270,10 +286,10 @@ class Wizard:
                 job.servos[i]["state"] = "checked: 0x%08X" % v
         a = argparse.Namespace(rescue=bool(body.get("rescue")), rounds=4, one_by_one=False, prog="kmx web",
                                resets=0, restarts=0)
-        done = kupdate.run_groups(up, a, ids, [], 3, job.lines.append)
+        done = kupdate.run_groups(up, a, ids, [], UPDATE_PASSES, job.lines.append)
         if done is None:
-            raise KmxError("the update gave up after 3 passes: the servos wait in their bootloaders; "
-                           "run it again")
+            raise KmxError("the update gave up after %d passes: the servos wait in their bootloaders; "
+                           "run it again" % UPDATE_PASSES)
         new = struct.unpack_from("<I", image, 12)[0]
         ok = kupdate.check_result(up, a, done, new, job.lines.append)
         for i in done:
@@ -288,7 +304,7 @@ class Server:
         self.web = import_debian("aiohttp.web", "python3-aiohttp", "kmx web needs aiohttp")
         self.wizard = wizard
         self.pool = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="kmx-bus")
-        self.lock = threading.Lock()
+        self.live_ids, self.live_samples, self.live_seq, self.live_error = None, [], 0, None
 
     async def call(self, fn, *args):
         """fn(*args) in the bus thread: {"ok": true, ...result} or {"ok": false, "error"}."""
@@ -333,6 +349,9 @@ class Server:
         r.add_post("/api/scan", self.h_scan)
         r.add_get("/api/job", self.h_job)
         r.add_get("/api/live", self.h_live)
+        r.add_post("/api/live/start", self.h_live_start)
+        r.add_post("/api/live/stop", self.h_live_stop)
+        r.add_get("/api/live/data", self.h_live_data)
         r.add_post("/api/rescue", self.h_rescue)
         r.add_post("/api/update", self.h_update)
         r.add_get("/api/servo/{id}/registers", self.h_servo_get)
@@ -368,6 +387,48 @@ class Server:
         except ValueError:
             return self.web.json_response({"ok": False, "error": "ids: a comma-separated list of IDs"})
         return await self.call(self.wizard.live, ids)
+
+    async def sampler(self, ids, period):
+        """While live: one sample of ids every `period` s in the bus thread
+        (other requests take their turn between samples), kept for the page."""
+        loop = asyncio.get_running_loop()
+        next_at = loop.time()
+        while self.live_ids == ids:
+            try:
+                sample = await loop.run_in_executor(self.pool, self.wizard.live, ids)
+                self.live_seq += 1
+                sample["seq"] = self.live_seq
+                self.live_samples.append(sample)
+                del self.live_samples[:-LIVE_KEEP]
+            except KmxError as e:
+                self.live_error = str(e)
+            next_at = max(next_at + period, loop.time())
+            await asyncio.sleep(next_at - loop.time())
+
+    async def h_live_start(self, request):
+        """{ids, period_ms}: sampling starts (20 Hz by default); the page reads /api/live/data."""
+        body = await self.body(request)
+        try:
+            ids = [int(i) for i in body["ids"]]
+            period = max(0.01, float(body.get("period_ms", 50)) / 1000.0)
+        except (KeyError, ValueError, TypeError):
+            return self.web.json_response({"ok": False, "error": "live: give ids and period_ms"})
+        self.live_ids, self.live_error = ids, None
+        self.live_task = asyncio.get_running_loop().create_task(self.sampler(ids, period))
+        return self.web.json_response({"ok": True, "ids": ids, "period_ms": period * 1000})
+
+    async def h_live_stop(self, request):
+        self.live_ids = None
+        return self.web.json_response({"ok": True})
+
+    async def h_live_data(self, request):
+        """The samples after ?since=SEQ, with the measured sample rate."""
+        since = int(request.query.get("since", "0") or 0)
+        new = [x for x in self.live_samples if x["seq"] > since]
+        recent = self.live_samples[-20:]
+        rate = (len(recent) - 1) / (recent[-1]["t"] - recent[0]["t"]) if len(recent) > 2 else None
+        return self.web.json_response({"ok": self.live_error is None, "error": self.live_error,
+                                       "samples": new, "rate": rate})
 
     def servo_id(self, request):
         dev_id = int(request.match_info["id"])
@@ -458,6 +519,9 @@ def cmd_web(args):
         print("kmx web: open %s in a browser (Ctrl-C stops it)" % url, flush=True)
     try:
         serve(spec, args.host, args.port, ready)
+    except KeyboardInterrupt:  # the way to stop it
+        print("kmx web: stopped", flush=True)
+        return 0
     except OSError as e:
         raise KmxError("cannot serve on %s:%d: %s" % (args.host, args.port, e.strerror or e)) from None
     return 0

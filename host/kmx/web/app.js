@@ -97,33 +97,46 @@ function makeCharts() {
   }
 }
 
-// The live loop: one /api/live (0x82 reads) after the other while on.
+// Draws the charts at the next animation frame, once however many samples came.
+function redraw() {
+  if (kmx.drawPending) return;
+  kmx.drawPending = true;
+  requestAnimationFrame(() => {
+    kmx.drawPending = false;
+    for (const [q] of QUANTITIES) if (kmx.charts[q]) kmx.charts[q].update("none");
+  });
+}
+
+// The live loop: the server samples every servo at 20 Hz (0x82 reads); the
+// page takes the new samples five times a second and draws them.
 async function liveLoop() {
-  let count = 0, since = performance.now();
+  let since = 0;
+  await api("/api/live/start", { ids: kmx.servos, period_ms: 50 });
   while (kmx.live) {
-    const r = await api("/api/live?ids=" + kmx.servos.join(","));
-    if (!r.ok) { $("live-rate").textContent = r.error; await new Promise((res) => setTimeout(res, 500)); continue; }
-    kmx.samples++;
-    count++;
-    for (const [q] of QUANTITIES) {
-      const chart = kmx.charts[q];
-      if (!chart) continue;
-      kmx.servos.forEach((id, n) => {
-        const s = r.servos[id];
-        const data = chart.data.datasets[n].data;
-        if (s && s[q] !== null && s[q] !== undefined) data.push({ x: r.t, y: s[q] });
-        if (data.length > KEEP) data.shift();
-      });
-      chart.update("none");
+    const r = await api("/api/live/data?since=" + since);
+    if (!r.ok) $("live-rate").textContent = r.error;
+    for (const sample of r.samples || []) {
+      since = sample.seq;
+      kmx.samples++;
+      for (const [q] of QUANTITIES) {
+        const chart = kmx.charts[q];
+        if (!chart) continue;
+        kmx.servos.forEach((id, n) => {
+          const s = sample.servos[id];
+          const data = chart.data.datasets[n].data;
+          if (s && s[q] !== null && s[q] !== undefined) data.push({ x: sample.t, y: s[q] });
+          if (data.length > KEEP) data.shift();
+        });
+      }
     }
-    const now = performance.now();
-    if (now - since > 1000) {
-      kmx.rate = (1000 * count) / (now - since);
-      $("live-rate").textContent = kmx.rate.toFixed(1) + " samples/s of " + kmx.servos.length + " servos";
-      count = 0;
-      since = now;
+    if (r.rate) {
+      kmx.rate = r.rate;
+      $("live-rate").textContent = r.rate.toFixed(1) + " samples/s of " + kmx.servos.length + " servos (0x82)";
     }
+    redraw();
+    await new Promise((res) => setTimeout(res, 200));
   }
+  await api("/api/live/stop", {});
 }
 
 function toggleLive() {
