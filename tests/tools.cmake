@@ -17,7 +17,10 @@
 # kmx (16 runs interrupted at random), about 15 s; test_servo_update.py:
 # servo-update's one-line refusals and its checks before touching a servo,
 # about 5 s; test_kmx_update.py: the same through `kmx update`, `kmx trace`
-# and `kmx --trace`'s decoded answers, about 8 s; test_servo_bus_sched.py: SCHED_FIFO by default where allowed,
+# and `kmx --trace`'s decoded answers, about 8 s; test_kmx_transport.py: device
+# paths, loop://, spy://, hwgrep://, socket:// through pyserial, about 6 s;
+# test_kmx_limits.py: product bounds and angle limits named before sending,
+# products.json current, about 4 s; test_servo_bus_sched.py: SCHED_FIFO by default where allowed,
 # --no-realtime, the fallback, policies read back from the kernel, three
 # QEMU servos in the polling update bootloader put back to plain scheduling
 # and answering, about 7 s; test_run_on_bus.py: the conformance wrapper runs every check it
