@@ -20,7 +20,8 @@
 # and `kmx --trace`'s decoded answers, about 8 s; test_kmx_transport.py: device
 # paths, loop://, spy://, hwgrep://, socket:// through pyserial, about 6 s;
 # test_kmx_limits.py: product bounds and angle limits named before sending,
-# products.json current, about 4 s; test_servo_bus_sched.py: SCHED_FIFO by default where allowed,
+# products.json current, about 4 s; test_kmx_web_api.py: kmx web's JSON API
+# without a browser (needs python3-aiohttp), about 6 s; test_servo_bus_sched.py: SCHED_FIFO by default where allowed,
 # --no-realtime, the fallback, policies read back from the kernel, three
 # QEMU servos in the polling update bootloader put back to plain scheduling
 # and answering, about 7 s; test_run_on_bus.py: the conformance wrapper runs every check it
