@@ -257,7 +257,22 @@ class KmxOnThreeServos(unittest.TestCase):
         self.assertEqual(len(times), 4, r.stdout)
         for n, t in enumerate(times):
             self.assertGreaterEqual(t, n * 0.150 - 0.002, times)  # never before its slot
-        self.assertLess(times[-1], 3 * 0.150 + 1.0, times)  # a schedule, not 4 x (interval + reads) piling up
+
+    def test_monitor_interval_is_the_sample_period(self):
+        """In virtual time (each sample takes 40 ms of it): sample n starts
+        at n x 150 ms, not n x (150 + 40) ms."""
+        clock = [100.0]
+        fake_time = mock.Mock(monotonic=lambda: clock[0], sleep=lambda s: clock.__setitem__(0, clock[0] + s))
+        real_sample = cli.monitor_sample
+
+        def sample_taking_40_ms(*args):
+            clock[0] += 0.040
+            return real_sample(*args)
+        with mock.patch.object(cli, "time", fake_time), mock.patch.object(cli, "monitor_sample", sample_taking_40_ms):
+            r = kmx(self.wire.spec, "monitor", "1", "2", "--csv", "--count", "4", "--interval", "150")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        times = [line.split(",")[0] for line in r.stdout.splitlines()[1:]]
+        self.assertEqual(times, ["0.000", "0.000", "0.150", "0.150", "0.300", "0.300", "0.450", "0.450"])
 
 
     def session(self, *args):
