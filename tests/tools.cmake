@@ -55,7 +55,7 @@ if(EXISTS /usr/bin/python3)
 endif()
 
 # The example scripts of docs/python-api.md (host/examples/) run against three
-# host-sim servos on tools/servo-bus and print what the tutorial says
+# host-sim servos on sim/bus/servo-bus and print what the tutorial says
 # (tests/tools/kmx_examples_check.py; needs the host-sim preset), about 10 s.
 if(KM_PYTHON3)
   add_test(NAME kmx_examples COMMAND ${KM_PYTHON3} ${CMAKE_SOURCE_DIR}/tests/tools/kmx_examples_check.py -v)

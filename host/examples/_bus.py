@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
 """What every example shares: kmx importable from the checkout, and the bus
-spec from --bus, else $KMX_BUS, else the emulated bus of tools/servo-bus."""
+spec from --bus, else $KMX_BUS, else the emulated bus of sim/bus/servo-bus."""
 import os
 import sys
 

@@ -3,7 +3,7 @@
 
 They need a bus whose line rate the master can change: a serial port
 (serial:DEV@BAUD) or the emulated bus over RFC 2217
-(rfc2217:HOST:PORT@BAUD, tools/servo-bus "Baud"); a raw tcp: bus carries
+(rfc2217:HOST:PORT@BAUD, sim/bus/servo-bus "Baud"); a raw tcp: bus carries
 bytes at whatever rate the hub was started with and cannot follow a servo
 to another baud, so these commands say so instead of failing later.
 

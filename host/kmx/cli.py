@@ -20,9 +20,9 @@ by name, with units (names, units and ranges from docs/registers.json).
   kmx [--bus SPEC] trace [--move]       a session with every frame printed and decoded
   kmx [--bus SPEC] web [--port N]       the servo wizard: a page on http://127.0.0.1:8765/
 
-SPEC: tcp:HOST:PORT (tools/servo-bus, host-sim), a device path
+SPEC: tcp:HOST:PORT (sim/bus/servo-bus, host-sim), a device path
 /dev/ttyUSB0[@BAUD] (or serial:/dev/ttyUSB0@115200, pty:/dev/pts/N),
-rfc2217:HOST:PORT@BAUD (tools/servo-bus as a serial port whose baud kmx can
+rfc2217:HOST:PORT@BAUD (sim/bus/servo-bus as a serial port whose baud kmx can
 change: set-baud, scan --all-bauds, rescue), or any pyserial URL:
 socket://HOST:PORT, rfc2217://HOST:PORT[@BAUD], loop://, spy://DEVICE (a hex
 trace of every byte), hwgrep://REGEXP (an adapter by its description);
@@ -547,7 +547,7 @@ def build_parser():
                                    "switches the master to BAUD and pings the servo there; on failure "
                                    "it switches back and says whether the servo still answers at the "
                                    "old baud. Needs a bus whose baud kmx can change: serial:DEV@BAUD or "
-                                   "rfc2217:HOST:PORT@BAUD (tools/servo-bus).")
+                                   "rfc2217:HOST:PORT@BAUD (sim/bus/servo-bus).")
     p.add_argument("id", type=servo_id, help="the servo's ID")
     p.add_argument("baud", type=baud_arg, help="its new baud, %d..%d, a multiple of 100"
                    % (kbaud.BAUD_MIN, kbaud.BAUD_MAX))

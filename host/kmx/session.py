@@ -5,7 +5,7 @@ every frame sent and every answer, decoded with register names and units
 docs/registers.json).
 
   kmx --bus tcp:127.0.0.1:7000 trace [--move]
-  tools/servo-session --tcp 127.0.0.1:7000          (a bus from tools/servo-bus)
+  tools/servo-session --tcp 127.0.0.1:7000          (a bus from sim/bus/servo-bus)
   tools/servo-session --serial /dev/ttyUSB0 [--baud 115200]   (a real bus; needs python3-serial)
   tools/servo-session --bus pty:/dev/pts/3          (any kmx bus spec)
 
@@ -209,7 +209,7 @@ def main(argv=None, prog="servo-session"):
     """servo-session's command line: --tcp, --serial (--baud) or --bus; --move."""
     ap = argparse.ArgumentParser(prog=prog, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     g = ap.add_mutually_exclusive_group(required=True)
-    g.add_argument("--tcp", metavar="HOST:PORT", help="a bus from tools/servo-bus")
+    g.add_argument("--tcp", metavar="HOST:PORT", help="a bus from sim/bus/servo-bus")
     g.add_argument("--serial", metavar="DEVICE", help="serial port of a real bus adapter")
     g.add_argument("--bus", metavar="SPEC", help="any kmx bus spec (kmx --help)")
     ap.add_argument("--baud", type=int, default=115200, help="with --serial (default 115200)")

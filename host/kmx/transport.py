@@ -3,9 +3,9 @@
 through pyserial's serial_for_url (Debian: python3-serial):
 
     /dev/ttyUSB0[@BAUD]        a serial port or pseudo-terminal by its path
-    socket://HOST:PORT         the emulated bus (tools/servo-bus, host-sim --listen)
+    socket://HOST:PORT         the emulated bus (sim/bus/servo-bus, host-sim --listen)
     rfc2217://HOST:PORT[@BAUD] the emulated bus as a serial port over RFC 2217
-                               (tools/servo-bus): the baud is the master's line
+                               (sim/bus/servo-bus): the baud is the master's line
                                rate on the wire, set_baud() changes it
     loop://                    pyserial's loop-back: every byte written comes back
     spy:///dev/ttyUSB0[?file=F] the port with a hex trace of every byte (stderr or F)
@@ -35,7 +35,7 @@ from .errors import (ConnectionRefused, NoSuchDevice, NotASerialPort,
                      PortBusy, SpecError, TransportError)
 
 DEFAULT_BAUD = 115200
-BUSY_PREFIX = b"servo-bus: busy"  # tools/servo-bus BUSY_LINE
+BUSY_PREFIX = b"servo-bus: busy"  # sim/bus/servo-bus BUSY_LINE
 SPEC_FORMS = ("tcp:HOST:PORT, serial:/dev/ttyUSB0@115200, pty:/dev/pts/N or rfc2217:HOST:PORT@115200; "
               "a device path /dev/ttyUSB0[@BAUD]; or a pyserial URL socket://, rfc2217://, loop://, "
               "spy://, hwgrep://")
@@ -294,7 +294,7 @@ def _open_error(spec, kind, url, baud, e):
     text, code = str(e), getattr(e, "errno", None)
     if "Connection refused" in text or code == errno.ECONNREFUSED:
         return ConnectionRefused("%s: connection refused (is the bus running? start it with "
-                                 "tools/servo-bus or host-sim --listen)" % spec)
+                                 "sim/bus/servo-bus or host-sim --listen)" % spec)
     if "parameter change" in text or "rejected value" in text:
         return TransportError("%s: the bus refused %d baud (the servos run at %d..%d)"
                               % (spec, baud, BAUD_MIN, BAUD_MAX))

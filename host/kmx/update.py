@@ -29,7 +29,7 @@ points at random over the whole pass (ENTER to START), one per pass. After a res
 notices on the next STATUS and starts the pass again from ENTER, so every
 run ends updated or reports why.
 
---resets N with --monitor-dir DIR (the servos' QEMU monitors, tools/servo-bus
+--resets N with --monitor-dir DIR (the servos' QEMU monitors, sim/bus/servo-bus
 --monitor-dir DIR) and --seed S: N real system resets ("system_reset" on
 one servo's QEMU monitor, the emulated equivalent of a power cut: the core,
 RAM and peripherals restart, flash keeps what was written) at random
@@ -85,7 +85,7 @@ BOOT_WAIT_S = 5.0
 
 
 class Monitor:
-    """One servo's QEMU human monitor (a Unix socket, tools/servo-bus
+    """One servo's QEMU human monitor (a Unix socket, sim/bus/servo-bus
     --monitor-dir), kept open for the whole run so a reset costs no connect."""
 
     def __init__(self, path):
@@ -415,7 +415,7 @@ def add_update_arguments(ap, with_bus):
     ap.add_argument("--seed", type=int, default=1, help="testing: the random points' seed")
     ap.add_argument("--resets", type=count_arg(0), default=0,
                     help="system resets through the servos' QEMU monitors (needs --monitor-dir)")
-    ap.add_argument("--monitor-dir", help="the servos' QEMU monitor sockets (tools/servo-bus --monitor-dir)")
+    ap.add_argument("--monitor-dir", help="the servos' QEMU monitor sockets (sim/bus/servo-bus --monitor-dir)")
     ap.add_argument("--attempts", type=count_arg(0), default=0, help="passes at most (default: restarts + 3)")
     ap.add_argument("--quiet", action="store_true", help="only the figures and the errors")
     ap.add_argument("--baud", type=count_arg(0), default=115200,

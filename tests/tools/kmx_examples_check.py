@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """The example scripts of docs/python-api.md (host/examples/*.py) run as a
 user runs them, against three real host-sim servos (IDs 1, 2, 3) on the
-emulated bus of tools/servo-bus: each exits 0, prints no traceback, and
+emulated bus of sim/bus/servo-bus: each exits 0, prints no traceback, and
 prints what the tutorial says it prints. Every example in host/examples/
 must have its check here (a new one without fails). CTest kmx_examples;
 needs the host-sim preset built. About 10 s.

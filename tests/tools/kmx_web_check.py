@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """`kmx web` in a real browser (issue 23 item 2): Debian's Chromium,
 headless, driven by Selenium (python3-selenium, chromium-driver) against
-`kmx web` on three host-sim servos on tools/servo-bus:
+`kmx web` on three host-sim servos on sim/bus/servo-bus:
   - a scan finds the 3 servos;
   - a value edited in the control table (max_speed = 300 °/s) reads back
     over the bus (the table read again shows it);
@@ -85,7 +85,7 @@ class QemuBus:
         for f in (BOOT, V2):
             if not os.path.isfile(f):
                 raise AssertionError("missing %s: cmake --preset qemu && cmake --build --preset qemu" % f)
-        self.proc = subprocess.Popen([os.path.join(REPO, "tools", "servo-bus"), "--ids", "1,2", "--port", "0",
+        self.proc = subprocess.Popen([os.path.join(REPO, "sim", "bus", "servo-bus"), "--ids", "1,2", "--port", "0",
                                       "--image", BOOT], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
                                      text=True)
         line = self.proc.stdout.readline()

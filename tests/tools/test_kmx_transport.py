@@ -4,7 +4,7 @@ a bare device path, loop://, spy:// (a hex trace of every byte), hwgrep://
 (an adapter by its description), socket:// and the tcp:HOST:PORT alias with
 servo-bus's busy message, each opened and used against a real host-sim
 servo (a pseudo-terminal, host-sim --pty) or the 3-servo host-sim bus of
-tools/servo-bus. About 6 s."""
+sim/bus/servo-bus. About 6 s."""
 import os
 import sys
 import tempfile

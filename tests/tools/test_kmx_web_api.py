@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
 """`kmx web`'s JSON API without a browser (docs/web.md; the page itself:
-kmx_web_check.py): on three host-sim servos on tools/servo-bus, a scan job
+kmx_web_check.py): on three host-sim servos on sim/bus/servo-bus, a scan job
 with its progress, the control table with this servo's product bounds in
 place of "product" and coded values in words, a write refused naming its
 limit and one read back, set-id refused when the new ID is taken (the
