@@ -207,8 +207,10 @@ class Updater:
                      ", ".join("ID %d %s" % kv for kv in sorted(after.items()))))
         return out
 
-    def ask(self, dev_id, sub, params=b"", timeout=1.0, tries=4):
-        """The answer's parameters to a 0x78 frame sent to dev_id, or None.
+    def ask(self, dev_id, sub, params=b"", timeout=2.0, tries=6):
+        """The answer's parameters to a 0x78 frame sent to dev_id, or None
+        (after 12 s: an emulated servo on a loaded machine works through a
+        backlog of blocks for seconds before it reads the question).
         Short responses are skipped: a late answer to an earlier ping (a
         servo that was restarting answers the pings it queued) must not
         pass for this answer."""

@@ -103,12 +103,6 @@ class WebUpdater(kupdate.Updater):
             self.job.progress = min(0.95, 0.1 + 0.8 * self.blocks_sent / max(1, self.blocks))
         return super().send(data, answers, timeout)
 
-    def ask(self, dev_id, sub, params=b"", timeout=2.0, tries=6):
-        """As the command's, with more patience: the page's user waits anyway,
-        and an emulated servo on a loaded machine can take seconds to work
-        through the blocks before it answers."""
-        return super().ask(dev_id, sub, params, timeout, tries)
-
     def status(self, dev_id, first=0):
         st = super().status(dev_id, first)
         if st is not None and dev_id in self.job.servos:
