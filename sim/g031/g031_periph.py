@@ -285,6 +285,10 @@ class Usart(Block):
         brr = self.r.get(self.BRR, 0) or 1
         return brr * NS / self.m.pclk()
 
+    def enabled(self):
+        """UE set: the USART runs at bit_ns()."""
+        return bool(self.r[self.CR1] & 1)
+
     def read(self, off, now):
         if off == self.ISR:
             cr1 = self.r[self.CR1]
@@ -314,20 +318,21 @@ class Usart(Block):
             self.shift_end = now + 10 * self.bit_ns()
             self.flags |= self.TXE
 
-    def receive_at(self, when, byte):
+    def receive_at(self, when, byte, framing_error=False):
         """A byte on the wire whose stop bit's middle is at `when`."""
-        self.rx_queue.append((when, byte))
+        self.rx_queue.append((when, byte, framing_error))
         self.rx_queue.sort()
 
-    def _rx(self, byte):
-        """The receiver completes a byte (RE and UE set)."""
+    def _rx(self, byte, framing_error=False):
+        """The receiver completes a byte (RE and UE set); a stop bit read 0
+        also sets FE, the data still goes to RDR (§33.5.6)."""
         cr1 = self.r[self.CR1]
         if cr1 & 5 != 5:
             return
         if self.flags & self.RXNE:
             self.flags |= self.ORE
         else:
-            self.rdr, self.flags = byte, self.flags | self.RXNE
+            self.rdr, self.flags = byte, self.flags | self.RXNE | (self.FE if framing_error else 0)
 
     def tick(self, now):
         while self.shift_end is not None and now >= self.shift_end:
@@ -341,7 +346,8 @@ class Usart(Block):
             else:
                 self.flags |= self.TC
         while self.rx_queue and now >= self.rx_queue[0][0]:
-            self._rx(self.rx_queue.pop(0)[1])
+            _when, byte, framing_error = self.rx_queue.pop(0)
+            self._rx(byte, framing_error)
 
     def next_event(self, now):
         times = [t for t in (self.shift_end, self.rx_queue[0][0] if self.rx_queue else None) if t is not None]

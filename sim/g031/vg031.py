@@ -34,6 +34,7 @@ UID = (0x00390041, 0x4E501120, 0x20383634)   # an arbitrary 96-bit unique ID (RM
 # Fixed sensor inputs (ADC codes, 12 bits) until the plant is attached:
 # pot mid-travel, zero current, 12 V supply through 100k/10k, NTC at 25 C.
 DEFAULT_SENSORS = {0: 2048, 1: 2048, 2: 1365, 3: 2048}
+QUIET_SLICE_NS = 16_000     # longest slice (vg031.Machine._slice_length)
 RESET_PIN, RESET_PWR, RESET_SFT, RESET_IWDG = 1 << 26, 1 << 27, 1 << 28, 1 << 29
 
 
@@ -174,6 +175,7 @@ class Machine:
         self.faults = []            # [(time, kind, pc)]
         self.reset_request = None
         self.slice_ns = 1000        # interrupts are taken between slices
+        self.horizon = None         # run_until's end: a WFI sleeps no further
         self.wfi_sites = set()
         self.unmask_sites = set()   # the instruction after each CPSIE i / MSR PRIMASK
         self.watches = {addr: [] for addr in watch}   # address: [(time, instructions before the slice)]
@@ -261,6 +263,7 @@ class Machine:
         self.flash[off:off + len(data)] = data
 
     def _mmio_read(self, uc, off, size, page):
+        self.touched = True
         addr = page + off
         for b in self.by_page[page]:
             if b.base <= addr < b.base + 0x400:
@@ -270,6 +273,7 @@ class Machine:
         return 0
 
     def _mmio_write(self, uc, off, size, val, page):
+        self.touched = True
         addr = page + off
         for b in self.by_page[page]:
             if b.base <= addr < b.base + 0x400:
@@ -278,9 +282,11 @@ class Machine:
         self.unmodelled.add(addr)
 
     def _scs_read(self, uc, off, size, _):
+        self.touched = True
         return self.scs.read(off, self.now)
 
     def _scs_write(self, uc, off, size, val, _):
+        self.touched = True
         self.scs.write(off, val, self.now)
 
     def _flash_hook(self, uc, access, addr, size, value, _):
@@ -290,6 +296,7 @@ class Machine:
         locks CR again. unicorn still writes the value into its RAM copy of
         the array; that store is undone at the next store or the end of the
         slice, so the controller always sees the array as it is."""
+        self.touched = True
         self._undo_flash_writes()
         off = addr & (P.FLASH_SIZE - 1)
         self.flash_writes.append((off, bytes(self.flash[off:off + size])))
@@ -355,9 +362,14 @@ class Machine:
         self.active = []
         self.reset_request = None
         self.locked_up = False
+        self.asleep = False
+        self.touched = True
+        self.due = 0
 
     def _pending_exception(self):
         """Highest-priority pending exception that may preempt, or None."""
+        if not (self.scs.pending & self.scs.enabled or self.scs.pend_sys):
+            return None
         primask = self.uc.reg_read(A.UC_ARM_REG_PRIMASK) & 1
         cur = min([self.scs.prio(e) for e in self.active], default=256)
         if primask:
@@ -423,6 +435,8 @@ class Machine:
 
     def _sync_active(self):
         """Exception returns happened inside unicorn: drop finished ones."""
+        if not self.active:
+            return
         ipsr = self.uc.reg_read(A.UC_ARM_REG_IPSR) & 0x3F
         while self.active and self.active[-1] != ipsr:
             self.active.pop()
@@ -491,9 +505,22 @@ class Machine:
         self.uc.reg_write(A.UC_ARM_REG_PRIMASK, 1)
         self.pc = addr
 
+    def _slice_length(self):
+        """A slice of slice_ns; after a slice that touched no peripheral,
+        with no interrupt pending, up to QUIET_SLICE_NS or the next
+        peripheral event: nothing can pend an interrupt before it."""
+        if self.touched or self.scs.pending & self.scs.enabled or self.scs.pend_sys:
+            return self.slice_ns
+        room = min(self.due, self.horizon if self.horizon is not None else self.due) - self.now
+        return max(self.slice_ns, min(QUIET_SLICE_NS, int(room)))
+
     def step(self, ns=None):
         """One slice: CPU, peripherals, interrupts, resets."""
-        ns = self.slice_ns if ns is None else ns
+        if self.asleep:
+            self._sleep()
+            return
+        ns = self._slice_length() if ns is None else ns
+        self.touched = False
         self._sync_active()
         exc = self._pending_exception()
         if exc is not None:
@@ -504,21 +531,30 @@ class Machine:
         else:
             sleep = self._run_slice(ns)
         self._sync_active()
-        self._tick_all()
-        self._levels()
+        if self.touched or sleep or self.now >= self.due:
+            self._tick_all()
+            self._levels()
+            self.due = self._next_event()
         if self.reset_request:
             self._system_reset(self.reset_request)
             return
         if sleep:
+            self.asleep = True
             self._sleep()
 
     def _sleep(self):
         """WFI: time passes to the next event until an interrupt is pending
-        (PRIMASK does not stop the wake-up, B1.5.19)."""
+        (PRIMASK does not stop the wake-up, B1.5.19), or up to the horizon
+        of run_until (the core stays asleep: the next step goes on)."""
         while True:
             if self.scs.pending & self.scs.enabled or self.scs.pend_sys or self.reset_request:
+                self.asleep = False
                 return
-            self.now = max(self.now, self._next_event())
+            nxt = self._next_event()
+            if self.horizon is not None and nxt > self.horizon:
+                self.now = max(self.now, self.horizon)
+                return
+            self.now = max(self.now, nxt)
             self._tick_all()
             self._levels()
             if self.reset_request:
@@ -527,6 +563,7 @@ class Machine:
 
     def run_until(self, t_ns, stop=None):
         """Runs until virtual time t_ns, or until stop() is true."""
+        self.horizon = t_ns
         while self.now < t_ns:
             self.step()
             if stop is not None and stop():

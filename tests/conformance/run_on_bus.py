@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """Run the conformance suite on an emulated bus (what CTest runs).
 
-    run_on_bus.py --backend host-sim|qemu [--ids 1,2,3] [--bus-baud N]
+    run_on_bus.py --backend host-sim|qemu|g031 [--ids 1,2,3] [--bus-baud N]
                   [--slot-timing auto|realtime|plain] [--slot-floor-us N]
                   [--slow-baud N --slow NAME...] [--] SUITE-ARGS...
 
@@ -202,7 +202,7 @@ def run_suite(port, a, realtime, t0):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--backend", required=True, choices=("host-sim", "qemu"))
+    ap.add_argument("--backend", required=True, choices=("host-sim", "qemu", "g031"))
     ap.add_argument("--ids", default="1,2,3")
     ap.add_argument("--bus-baud", type=int)
     ap.add_argument("--gap-floor-us", type=int)

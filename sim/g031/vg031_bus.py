@@ -1,0 +1,404 @@
+#!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
+"""vg031_bus: several virtual STM32G031 servos (vg031.py) on one emulated
+single wire, all in one virtual time, served to one master over TCP like
+tools/servo-bus's other backends (raw bytes, or RFC 2217 for the baud).
+
+    vg031_bus.py --ids 1,2,3 --port 0 [--image BOOT.elf] [--app APP.kmfw]
+                 [--app-elf APP.elf] [--build-dir DIR] [--baud N]
+                 [--flash-dir DIR] [--timeout S] [servo-bus's other options]
+
+servo-bus --backend g031 runs this program with its own arguments. Each
+servo runs the unmodified bootloader and application images of the
+stm32g031 preset (default build/stm32g031/boards/stm32g031:
+km-boot-stm32g031.elf, km-servo-app-stm32g031.kmfw in the application
+region, km-servo-app-stm32g031.elf for its WFI sites). It gets its ID over
+the protocol, alone on its wire, before it joins the bus: ping ID 0, write
+0x0F = ID, ping the new ID (docs/protocol.md §5.1).
+
+The wire is modelled in virtual time: a byte a servo sends reaches every
+other servo at its stop bit (decoded at the receiver's own bit time,
+g031_wire.py), and the master's bytes go on the wire at the virtual time
+they arrive. The servos' answer slots (super-ID, 0x82) therefore keep
+their order exactly, however loaded the host: --slot-floor-us has nothing
+to do and is only logged. Virtual time follows real time where the
+emulator is fast enough and lags behind it where it is not (it never runs
+ahead, so an idle bus does not spin); answers go to the master in the
+order of their start bits.
+
+Each chunk of the master's bytes goes on the wire back to back from the
+virtual time it arrives (a master writes a frame at once); --gap-floor-us
+is accepted and has no effect: the unmodified image keeps the parser's
+real gap rule, and virtual time never runs faster than real time, so a
+host stall inside a frame is no longer on the wire than in real time.
+
+--flash-dir DIR: each servo's whole 64 KiB flash in DIR/servo-ID.flash,
+read at start (a servo that already answers on its ID is not written
+again) and written back when the bus stops (SIGTERM, SIGINT, client gone).
+
+stdout: exactly one line "ready 127.0.0.1:PORT" once every servo answers
+on its ID; everything else on stderr. Exit 0 after SIGTERM / SIGINT, 1 when
+a servo cannot be provisioned, 2 for usage errors and missing images."""
+import argparse
+import os
+import selectors
+import signal
+import socket
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import g031_deps  # noqa: E402
+
+REPO = os.path.dirname(os.path.dirname(HERE))
+IMAGES = "boards/stm32g031"
+BUILD_DEFAULT = "build/stm32g031"
+HOST = "127.0.0.1"
+QUANTUM_NS = 50_000     # the servos advance together in steps of this much virtual time
+STOP = []
+
+
+def log(msg):
+    print("servo-bus: g031: " + msg, file=sys.stderr, flush=True)
+
+
+def frame(servo_id, cmd, adr=None, params=b""):
+    """A command frame with its checksum (docs/protocol.md §2)."""
+    body = bytes([servo_id, 2 + len(params) + (adr is not None), cmd])
+    body += (bytes([adr]) if adr is not None else b"") + params
+    return b"\xf9\xff" + body + bytes([~sum(body) & 0xFF])
+
+
+def parse_args(argv):
+    """servo-bus's command line, with the options that mean something here."""
+    ap = argparse.ArgumentParser(prog="servo-bus --backend g031", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--ids", required=True)
+    ap.add_argument("--port", required=True, type=int)
+    ap.add_argument("--backend", default="g031")
+    ap.add_argument("--baud", type=int, default=115200)
+    ap.add_argument("--image", help="the bootloader ELF (km-boot-stm32g031.elf)")
+    ap.add_argument("--app", help="the application update image (.kmfw)")
+    ap.add_argument("--app-elf", help="the application ELF")
+    ap.add_argument("--build-dir")
+    ap.add_argument("--gap-floor-us", type=int, default=0)
+    ap.add_argument("--slot-floor-us", type=int)
+    ap.add_argument("--product")
+    ap.add_argument("--scenario", action="append", default=[])
+    ap.add_argument("--qemu-arg", action="append", default=[])
+    ap.add_argument("--monitor-dir")
+    ap.add_argument("--flash-dir")
+    ap.add_argument("--timeout", type=float, default=10.0)
+    ap.add_argument("--realtime", action="store_true")
+    ap.add_argument("--no-realtime", action="store_true")
+    return ap.parse_args(argv)
+
+
+def image_paths(a):
+    """(boot ELF, app .kmfw, app ELF) from the options and the build tree."""
+    build = os.path.join(REPO, a.build_dir or os.environ.get("KM_BUILD_STM32G031") or BUILD_DEFAULT, IMAGES)
+    boot = a.image or os.path.join(build, "km-boot-stm32g031.elf")
+    folder = os.path.dirname(boot)
+    app = a.app or os.path.join(folder, "km-servo-app-stm32g031.kmfw")
+    app_elf = a.app_elf or os.path.join(folder, "km-servo-app-stm32g031.elf")
+    return boot, app, app_elf
+
+
+def refused_options(a):
+    """The reason an option cannot apply to the virtual G031, or None."""
+    if a.qemu_arg or a.monitor_dir:
+        return "--qemu-arg and --monitor-dir are for the qemu backend only"
+    if a.product not in (None, "pot"):
+        return "--product %s: the stm32g031 image is the potentiometer product" % a.product
+    if a.scenario:
+        return "--scenario: the virtual G031 has no plant yet (fixed sensor inputs, docs/virtual-g031.md)"
+    if a.realtime:
+        return "--realtime: the virtual bus keeps slots in virtual time and needs no SCHED_FIFO"
+    return None
+
+
+class Line:
+    """The master's side of the wire for pyserial's RFC 2217 PortManager:
+    the baud a client sets, like a serial port's."""
+
+    def __init__(self, baud):
+        self.baudrate = baud
+        self.bytesize, self.parity, self.stopbits = 8, "N", 1
+        self.xonxoff = self.rtscts = self.break_condition = False
+        self.dtr = self.rts = True
+        self.cts = self.dsr = self.ri = self.cd = False
+
+    def reset_input_buffer(self):
+        """Nothing is held back from the client."""
+
+    def reset_output_buffer(self):
+        """Nothing is held back for the servos."""
+
+
+class Servo:
+    """One virtual G031 on the bus, with the file that keeps its flash."""
+
+    def __init__(self, dev_id, images, flash_dir):
+        import vg031
+        boot, app, app_elf = images
+        self.id = dev_id
+        self.flash_file = os.path.join(flash_dir, "servo-%d.flash" % dev_id) if flash_dir else None
+        image = None
+        if self.flash_file and os.path.exists(self.flash_file):
+            with open(self.flash_file, "rb") as f:
+                image = f.read()
+            if len(image) != vg031.P.FLASH_SIZE:
+                log("servo id %d: %s is not a 64 KiB flash image: images flashed again" % (dev_id, self.flash_file))
+                image = None
+        self.kept = image is not None
+        self.m = vg031.Machine(image or vg031.flash_from_images(boot, app), elves=[boot, app_elf])
+        self.faults_seen = 0
+
+    def exchange(self, data, wait_ns):
+        """Alone on its wire: sends `data` at the master's 115200 baud (a
+        fresh servo's rate, docs/protocol.md §1), returns what it answers."""
+        self.m.take_output()
+        end = self.m.send(data, 115200)
+        self.m.run_until(end + wait_ns)
+        return bytes(b for _t, b in self.m.take_output())
+
+    def answers(self, dev_id):
+        """True when a ping to dev_id is answered (docs/protocol.md §4)."""
+        out = self.exchange(frame(dev_id, 0x01), 5_000_000)
+        return out[:3] == bytes([0xF9, 0xF5, dev_id])
+
+    def provision(self, timeout_s):
+        """Gives the servo its ID over the protocol, in virtual time (boot
+        included); False when it never answers."""
+        limit = self.m.now + int(timeout_s * 1e9)
+        if self.kept and self.answers(self.id):
+            return True
+        while not self.answers(0):
+            if self.m.now > limit:
+                return False
+        self.exchange(frame(0, 0x03, 0x0F, bytes([self.id])), 200_000_000)
+        return self.answers(self.id)
+
+    def save(self):
+        """Writes the flash back to its file (--flash-dir)."""
+        if self.flash_file:
+            with open(self.flash_file, "wb") as f:
+                f.write(bytes(self.m.flash))
+
+    def report_faults(self):
+        """Logs faults and resets the core took since the last call."""
+        for when, kind, pc in self.m.faults[self.faults_seen:]:
+            log("servo id %d: %s at pc 0x%08x, %.3f ms" % (self.id, kind, pc, when / 1e6))
+        self.faults_seen = len(self.m.faults)
+
+
+class Bus:
+    """The shared wire in virtual time, one TCP client as the master."""
+
+    def __init__(self, server, servos, baud):
+        self.server, self.servos = server, servos
+        self.baud = baud
+        self.line = Line(baud)
+        self.client, self.rfc2217, self.fresh = None, None, False
+        self.client_out = bytearray()
+        self.now = max(s.m.now for s in servos)
+        for s in servos:
+            s.m.run_until(self.now)
+            s.m.take_output()
+        self.master_free = self.now      # end of the master's last byte on the wire
+        self.sel = selectors.DefaultSelector()
+        self.sel.register(server, selectors.EVENT_READ, "server")
+        self.anchor = (time.monotonic(), self.now)
+        self.started = self.anchor
+
+    def _accept(self):
+        conn, addr = self.server.accept()
+        if self.client is not None:
+            try:
+                conn.send(b"servo-bus: busy: another client holds the bus\n")
+            except OSError:
+                pass
+            conn.close()
+            return
+        conn.setblocking(False)
+        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.client, self.fresh, self.rfc2217 = conn, True, None
+        self.line = Line(self.baud)
+        self.sel.register(conn, selectors.EVENT_READ, "client")
+        log("client connected from %s:%d" % addr)
+
+    def _drop_client(self):
+        self.sel.unregister(self.client)
+        self.client.close()
+        self.client = None
+        self.client_out.clear()
+        log("client disconnected")
+
+    def write(self, data):
+        """PortManager's connection: Telnet/RFC 2217 replies."""
+        self.client_out += bytes(data)
+
+    def _from_client(self, chunk):
+        if self.fresh:
+            self.fresh = False
+            if chunk[0] == 0xFF and (len(chunk) == 1 or chunk[1] in (251, 252, 253, 254)):
+                import serial.rfc2217
+                self.rfc2217 = serial.rfc2217.PortManager(self.line, self)
+                log("client speaks RFC 2217")
+        start = max(self.now, self.master_free)
+        if self.rfc2217 is None:
+            self._to_servos(chunk, start)
+            return
+        for byte in self.rfc2217.filter(chunk):
+            start = self._to_servos(byte, start)
+
+    def _to_servos(self, data, start):
+        """The master's bytes on the wire from `start` at its baud; returns their end."""
+        tx_bit = 1e9 / self.line.baudrate
+        for byte in data:
+            for s in self.servos:
+                self._deliver(s, start, byte, tx_bit)
+            start += 10 * tx_bit
+        self.master_free = start
+        return start
+
+    def _deliver(self, servo, start, byte, tx_bit):
+        """A byte whose start bit began at `start` reaches one servo's USART."""
+        u = servo.m.usart1
+        if not u.enabled():
+            return
+        rx_bit = u.bit_ns()
+        got = _decode(byte, tx_bit, rx_bit)
+        if got is not None:
+            u.receive_at(max(start + 9.5 * rx_bit, servo.m.now + 1), got[0], got[1])
+
+    def _advance(self, until):
+        """Every servo to virtual time `until`; their bytes onto the wire."""
+        sent = []
+        for s in self.servos:
+            s.m.run_until(until)
+            bit = s.m.usart1.bit_ns()
+            sent += [(t, b, bit, s) for t, b in s.m.take_output()]
+            if len(s.m.faults) != s.faults_seen:
+                s.report_faults()
+        self.now = until
+        for t, byte, bit, src in sorted(sent, key=lambda x: x[0]):
+            for s in self.servos:
+                if s is not src:
+                    self._deliver(s, t, byte, bit)
+            got = _decode(byte, bit, 1e9 / self.line.baudrate)
+            if self.client is not None and got is not None and not got[1]:
+                self.client_out += b"\xff\xff" if got[0] == 0xFF and self.rfc2217 else bytes([got[0]])
+
+    def _wait_s(self):
+        """Real seconds to wait before the next quantum: virtual time never
+        runs ahead of real time; when it lags, the anchor moves (no sprint)."""
+        r0, v0 = self.anchor
+        real = time.monotonic()
+        ahead = (self.now - v0) / 1e9 - (real - r0)
+        if ahead < -0.02:
+            self.anchor = (real, self.now)
+        return max(0.0, ahead)
+
+    def _service(self, timeout):
+        """Socket events: a client, its bytes, our bytes to it."""
+        if self.client is not None and self.client_out:
+            try:
+                n = self.client.send(self.client_out)
+                del self.client_out[:n]
+            except BlockingIOError:
+                pass
+            except OSError:
+                self._drop_client()
+        for key, _mask in self.sel.select(timeout):
+            if key.data == "server":
+                self._accept()
+            elif self.client is not None:
+                try:
+                    chunk = self.client.recv(4096)
+                except (BlockingIOError, InterruptedError):
+                    continue
+                except OSError:
+                    chunk = b""
+                if not chunk:
+                    self._drop_client()
+                else:
+                    self._from_client(chunk)
+
+    def run(self):
+        """Until SIGTERM or SIGINT."""
+        while not STOP:
+            self._service(min(self._wait_s(), 0.05))
+            if self._wait_s() == 0.0:
+                self._advance(self.now + QUANTUM_NS)
+
+    def speed(self):
+        """Virtual us per real second since the bus started."""
+        real = time.monotonic() - self.started[0]
+        return (self.now - self.started[1]) / 1e3 / real if real > 0 else 0.0
+
+
+def _decode(byte, tx_bit, rx_bit):
+    import g031_wire
+    return g031_wire.decode(byte, tx_bit, rx_bit)
+
+
+def main(argv=None):
+    a = parse_args(sys.argv[1:] if argv is None else argv)
+    g031_deps.require()
+    why = refused_options(a)
+    if why:
+        log(why)
+        return 2
+    try:
+        ids = [int(x, 0) for x in a.ids.split(",") if x.strip()]
+    except ValueError:
+        log("--ids: not a list of IDs: %r" % a.ids)
+        return 2
+    images = image_paths(a)
+    missing = [p for p in images if not os.path.isfile(p)]
+    if missing:
+        log("no image at %s; build it first: cmake --preset stm32g031 && cmake --build --preset stm32g031"
+            % ", ".join(missing))
+        return 2
+    if a.gap_floor_us:
+        log("--gap-floor-us %d: no effect, the image keeps the parser's real gap rule" % a.gap_floor_us)
+    if a.slot_floor_us:
+        log("--slot-floor-us %d: not needed, the wire keeps answer slots in virtual time" % a.slot_floor_us)
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(sig, lambda *_: STOP.append(1))
+    server = socket.socket()
+    server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        server.bind((HOST, a.port))
+    except OSError as e:
+        log("cannot listen on %s:%d: %s" % (HOST, a.port, e))
+        return 2
+    server.listen(1)
+    server.setblocking(False)
+    servos = []
+    try:
+        for dev_id in ids:
+            if STOP:
+                return 0
+            s = Servo(dev_id, images, a.flash_dir)
+            if not s.provision(a.timeout):
+                log("servo id %d: no answer to a ping on ID 0 within %.0f s of virtual time" % (dev_id, a.timeout))
+                return 1
+            log("servo id %d: on the bus (%.1f ms virtual since power-on)" % (dev_id, s.m.now / 1e6))
+            servos.append(s)
+        if STOP:
+            return 0
+        bus = Bus(server, servos, a.baud)
+        print("ready %s:%d" % server.getsockname(), flush=True)
+        bus.run()
+        log("stopping: %.0f virtual us per real second over the run" % bus.speed())
+        return 0
+    finally:
+        for s in servos:
+            s.save()
+        server.close()
+
+
+if __name__ == "__main__":
+    sys.exit(main())
