@@ -176,6 +176,7 @@ class Machine:
         self.reset_request = None
         self.slice_ns = 1000        # interrupts are taken between slices
         self.horizon = None         # run_until's end: a WFI sleeps no further
+        self.stall_ns = 0           # CPU time lost to flash stalls (_stall)
         self.wfi_sites = set()
         self.unmask_sites = set()   # the instruction after each CPSIE i / MSR PRIMASK
         self.watches = {addr: [] for addr in watch}   # address: [(time, instructions before the slice)]
@@ -203,6 +204,10 @@ class Machine:
         for b in self.blocks:
             self.by_page.setdefault(b.base & ~0xFFF, []).append(b)
         self.unmodelled = set()
+        # Reads that change state (RDR clears RXNE, RM0444 §33.8.10): the
+        # slice after them is short. Other reads change nothing, and what
+        # they show changes only at a peripheral event, which ends a slice.
+        self.read_side_effects = {self.usart1.base + P.Usart.RDR}
 
     @property
     def hz(self):
@@ -263,8 +268,9 @@ class Machine:
         self.flash[off:off + len(data)] = data
 
     def _mmio_read(self, uc, off, size, page):
-        self.touched = True
         addr = page + off
+        if addr in self.read_side_effects:
+            self.touched = True
         for b in self.by_page[page]:
             if b.base <= addr < b.base + 0x400:
                 v = b.read(addr - b.base, self.now)
@@ -282,7 +288,8 @@ class Machine:
         self.unmodelled.add(addr)
 
     def _scs_read(self, uc, off, size, _):
-        self.touched = True
+        if off == 0x010:
+            self.touched = True   # COUNTFLAG clears on read
         return self.scs.read(off, self.now)
 
     def _scs_write(self, uc, off, size, val, _):
@@ -333,7 +340,8 @@ class Machine:
         self._core_reset()
 
     def request_reset(self, reason):
-        """AIRCR.SYSRESETREQ or the IWDG: reset at the end of this slice."""
+        """AIRCR.SYSRESETREQ, the IWDG or the NRST pin ("pin"): reset at
+        the end of this slice."""
         if self.reset_request is None:
             self.reset_request = reason
 
@@ -341,7 +349,8 @@ class Machine:
         """System reset (RM0444 §5.1.2): peripherals and core to reset values,
         SRAM and flash keep their contents; RCC_CSR records the cause."""
         self.resets.append((self.now, reason))
-        self.rcc.set_reset_flags(RESET_PIN | (RESET_IWDG if reason == "iwdg" else RESET_SFT))
+        kind = {"iwdg": RESET_IWDG, "pin": 0}.get(reason, RESET_SFT)
+        self.rcc.set_reset_flags(RESET_PIN | kind)
         for b in self.blocks:
             b.reset()
         self.scs.reset()
@@ -514,10 +523,38 @@ class Machine:
         room = min(self.due, self.horizon if self.horizon is not None else self.due) - self.now
         return max(self.slice_ns, min(QUIET_SLICE_NS, int(room)))
 
+    def _fetches_flash(self):
+        """The CPU's next access is an instruction or vector fetch from the
+        flash array (the boot alias at 0 included)."""
+        if self._pending_exception() is not None:
+            return self.scs.vtor < RAM_BASE
+        return self.pc < P.FLASH_BASE + P.FLASH_SIZE and (self.pc >= P.FLASH_BASE or self.pc < P.FLASH_SIZE)
+
+    def _stall(self):
+        """A flash fetch while BSY1: the CPU waits for the end of the
+        program or erase (RM0444 §3.3.7, §3.3.8: a flash read during an
+        operation stalls the bus until it completes); the peripherals run
+        on, interrupts wait (their handlers and vectors are in flash)."""
+        end = self.flashc.busy_until
+        if self.horizon is not None:
+            end = min(end, self.horizon)
+        start = self.now
+        while self.now < end and not self.reset_request:
+            self.now = max(self.now, min(self.due, end))
+            self._tick_all()
+            self._levels()
+            self.due = self._next_event()
+        self.stall_ns += self.now - start
+        if self.reset_request:
+            self._system_reset(self.reset_request)
+
     def step(self, ns=None):
         """One slice: CPU, peripherals, interrupts, resets."""
         if self.asleep:
             self._sleep()
+            return
+        if self.now < self.flashc.busy_until and self._fetches_flash():
+            self._stall()
             return
         ns = self._slice_length() if ns is None else ns
         self.touched = False

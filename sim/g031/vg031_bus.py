@@ -32,6 +32,11 @@ is accepted and has no effect: the unmodified image keeps the parser's
 real gap rule, and virtual time never runs faster than real time, so a
 host stall inside a frame is no longer on the wire than in real time.
 
+--monitor-dir DIR: each servo gets DIR/servo-ID.sock, a Unix socket that
+answers like QEMU's human monitor to the one command tools/servo-update
+--resets sends, "system_reset": a reset from the NRST pin (RM0444 §5.1.2:
+core and peripherals to their reset values, SRAM and flash kept, PINRSTF).
+
 --flash-dir DIR: each servo's whole 64 KiB flash in DIR/servo-ID.flash,
 read at start (a servo that already answers on its ID is not written
 again) and written back when the bus stops (SIGTERM, SIGINT, client gone).
@@ -106,8 +111,10 @@ def image_paths(a):
 
 def refused_options(a):
     """The reason an option cannot apply to the virtual G031, or None."""
-    if a.qemu_arg or a.monitor_dir:
-        return "--qemu-arg and --monitor-dir are for the qemu backend only"
+    if a.qemu_arg:
+        return "--qemu-arg is for the qemu backend only"
+    if a.monitor_dir and not os.path.isdir(a.monitor_dir):
+        return "--monitor-dir: %s is not a directory" % a.monitor_dir
     if a.product not in (None, "pot"):
         return "--product %s: the stm32g031 image is the potentiometer product" % a.product
     if a.scenario:
@@ -227,6 +234,38 @@ class Bus:
         self.sel.register(conn, selectors.EVENT_READ, "client")
         log("client connected from %s:%d" % addr)
 
+    def add_monitors(self, monitor_dir):
+        """A monitor socket per servo (--monitor-dir)."""
+        for s in self.servos:
+            path = os.path.join(monitor_dir, "servo-%d.sock" % s.id)
+            if os.path.exists(path):
+                os.unlink(path)
+            sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+            sock.bind(path)
+            sock.listen(1)
+            sock.setblocking(False)
+            self.sel.register(sock, selectors.EVENT_READ, ("monitor", s))
+
+    def _monitor(self, key):
+        """A monitor connection or command: "system_reset" resets the servo."""
+        kind, servo = key.data
+        if kind == "monitor":
+            conn, _ = key.fileobj.accept()
+            conn.sendall(b"vg031 monitor\r\n(qemu) ")
+            self.sel.register(conn, selectors.EVENT_READ, ("command", servo))
+            return
+        try:
+            got = key.fileobj.recv(256)
+        except OSError:
+            got = b""
+        if not got:
+            self.sel.unregister(key.fileobj)
+            key.fileobj.close()
+            return
+        if b"system_reset" in got:
+            servo.m.request_reset("pin")
+        key.fileobj.sendall(b"\r\n(qemu) ")
+
     def _drop_client(self):
         self.sel.unregister(self.client)
         self.client.close()
@@ -313,6 +352,8 @@ class Bus:
         for key, _mask in self.sel.select(timeout):
             if key.data == "server":
                 self._accept()
+            elif isinstance(key.data, tuple):
+                self._monitor(key)
             elif self.client is not None:
                 try:
                     chunk = self.client.recv(4096)
@@ -390,6 +431,8 @@ def main(argv=None):
         if STOP:
             return 0
         bus = Bus(server, servos, a.baud)
+        if a.monitor_dir:
+            bus.add_monitors(a.monitor_dir)
         print("ready %s:%d" % server.getsockname(), flush=True)
         bus.run()
         log("stopping: %.0f virtual us per real second over the run" % bus.speed())
