@@ -37,3 +37,22 @@ add_test(NAME g031_first_saved_setting_ping_on_time
   COMMAND ${KM_DEBIAN_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/g031/test_vg031_flash.py
           ${KM_G031_IMAGES} Flash.test_first_saved_setting_after_idle_format_ping_on_time)
 set_tests_properties(g031_first_saved_setting_ping_on_time PROPERTIES LABELS g031 TIMEOUT 600)
+# The bus suites on three virtual G031s (servo-bus --backend g031: one
+# process, one wire in virtual time, sim/g031/vg031_bus.py), the unmodified
+# bootloader + application of the stm32g031 preset, at 115200 baud. The
+# answer slots are exact in virtual time, so every check runs in one pass
+# at 115200 without a slot floor (the image has none) and without SCHED_FIFO;
+# the suite's own timeouts are real time, and the emulator runs slower than
+# real time (docs/virtual-g031.md "On the bus"). RUN_SERIAL: one core for
+# the three servos, the other for the suite.
+find_program(KM_PYTHON3_G031BUS python3)
+if(KM_PYTHON3_G031BUS)
+  add_test(NAME g031_conformance
+    COMMAND ${KM_PYTHON3_G031BUS} ${CMAKE_SOURCE_DIR}/tests/conformance/run_on_bus.py
+            --backend g031 --slot-timing plain -- --load 1000)
+  set_tests_properties(g031_conformance PROPERTIES LABELS "g031;conformance;bus" TIMEOUT 900 RUN_SERIAL TRUE)
+  add_test(NAME g031_update_on_bus
+    COMMAND ${KM_DEBIAN_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/g031/update_on_bus.py --restarts 2 --resets 2)
+  set_tests_properties(g031_update_on_bus PROPERTIES LABELS "g031;bus" TIMEOUT 900 RUN_SERIAL TRUE
+    PASS_REGULAR_EXPRESSION "all checks passed")
+endif()

@@ -65,6 +65,7 @@ class Rcc(Block):
 
     def __init__(self, machine):
         self.csr_flags = 0
+        self.clock_key, self.clock_hz = None, HSI_HZ
         super().__init__(machine)
 
     def reset(self):
@@ -95,7 +96,14 @@ class Rcc(Block):
         self.csr_flags |= flags
 
     def sysclk(self):
-        """SYSCLK in Hz: HSI16 or PLLRCLK (§5.2.3, §5.4.4)."""
+        """SYSCLK in Hz: HSI16 or PLLRCLK (§5.2.3, §5.4.4), from CFGR and PLLCFGR."""
+        key = (self.r.get(0x08, 0) & 7, self.r.get(0x0C, 0))
+        if key != self.clock_key:
+            self.clock_key, self.clock_hz = key, self._sysclk()
+        return self.clock_hz
+
+    def _sysclk(self):
+        """SYSCLK in Hz from the registers."""
         if (self.r.get(0x08, 0) & 7) != 2:
             return HSI_HZ
         pll = self.r.get(0x0C, 0)
@@ -487,7 +495,7 @@ class Adc(Block):
     def tick(self, now):
         while self.next_conv is not None and now >= self.next_conv and self.scan:
             ch = self.scan.pop(0)
-            value = self.m.sensors.get(ch, 0) & 0xFFF
+            value = self.m.sample(ch, self.next_conv) & 0xFFF
             self.r[self.DR] = value
             if self.r[self.CFGR1] & 1:
                 self.m.dma.request(5, value)
@@ -499,7 +507,11 @@ class Adc(Block):
             self.next_conv += self.conv_ns()
 
     def next_event(self, now):
-        return self.next_conv
+        """With an ADC interrupt enabled, the next conversion's end; else
+        None: the DMA transfers of the conversions that ended are made at
+        the next event or register access of any block (docs/virtual-g031.md
+        "Time"), each with its own value."""
+        return self.next_conv if self.r[0x04] else None
 
 
 class Dma(Block):

@@ -165,10 +165,11 @@ class Scs:
 class Machine:
     """One STM32G031: core, memory and peripherals, in virtual time."""
 
-    def __init__(self, flash_image, elves=(), watch=(), sensors=None):
+    def __init__(self, flash_image, elves=(), watch=(), sensors=None, plant=None):
         self.flash_buf = (ctypes.c_ubyte * P.FLASH_SIZE).from_buffer_copy(flash_image.ljust(P.FLASH_SIZE, b"\xff"))
         self.flash = memoryview(self.flash_buf).cast("B")
         self.sensors = dict(DEFAULT_SENSORS if sensors is None else sensors)
+        self.plant = plant          # g031_plant.Plant: ADC inputs from a moving shaft
         self.now = 0
         self.instructions = 0
         self.resets = []            # [(time, reason)]
@@ -200,6 +201,7 @@ class Machine:
         self.iwdg = P.Iwdg(self)
         self.blocks = [self.rcc, self.flashc, self.gpioa, self.gpiob, self.usart1, self.tim2,
                        self.tim3, self.adc, self.dma, self.dmamux, self.iwdg]
+        self.timed_blocks = [self.flashc, self.usart1, self.tim2, self.tim3, self.adc, self.iwdg]
         self.by_page = {}
         for b in self.blocks:
             self.by_page.setdefault(b.base & ~0xFFF, []).append(b)
@@ -258,6 +260,18 @@ class Machine:
                         elif (data[i + 1] == 0xF3 and data[i] & 0xF0 == 0x80 and i + 3 < len(data)
                               and data[i + 2] == 0x10 and data[i + 3] == 0x88):  # msr primask, rN
                             self.unmask_sites.add(base + i + 4)
+
+    def sample(self, channel, when):
+        """The analog input of ADC channel `channel` at virtual time `when`:
+        from the plant (driven by TIM3 CH1/CH2 on PA6/PA7 when those pins
+        are in alternate function mode, RM0444 §7.3.2), else the fixed
+        inputs of `sensors`."""
+        if self.plant is None:
+            return self.sensors.get(channel, 0)
+        moder = self.gpioa.r[0x00]
+        self.plant.drive_from(self.tim3, (moder >> 12) & 3 == 2 and (moder >> 14) & 3 == 2)
+        self.plant.advance(when)
+        return self.plant.code(channel)
 
     def mem_write(self, addr, data):
         """A bus master (DMA) writes memory."""
@@ -468,7 +482,8 @@ class Machine:
                 self.scs.pending |= 1 << irq
 
     def _tick_all(self):
-        for b in self.blocks:
+        """Every block with time-driven state to `now`."""
+        for b in self.timed_blocks:
             b.tick(self.now)
         self.scs.tick(self.now)
 
@@ -577,6 +592,7 @@ class Machine:
             return
         if sleep:
             self.asleep = True
+            self.due = self._next_event()
             self._sleep()
 
     def _sleep(self):
@@ -587,13 +603,13 @@ class Machine:
             if self.scs.pending & self.scs.enabled or self.scs.pend_sys or self.reset_request:
                 self.asleep = False
                 return
-            nxt = self._next_event()
-            if self.horizon is not None and nxt > self.horizon:
+            if self.horizon is not None and self.due > self.horizon:
                 self.now = max(self.now, self.horizon)
                 return
-            self.now = max(self.now, nxt)
+            self.now = max(self.now, self.due)
             self._tick_all()
             self._levels()
+            self.due = self._next_event()
             if self.reset_request:
                 self._system_reset(self.reset_request)
                 return
@@ -618,9 +634,15 @@ class Machine:
         t = self.now if start is None else start
         bit = self.bit_ns(baud)
         for byte in data:
-            self.usart1.receive_at(t + 9.5 * bit, byte)
+            self.wire_in(t + 9.5 * bit, byte)
             t += 10 * bit
         return t
+
+    def wire_in(self, when, byte, framing_error=False):
+        """A byte from the wire completes in USART1's receiver at `when`
+        (the middle of its stop bit); the next event may now be sooner."""
+        self.usart1.receive_at(when, byte, framing_error)
+        self.due = min(self.due, when)
 
     def take_output(self):
         """Bytes the MCU put on the wire since the last call: [(start, byte)]."""

@@ -93,6 +93,8 @@ def parse_args(argv):
     ap.add_argument("--qemu-arg", action="append", default=[])
     ap.add_argument("--monitor-dir")
     ap.add_argument("--flash-dir")
+    ap.add_argument("--plant", default="realistic", choices=("realistic", "ideal", "none"),
+                    help="each servo's plant (sim/plant configuration), or none: fixed sensor inputs")
     ap.add_argument("--timeout", type=float, default=10.0)
     ap.add_argument("--realtime", action="store_true")
     ap.add_argument("--no-realtime", action="store_true")
@@ -145,8 +147,9 @@ class Line:
 class Servo:
     """One virtual G031 on the bus, with the file that keeps its flash."""
 
-    def __init__(self, dev_id, images, flash_dir):
+    def __init__(self, dev_id, images, flash_dir, plant_config="realistic"):
         import vg031
+        import g031_plant
         boot, app, app_elf = images
         self.id = dev_id
         self.flash_file = os.path.join(flash_dir, "servo-%d.flash" % dev_id) if flash_dir else None
@@ -158,7 +161,8 @@ class Servo:
                 log("servo id %d: %s is not a 64 KiB flash image: images flashed again" % (dev_id, self.flash_file))
                 image = None
         self.kept = image is not None
-        self.m = vg031.Machine(image or vg031.flash_from_images(boot, app), elves=[boot, app_elf])
+        plant = None if plant_config == "none" else g031_plant.Plant(plant_config)
+        self.m = vg031.Machine(image or vg031.flash_from_images(boot, app), elves=[boot, app_elf], plant=plant)
         self.faults_seen = 0
 
     def exchange(self, data, wait_ns):
@@ -309,7 +313,7 @@ class Bus:
         rx_bit = u.bit_ns()
         got = _decode(byte, tx_bit, rx_bit)
         if got is not None:
-            u.receive_at(max(start + 9.5 * rx_bit, servo.m.now + 1), got[0], got[1])
+            servo.m.wire_in(max(start + 9.5 * rx_bit, servo.m.now + 1), got[0], got[1])
 
     def _advance(self, until):
         """Every servo to virtual time `until`; their bytes onto the wire."""
@@ -422,7 +426,7 @@ def main(argv=None):
         for dev_id in ids:
             if STOP:
                 return 0
-            s = Servo(dev_id, images, a.flash_dir)
+            s = Servo(dev_id, images, a.flash_dir, a.plant)
             if not s.provision(a.timeout):
                 log("servo id %d: no answer to a ping on ID 0 within %.0f s of virtual time" % (dev_id, a.timeout))
                 return 1

@@ -90,6 +90,9 @@ def main(argv=None):
                     "(default 150)")
     ap.add_argument("--restart-s", type=float, default=10.0,
                     help="s a servo may take to answer after a restart (default 10)")
+    ap.add_argument("--time-scale", type=float, default=1.0, metavar="F",
+                    help="multiply every wait for an answer or a quiet bus by F (default 1): for "
+                    "emulated servos slower than real time (servo-bus --backend g031)")
     ap.add_argument("-v", "--verbose", action="store_true", help="check progress on stderr")
     opts = ap.parse_args(argv)
     opts.log = (lambda m: print("  " + m, file=sys.stderr, flush=True)) if opts.verbose \
@@ -110,7 +113,7 @@ def main(argv=None):
         ap.error("--only %s matches no check (see --list)" % " ".join(opts.only))
 
     try:
-        wire = W.Wire(opts.bus)
+        wire = W.Wire(opts.bus, opts.time_scale)
     except KmxError as e:
         print("FAIL bus: %s" % e)
         return 1

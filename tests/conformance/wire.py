@@ -71,8 +71,9 @@ def open_bus(spec):
 
 
 class Wire:
-    def __init__(self, spec):
+    def __init__(self, spec, time_scale=1.0):
         self.t, self.kind, self.can_set_baud = open_bus(spec)
+        self.time_scale = time_scale  # every wait for answers or quiet, multiplied (--time-scale)
         self.parser = fr.Parser(headers=(fr.RSP_HEADER, fr.CMD_HEADER))
         self.stale = []    # frames that arrived before the request they were read for
         self.sent = set()  # our own frames (their echo is no answer)
@@ -105,6 +106,8 @@ class Wire:
         """Answer frames until `expect` of them came (expect=None: until
         `quiet` seconds pass without a byte) or `timeout` seconds passed."""
         got = []
+        timeout *= self.time_scale
+        quiet = None if quiet is None else quiet * self.time_scale
         end = time.monotonic() + timeout
         while expect is None or len(got) < expect:
             left = end - time.monotonic()

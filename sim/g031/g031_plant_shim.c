@@ -1,0 +1,48 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* The plant (sim/plant, the integer model host-sim and the QEMU image run)
+ * as a host shared library for the virtual G031 (sim/g031/g031_plant.py
+ * builds it with the host's cc and calls it through ctypes): one plant per
+ * servo, stepped to each ADC conversion with the bridge as TIM3 drives it. */
+#include <stddef.h>
+#include <stdint.h>
+
+#include "km_plant.h"
+
+/* Bytes a plant takes (the caller allocates them). */
+size_t g031_plant_size(void)
+{
+    return sizeof(km_plant_t);
+}
+
+/* A plant at rest with the named configuration; 0 on success. */
+int g031_plant_init(km_plant_t *p, const char *config_name)
+{
+    const km_plant_config_t *cfg = km_plant_config_named(config_name);
+    return cfg != NULL && km_plant_init(p, cfg) ? 0 : -1;
+}
+
+/* Advances the plant by dt_us with the bridge held (0 drive, 1 coast, 2 brake). */
+void g031_plant_step(km_plant_t *p, int32_t bridge, int32_t pwm, int32_t ext_torque_unm, uint32_t dt_us)
+{
+    km_plant_input_t in = {(km_plant_bridge_t)bridge, (int16_t)pwm, ext_torque_unm};
+    km_plant_step(p, &in, dt_us);
+}
+
+/* The physical quantities the board's sensors see: pot position (0.1 deg),
+ * motor current (mA, signed), supply terminal voltage (mV), winding
+ * temperature (0.1 degC). */
+void g031_plant_read(const km_plant_t *p, int32_t out[4])
+{
+    out[0] = km_plant_position_ddeg(p);
+    out[1] = km_plant_current_ma(p);
+    out[2] = km_plant_voltage_mv(p);
+    out[3] = km_plant_temp_dc(p);
+}
+
+/* Test and scenario hooks: supply (mV), ambient (0.1 degC), faults mask. */
+void g031_plant_set(km_plant_t *p, int32_t supply_mv, int32_t ambient_dc, uint32_t faults)
+{
+    km_plant_set_supply_mv(p, supply_mv);
+    km_plant_set_ambient_dc(p, (int16_t)ambient_dc);
+    km_plant_set_faults(p, faults);
+}
