@@ -507,11 +507,7 @@ class Adc(Block):
             self.next_conv += self.conv_ns()
 
     def next_event(self, now):
-        """With an ADC interrupt enabled, the next conversion's end; else
-        None: the DMA transfers of the conversions that ended are made at
-        the next event or register access of any block (docs/virtual-g031.md
-        "Time"), each with its own value."""
-        return self.next_conv if self.r[0x04] else None
+        return self.next_conv
 
 
 class Dma(Block):

@@ -238,5 +238,39 @@ class MachineFlashTests(unittest.TestCase):
         self.assertEqual(m.faults, [])
 
 
+# Reset handler at 0x100: LDR r0, =0x20000001; LDR r1, [r0] (a word load from
+# an odd address); b . -- HardFault handler at 0x200: b .
+UNALIGNED_LOAD = bytes.fromhex("0148" "0168" "fee7" "00bf") + (0x20000001).to_bytes(4, "little")
+
+
+class MachineFaultTests(unittest.TestCase):
+    """Faults the M0+ raises that unicorn's M0 core does not."""
+
+    def _machine(self, check):
+        import vg031
+        image = bytearray(b"\xff" * 0x800)
+        image[0:16] = b"".join(v.to_bytes(4, "little") for v in (0x20002000, 0x08000101, 0, 0x08000201))
+        image[0x100:0x100 + len(UNALIGNED_LOAD)] = UNALIGNED_LOAD
+        image[0x200:0x202] = b"\xfe\xe7"
+        m = vg031.Machine(bytes(image), check_alignment=check)
+        m.run_until(20_000)
+        return m
+
+    def test_unaligned_word_load_is_a_hardfault(self):  # ARMv6-M A3.2.1, B1.5.6
+        from unicorn import arm_const as A
+        m = self._machine(True)
+        self.assertEqual(len(m.faults), 1, m.faults)
+        self.assertIn("unaligned 4-byte access at 0x20000001", m.faults[0][1])
+        self.assertEqual(m.active, [3], "not in HardFault")
+        self.assertEqual(m.pc & ~1, 0x08000200)
+        sp = m.uc.reg_read(A.UC_ARM_REG_SP)
+        stacked_pc = int.from_bytes(m.uc.mem_read(sp + 24, 4), "little")
+        self.assertEqual(stacked_pc, 0x08000102, "the frame must return to the faulting LDR")
+
+    def test_unchecked_machine_lets_it_pass(self):
+        m = self._machine(False)
+        self.assertEqual(m.faults, [])
+
+
 if __name__ == "__main__":
     unittest.main(verbosity=1)

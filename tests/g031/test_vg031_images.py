@@ -31,13 +31,13 @@ def frame(servo_id, cmd, adr=None, params=b""):
     return b"\xf9\xff" + body + bytes([~sum(body) & 0xFF])
 
 
-def boot_and_app(watch_names=("km_app_poll",)):
+def boot_and_app(watch_names=("km_app_poll",), check_alignment=False):
     """A machine with the bootloader and the update image of the application."""
     a = argparse.Namespace(boot=os.path.join(IMAGES, "km-boot-stm32g031.elf"),
                            app=os.path.join(IMAGES, "km-servo-app-stm32g031.kmfw"), elf=None,
                            app_elf=os.path.join(IMAGES, "km-servo-app-stm32g031.elf"))
     watch = [vg031.symbol(a.app_elf, n) for n in watch_names]
-    return vg031.make(a, watch=watch), watch
+    return vg031.make(a, watch=watch, check_alignment=check_alignment), watch
 
 
 def to_main_loop(m, poll, limit_ms=100):
@@ -133,6 +133,39 @@ class Images(unittest.TestCase):
         answer, _ = exchange(m, frame(7, 0x01))
         self.assertEqual(answer[:4], bytes.fromhex("F9F50702"), answer.hex(" "))
         self.assertEqual(exchange(m, frame(0, 0x01))[0], b"")
+
+    def test_no_unaligned_access_through_boot_and_bus(self):
+        # ARMv6-M A3.2.1: the M0+ faults on an unaligned halfword or word
+        # access; the machine checks every RAM and flash access for it here.
+        m, (poll,) = boot_and_app(check_alignment=True)
+        self.assertTrue(to_main_loop(m, poll), "km_app_poll never ran: %s" % (m.faults,))
+        m.run_until(m.now + 2 * MS)
+        self.assertEqual(exchange(m, frame(0, 0x01))[0][:4], bytes.fromhex("F9F50002"))
+        self.assertEqual(exchange(m, frame(0, 0x02, 0x0B))[0][:4], bytes.fromhex("F9F50007"))
+        self.assertEqual(exchange(m, frame(0, 0x03, 0x0F, b"\x07"), wait_ms=200)[0], b"")
+        exchange(m, frame(7, 0x03, 0x02, b"\xe1\xe2\xe3\xe4"), wait_ms=1)
+        self.assertTrue(m.run_until(m.now + 200 * MS, stop=lambda: bool(m.resets)), "no reset")
+        m.run_until(m.now + 60 * MS)
+        self.assertEqual(exchange(m, frame(7, 0x01))[0][:4], bytes.fromhex("F9F50702"))
+        self.assertEqual(m.faults, [])
+
+    def test_first_sensor_read_after_a_full_adc_scan(self):
+        # The start-up race: km_hal_sensors_read before the ADC's first
+        # full scan (4 channels x 16 x (160.5 + 12.5) ADC cycles at 32 MHz,
+        # RM0444 §15.5) would see the zeroed DMA buffer: position, voltage
+        # and NTC at a rail (0x35 bits 5, 3, 2).
+        elf = os.path.join(IMAGES, "km-servo-app-stm32g031.elf")
+        start, read = vg031.symbol(elf, "km_adc_start"), vg031.symbol(elf, "km_hal_sensors_read")
+        m, _ = boot_and_app(("km_adc_start", "km_hal_sensors_read"))
+        self.assertTrue(m.run_until(m.now + 100 * MS, stop=lambda: bool(m.watches[read])))
+        scan_ns = 4 * 16 * (160.5 + 12.5) * 1e9 / 32e6
+        gap = m.watches[read][0][0] - m.watches[start][0][0]
+        print("first sensor read %.3f ms after km_adc_start (a full scan: %.3f ms)" % (gap / 1e6, scan_ns / 1e6))
+        self.assertGreater(gap, scan_ns)
+        m.run_until(m.now + 2 * MS)
+        faults, _ = exchange(m, frame(0, 0x02, 0x35))
+        self.assertEqual(faults[:6], bytes.fromhex("F9F500040235"), faults.hex(" "))
+        self.assertEqual(faults[6], 0, "sensor faults at power-on: 0x35 = %#x" % faults[6])
 
     def test_hung_main_loop_ends_in_iwdg_reset(self):
         m, (poll,) = boot_and_app()
