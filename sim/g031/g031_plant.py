@@ -52,7 +52,9 @@ def library():
     lib.g031_plant_step.argtypes = [ctypes.c_void_p, ctypes.c_int32, ctypes.c_int32, ctypes.c_int32,
                                     ctypes.c_uint32]
     lib.g031_plant_read.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_int32)]
-    lib.g031_plant_set.argtypes = [ctypes.c_void_p, ctypes.c_int32, ctypes.c_int32, ctypes.c_uint32]
+    lib.g031_plant_event.argtypes = [ctypes.c_void_p, ctypes.c_int32, ctypes.c_int32]
+    lib.g031_plant_time_ms.argtypes = [ctypes.c_void_p]
+    lib.g031_plant_time_ms.restype = ctypes.c_uint32
     _LIB.append(lib)
     return lib
 
@@ -72,7 +74,7 @@ def _code(mv):
 class Plant:
     """One servo's plant, stepped to the times the ADC samples it."""
 
-    def __init__(self, config="realistic"):
+    def __init__(self, config="realistic", scenario=()):
         self.lib = library()
         self.buf = ctypes.create_string_buffer(self.lib.g031_plant_size())
         if self.lib.g031_plant_init(self.buf, config.encode()) != 0:
@@ -80,6 +82,8 @@ class Plant:
         self.t_ns = None
         self.bridge, self.pwm = COAST, 0
         self.readings = (ctypes.c_int32 * 4)()
+        self.scenario = list(scenario)   # [(t_ms, key, value)] on the plant's clock
+        self.load_unm = 0
         self.lib.g031_plant_read(self.buf, self.readings)
 
     def drive_from(self, tim3, outputs_on):
@@ -101,9 +105,20 @@ class Plant:
         dt_us = int((now_ns - self.t_ns) // 1000)
         if dt_us <= 0:
             return
-        self.lib.g031_plant_step(self.buf, self.bridge, self.pwm, 0, dt_us)
+        self._play(self.lib.g031_plant_time_ms(self.buf))
+        self.lib.g031_plant_step(self.buf, self.bridge, self.pwm, self.load_unm, dt_us)
         self.t_ns += dt_us * 1000
         self.lib.g031_plant_read(self.buf, self.readings)
+
+    def _play(self, t_ms):
+        """Applies the scenario events due at plant time t_ms (key 3, the
+        load on the horn in mN*m, is held as the torque input)."""
+        while self.scenario and self.scenario[0][0] <= t_ms:
+            _t, key, value = self.scenario.pop(0)
+            if key == 3:
+                self.load_unm = value * 1000
+            else:
+                self.lib.g031_plant_event(self.buf, key, value)
 
     def code(self, channel):
         """The ADC code on ADC_IN<channel> now (board_pins.h channels 0..3)."""

@@ -39,10 +39,24 @@ void g031_plant_read(const km_plant_t *p, int32_t out[4])
     out[3] = km_plant_temp_dc(p);
 }
 
-/* Test and scenario hooks: supply (mV), ambient (0.1 degC), faults mask. */
-void g031_plant_set(km_plant_t *p, int32_t supply_mv, int32_t ambient_dc, uint32_t faults)
+/* One bench scenario event (boards/sim-common/km_sim_scenario.h keys):
+ * 1 supply_mv, 2 ambient_dc, 4 faults, 5 temp_dc; 3 (the load) is the
+ * caller's torque input. */
+void g031_plant_event(km_plant_t *p, int32_t key, int32_t value)
 {
-    km_plant_set_supply_mv(p, supply_mv);
-    km_plant_set_ambient_dc(p, (int16_t)ambient_dc);
-    km_plant_set_faults(p, faults);
+    if (key == 1) {
+        km_plant_set_supply_mv(p, value);
+    } else if (key == 2) {
+        km_plant_set_ambient_dc(p, (int16_t)value);
+    } else if (key == 4) {
+        km_plant_set_faults(p, (uint32_t)value);
+    } else if (key == 5) {
+        km_plant_set_temp_dc(p, value);
+    }
+}
+
+/* The plant's clock: ms since its power-on (a scenario runs on it). */
+uint32_t g031_plant_time_ms(const km_plant_t *p)
+{
+    return km_plant_time_ms(p);
 }

@@ -119,8 +119,8 @@ def refused_options(a):
         return "--monitor-dir: %s is not a directory" % a.monitor_dir
     if a.product not in (None, "pot"):
         return "--product %s: the stm32g031 image is the potentiometer product" % a.product
-    if a.scenario:
-        return "--scenario: the virtual G031 has no plant yet (fixed sensor inputs, docs/virtual-g031.md)"
+    if a.scenario and a.plant == "none":
+        return "--scenario needs a plant (--plant realistic or ideal)"
     if a.realtime:
         return "--realtime: the virtual bus keeps slots in virtual time and needs no SCHED_FIFO"
     return None
@@ -147,7 +147,7 @@ class Line:
 class Servo:
     """One virtual G031 on the bus, with the file that keeps its flash."""
 
-    def __init__(self, dev_id, images, flash_dir, plant_config="realistic"):
+    def __init__(self, dev_id, images, flash_dir, plant_config="realistic", scenario=()):
         import vg031
         import g031_plant
         boot, app, app_elf = images
@@ -161,7 +161,7 @@ class Servo:
                 log("servo id %d: %s is not a 64 KiB flash image: images flashed again" % (dev_id, self.flash_file))
                 image = None
         self.kept = image is not None
-        plant = None if plant_config == "none" else g031_plant.Plant(plant_config)
+        plant = None if plant_config == "none" else g031_plant.Plant(plant_config, scenario)
         self.m = vg031.Machine(image or vg031.flash_from_images(boot, app), elves=[boot, app_elf], plant=plant)
         self.faults_seen = 0
 
@@ -388,6 +388,31 @@ def _decode(byte, tx_bit, rx_bit):
     return g031_wire.decode(byte, tx_bit, rx_bit)
 
 
+SCENARIO_KEYS = {"supply_mv": 1, "ambient_dc": 2, "load_mnm": 3, "faults": 4, "temp_dc": 5}
+
+
+def read_scenarios(specs, ids):
+    """{ID: [(t_ms, key, value)]} from servo-bus's --scenario [ID=]FILE
+    options (lines "T_MS KEY VALUE", boards/sim-common/km_sim_scenario.h);
+    ValueError with the line when one is malformed."""
+    out = {}
+    for spec in specs:
+        dev, _, path = spec.rpartition("=")
+        events = []
+        with open(path) as f:
+            for n, line in enumerate(f, 1):
+                words = line.split("#", 1)[0].split()
+                if not words:
+                    continue
+                if len(words) != 3 or words[1] not in SCENARIO_KEYS:
+                    raise ValueError("%s:%d: expected T_MS KEY VALUE with KEY one of %s"
+                                     % (path, n, ", ".join(SCENARIO_KEYS)))
+                events.append((int(words[0]), SCENARIO_KEYS[words[1]], int(words[2], 0)))
+        for i in ([int(dev)] if dev else ids):
+            out[i] = events
+    return out
+
+
 def main(argv=None):
     a = parse_args(sys.argv[1:] if argv is None else argv)
     g031_deps.require()
@@ -399,6 +424,11 @@ def main(argv=None):
         ids = [int(x, 0) for x in a.ids.split(",") if x.strip()]
     except ValueError:
         log("--ids: not a list of IDs: %r" % a.ids)
+        return 2
+    try:
+        scenarios = read_scenarios(a.scenario, ids)
+    except (OSError, ValueError) as e:
+        log("--scenario: %s" % e)
         return 2
     images = image_paths(a)
     missing = [p for p in images if not os.path.isfile(p)]
@@ -426,7 +456,7 @@ def main(argv=None):
         for dev_id in ids:
             if STOP:
                 return 0
-            s = Servo(dev_id, images, a.flash_dir, a.plant)
+            s = Servo(dev_id, images, a.flash_dir, a.plant, scenarios.get(dev_id, ()))
             if not s.provision(a.timeout):
                 log("servo id %d: no answer to a ping on ID 0 within %.0f s of virtual time" % (dev_id, a.timeout))
                 return 1

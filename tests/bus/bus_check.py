@@ -971,7 +971,7 @@ def selftest(backend, opts):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("which", choices=["smoke", "bus", "encoder", "protect", "selftest"])
-    ap.add_argument("--backend", choices=["qemu", "host-sim"], required=True)
+    ap.add_argument("--backend", choices=["qemu", "host-sim", "g031"], required=True)
     ap.add_argument("--gap-floor-us", type=int, help="passed to sim/bus/servo-bus")
     ap.add_argument("--build-dir", help="passed to sim/bus/servo-bus")
     ap.add_argument("--slot-timing", choices=["auto", "realtime", "floor"], default="auto",
