@@ -12,7 +12,9 @@ servo-bus --backend g031 runs this program with its own arguments. Each
 servo runs the unmodified bootloader and application images of the
 stm32g031 preset (default build/stm32g031/boards/stm32g031:
 km-boot-stm32g031.elf, km-servo-app-stm32g031.kmfw in the application
-region, km-servo-app-stm32g031.elf for its WFI sites). It gets its ID over
+region, km-servo-app-stm32g031.elf for its WFI sites); --image naming an
+application ELF (one with km_app_poll: km-servo-stm32g031.elf) runs that
+stand-alone image at 0x08000000 instead. It gets its ID over
 the protocol, alone on its wire, before it joins the bus: ping ID 0, write
 0x0F = ID, ping the new ID (docs/protocol.md §5.1).
 
@@ -101,9 +103,23 @@ def parse_args(argv):
     return ap.parse_args(argv)
 
 
+def is_application(elf_path):
+    """True for an application linked stand-alone at 0x08000000 (it has the
+    main loop, km_app_poll), False for the bootloader."""
+    import vg031
+    try:
+        vg031.symbol(elf_path, "km_app_poll")
+        return True
+    except KeyError:
+        return False
+
+
 def image_paths(a):
-    """(boot ELF, app .kmfw, app ELF) from the options and the build tree."""
+    """(boot ELF, app .kmfw, app ELF) from the options and the build tree;
+    (None, None, ELF) when --image is a stand-alone application."""
     build = os.path.join(REPO, a.build_dir or os.environ.get("KM_BUILD_STM32G031") or BUILD_DEFAULT, IMAGES)
+    if a.image and os.path.isfile(a.image) and is_application(a.image):
+        return None, None, a.image
     boot = a.image or os.path.join(build, "km-boot-stm32g031.elf")
     folder = os.path.dirname(boot)
     app = a.app or os.path.join(folder, "km-servo-app-stm32g031.kmfw")
@@ -162,7 +178,8 @@ class Servo:
                 image = None
         self.kept = image is not None
         plant = None if plant_config == "none" else g031_plant.Plant(plant_config, scenario)
-        self.m = vg031.Machine(image or vg031.flash_from_images(boot, app), elves=[boot, app_elf], plant=plant)
+        flash = image or (vg031.flash_from_images(boot, app) if boot else vg031.flash_from_images(elf=app_elf))
+        self.m = vg031.Machine(flash, elves=[p for p in (boot, app_elf) if p], plant=plant)
         self.faults_seen = 0
 
     def exchange(self, data, wait_ns):
@@ -431,7 +448,7 @@ def main(argv=None):
         log("--scenario: %s" % e)
         return 2
     images = image_paths(a)
-    missing = [p for p in images if not os.path.isfile(p)]
+    missing = [p for p in images if p and not os.path.isfile(p)]
     if missing:
         log("no image at %s; build it first: cmake --preset stm32g031 && cmake --build --preset stm32g031"
             % ", ".join(missing))

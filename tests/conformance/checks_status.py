@@ -194,7 +194,7 @@ def status_running(ctx):
         target = start + 100 if start < 500 else start - 100  # 10.0 deg, inside any travel
         ctx.write_ok(i, 0x65, spec.i16(target) + spec.u16(600))
         seen_running = False
-        end = time.monotonic() + 5.0
+        end = time.monotonic() + 5.0 * ctx.opts.time_scale
         while time.monotonic() < end:
             st = ctx.status(i)
             if st & spec.BIT_RUNNING:
@@ -207,7 +207,7 @@ def status_running(ctx):
         expect(abs(p - target) <= 20, "stopped at %d, target %d (0.1 deg)" % (p, target))
         expect(ctx.read_int(i, 0x4D) >= 300, "0x4D rotation time %d ms" % ctx.read_int(i, 0x4D))
         ctx.write_ok(i, 0x65, spec.i16(start) + spec.u16(300))  # back where it was
-        time.sleep(0.6)
+        time.sleep(0.6 * ctx.opts.time_scale)
     finally:
         ctx.write(i, 0x64, b"\x00")
         ctx.restore(i, saved)

@@ -210,6 +210,7 @@ def main():
     ap.add_argument("--slow-baud", type=int)
     ap.add_argument("--slow", action="append", default=[])
     ap.add_argument("--slot-timing", choices=("auto", "realtime", "plain"), default="auto")
+    ap.add_argument("--image", help="passed to servo-bus: the servo image (default: the backend's)")
     ap.add_argument("suite", nargs=argparse.REMAINDER)
     a = ap.parse_args()
     argv = [sys.executable, os.path.join(ROOT, "sim", "bus", "servo-bus"), "--ids", a.ids, "--port", "0",
@@ -225,6 +226,8 @@ def main():
                                  else "plain scheduling"), flush=True)
     if a.gap_floor_us is not None:
         argv += ["--gap-floor-us", str(a.gap_floor_us)]
+    if a.image:
+        argv += ["--image", a.image]
     if a.slot_floor_us is not None:
         argv += ["--slot-floor-us", str(a.slot_floor_us)]
         print("# slot floor: every super-ID and 0x82 answer slot at least %d us (servo-bus "
