@@ -55,8 +55,8 @@ if(KM_PYTHON3_G031BUS)
   add_test(NAME g031_conformance
     COMMAND ${KM_PYTHON3_G031BUS} ${CMAKE_SOURCE_DIR}/tests/conformance/run_on_bus.py
             --backend g031 --slot-timing plain --image ${KM_G031_IMAGES}/km-servo-stm32g031.elf
-            -- --load 1000 --time-scale 5)
-  set_tests_properties(g031_conformance PROPERTIES LABELS "g031;conformance;bus" TIMEOUT 900 RUN_SERIAL TRUE)
+            -- --load 1000 --time-scale 8)
+  set_tests_properties(g031_conformance PROPERTIES LABELS "g031;conformance;bus" TIMEOUT 1500 RUN_SERIAL TRUE)
   add_test(NAME g031_update_on_bus
     COMMAND ${KM_DEBIAN_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/g031/update_on_bus.py --restarts 2 --resets 2)
   set_tests_properties(g031_update_on_bus PROPERTIES LABELS "g031;bus" TIMEOUT 900 RUN_SERIAL TRUE

@@ -3,6 +3,8 @@
 after its RM0444 section. Pure Python, no unicorn: the unit tests drive
 them directly (tests/g031/test_periph.py). Time is virtual, in
 nanoseconds, handed in by the machine (vg031.py) as `now`."""
+import bisect
+
 import g031_regmap as regmap
 from g031_errata import reset_value
 
@@ -328,8 +330,7 @@ class Usart(Block):
 
     def receive_at(self, when, byte, framing_error=False):
         """A byte on the wire whose stop bit's middle is at `when`."""
-        self.rx_queue.append((when, byte, framing_error))
-        self.rx_queue.sort()
+        bisect.insort(self.rx_queue, (when, byte, framing_error))
 
     def _rx(self, byte, framing_error=False):
         """The receiver completes a byte (RE and UE set); a stop bit read 0

@@ -202,6 +202,7 @@ class Machine:
         self.iwdg = P.Iwdg(self)
         self.blocks = [self.rcc, self.flashc, self.gpioa, self.gpiob, self.usart1, self.tim2,
                        self.tim3, self.adc, self.dma, self.dmamux, self.iwdg]
+        self.irq_blocks = (self.usart1, self.tim2, self.tim3, self.adc)
         self.timed_blocks = [self.flashc, self.usart1, self.tim2, self.tim3, self.adc, self.iwdg]
         self.by_page = {}
         for b in self.blocks:
@@ -297,12 +298,22 @@ class Machine:
         return 0
 
     def _mmio_write(self, uc, off, size, val, page):
-        self.touched = True
+        """A register write. Blocks with an interrupt line (and the SCS)
+        may pend an interrupt at once: the slice after it is short; for the
+        others only their next event can move (IWDG reload, a flash
+        operation started)."""
         addr = page + off
         for b in self.by_page[page]:
             if b.base <= addr < b.base + 0x400:
                 b.write(addr - b.base, val, self.now)
+                if b in self.irq_blocks:
+                    self.touched = True
+                else:
+                    nxt = b.next_event(self.now)
+                    if nxt is not None:
+                        self.due = min(self.due, nxt)
                 return
+        self.touched = True
         self.unmodelled.add(addr)
 
     def _scs_read(self, uc, off, size, _):

@@ -29,7 +29,9 @@ ahead, so an idle bus does not spin); answers go to the master in the
 order of their start bits.
 
 Each chunk of the master's bytes goes on the wire back to back from the
-virtual time it arrives (a master writes a frame at once); --gap-floor-us
+virtual time it arrives (a master writes a frame at once); while more than
+20 ms of them wait for the wire, the bus reads no more from the client
+(TCP then holds its writes back, as a serial port's full buffer does); --gap-floor-us
 is accepted and has no effect: the unmodified image keeps the parser's
 real gap rule, and virtual time never runs faster than real time, so a
 host stall inside a frame is no longer on the wire than in real time.
@@ -47,6 +49,7 @@ stdout: exactly one line "ready 127.0.0.1:PORT" once every servo answers
 on its ID; everything else on stderr. Exit 0 after SIGTERM / SIGINT, 1 when
 a servo cannot be provisioned, 2 for usage errors and missing images."""
 import argparse
+import faulthandler
 import os
 import selectors
 import signal
@@ -63,6 +66,7 @@ IMAGES = "boards/stm32g031"
 BUILD_DEFAULT = "build/stm32g031"
 HOST = "127.0.0.1"
 QUANTUM_NS = 50_000     # the servos advance together in steps of this much virtual time
+BACKLOG_NS = 20_000_000  # the master's bytes queued on the wire ahead of now, at most
 STOP = []
 
 
@@ -376,6 +380,8 @@ class Bus:
             elif isinstance(key.data, tuple):
                 self._monitor(key)
             elif self.client is not None:
+                if self.master_free - self.now > BACKLOG_NS:
+                    continue  # the wire is busy: the client waits, as on a serial port whose buffer is full
                 try:
                     chunk = self.client.recv(4096)
                 except (BlockingIOError, InterruptedError):
@@ -457,6 +463,7 @@ def main(argv=None):
         log("--gap-floor-us %d: no effect, the image keeps the parser's real gap rule" % a.gap_floor_us)
     if a.slot_floor_us:
         log("--slot-floor-us %d: not needed, the wire keeps answer slots in virtual time" % a.slot_floor_us)
+    faulthandler.register(signal.SIGUSR1)  # kill -USR1 PID: where the bus is, on stderr
     for sig in (signal.SIGTERM, signal.SIGINT):
         signal.signal(sig, lambda *_: STOP.append(1))
     server = socket.socket()
