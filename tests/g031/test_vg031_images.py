@@ -167,6 +167,28 @@ class Images(unittest.TestCase):
         self.assertEqual(faults[:6], bytes.fromhex("F9F500040235"), faults.hex(" "))
         self.assertEqual(faults[6], 0, "sensor faults at power-on: 0x35 = %#x" % faults[6])
 
+    def test_received_byte_reaches_rx_queue(self):
+        # Interrupt latency from RXNE (the middle of the stop bit, RM0444
+        # §33.5.6) to km_rx_queue_push's entry, per byte of a ping; each
+        # byte must be in the queue before the next one completes. Virtual
+        # time at CPI 1 with exception entry taken in no time: silicon adds
+        # the M0+'s 15-cycle entry and its wait states.
+        m, (poll, push) = boot_and_app(("km_app_poll", "km_rx_queue_push"))
+        self.assertTrue(to_main_loop(m, poll))
+        m.run_until(m.now + 2 * MS)
+        before = len(m.watches[push])
+        start = m.now
+        bit = 1e9 / BAUD
+        m.send(frame(0, 0x01), BAUD)
+        m.run_until(start + 2 * MS)
+        pushes = [t for t, _i in m.watches[push][before:]]
+        rxne = [start + (10 * k + 9.5) * bit for k in range(6)]
+        self.assertGreaterEqual(len(pushes), 6, "bytes pushed: %d of 6" % len(pushes))
+        lat = [(p - r) / 1000 for p, r in zip(pushes, rxne)]
+        print("RXNE -> km_rx_queue_push: %s us" % ", ".join("%.2f" % x for x in lat))
+        for k, x in enumerate(lat):
+            self.assertTrue(0 <= x < 10 * bit / 1000, "byte %d: %.2f us" % (k, x))
+
     def test_hung_main_loop_ends_in_iwdg_reset(self):
         m, (poll,) = boot_and_app()
         self.assertTrue(to_main_loop(m, poll))
