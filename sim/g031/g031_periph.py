@@ -465,6 +465,7 @@ class Adc(Block):
         super().reset()
         self.next_conv = None
         self.scan = []
+        self.started_at = None   # virtual time of the first ADSTART (tests)
 
     def write(self, off, val, now):
         if off == self.ISR:
@@ -477,6 +478,8 @@ class Adc(Block):
             if val & 1:
                 self.r[self.ISR] |= 1            # ADRDY
             self.r[self.CR] = cr
+            if val & 4 and self.started_at is None:
+                self.started_at = now
             if val & 4 and self.next_conv is None:
                 self.scan = [ch for ch in range(19) if self.r[self.CHSELR] & (1 << ch)]
                 self.next_conv = now + self.conv_ns()

@@ -154,13 +154,21 @@ class Images(unittest.TestCase):
         # full scan (4 channels x 16 x (160.5 + 12.5) ADC cycles at 32 MHz,
         # RM0444 §15.5) would see the zeroed DMA buffer: position, voltage
         # and NTC at a rail (0x35 bits 5, 3, 2).
+        # The buffer is the DMA target s_samples (boards/stm32g031/adc.c);
+        # the functions around it are inlined (LTO), so the first CPU load
+        # from it is watched, against the ADSTART write the ADC model saw.
+        from unicorn import UC_HOOK_MEM_READ
         elf = os.path.join(IMAGES, "km-servo-app-stm32g031.elf")
-        start, read = vg031.symbol(elf, "km_adc_start"), vg031.symbol(elf, "km_hal_sensors_read")
-        m, _ = boot_and_app(("km_adc_start", "km_hal_sensors_read"))
-        self.assertTrue(m.run_until(m.now + 100 * MS, stop=lambda: bool(m.watches[read])))
+        samples = vg031.symbol(elf, "s_samples")
+        m, _ = boot_and_app()
+        first_read = []
+        m.uc.hook_add(UC_HOOK_MEM_READ, lambda *a: first_read or first_read.append(m.now), None,
+                      samples, samples + 7)
+        self.assertTrue(m.run_until(m.now + 100 * MS, stop=lambda: bool(first_read)), "s_samples never read")
+        self.assertIsNotNone(m.adc.started_at, "ADSTART never written")
         scan_ns = 4 * 16 * (160.5 + 12.5) * 1e9 / 32e6
-        gap = m.watches[read][0][0] - m.watches[start][0][0]
-        print("first sensor read %.3f ms after km_adc_start (a full scan: %.3f ms)" % (gap / 1e6, scan_ns / 1e6))
+        gap = first_read[0] - m.adc.started_at
+        print("first sensor read %.3f ms after ADSTART (a full scan: %.3f ms)" % (gap / 1e6, scan_ns / 1e6))
         self.assertGreater(gap, scan_ns)
         m.run_until(m.now + 2 * MS)
         faults, _ = exchange(m, frame(0, 0x02, 0x35))
@@ -173,7 +181,7 @@ class Images(unittest.TestCase):
         # byte must be in the queue before the next one completes. Virtual
         # time at CPI 1 with exception entry taken in no time: silicon adds
         # the M0+'s 15-cycle entry and its wait states.
-        m, (poll, push) = boot_and_app(("km_app_poll", "km_rx_queue_push"))
+        m, (poll, push) = boot_and_app(("km_app_poll", "ISR_rx_byte"))  # the app's RX handler: queue push
         self.assertTrue(to_main_loop(m, poll))
         m.run_until(m.now + 2 * MS)
         before = len(m.watches[push])
@@ -185,7 +193,7 @@ class Images(unittest.TestCase):
         rxne = [start + (10 * k + 9.5) * bit for k in range(6)]
         self.assertGreaterEqual(len(pushes), 6, "bytes pushed: %d of 6" % len(pushes))
         lat = [(p - r) / 1000 for p, r in zip(pushes, rxne)]
-        print("RXNE -> km_rx_queue_push: %s us" % ", ".join("%.2f" % x for x in lat))
+        print("RXNE -> ISR_rx_byte (RX queue push): %s us" % ", ".join("%.2f" % x for x in lat))
         for k, x in enumerate(lat):
             self.assertTrue(0 <= x < 10 * bit / 1000, "byte %d: %.2f us" % (k, x))
 
