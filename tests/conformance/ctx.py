@@ -195,7 +195,7 @@ class Ctx:
                    % answer_id)
 
     def wait_ping(self, dev_id, seconds=None):
-        end = time.monotonic() + (seconds or self.opts.restart_s)
+        end = time.monotonic() + (seconds or self.opts.restart_s) * getattr(self.opts, "time_scale", 1.0)
         while time.monotonic() < end:
             if self.ping(dev_id, timeout=0.2) is not None:
                 return True
