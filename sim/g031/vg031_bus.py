@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """vg031_bus: several virtual STM32G031 servos (vg031.py) on one emulated
 single wire, all in one virtual time, served to one master over TCP like
-tools/servo-bus's other backends (raw bytes, or RFC 2217 for the baud).
+sim/bus/servo-bus's other backends (raw bytes, or RFC 2217 for the baud).
 
     vg031_bus.py --ids 1,2,3 --port 0 [--image BOOT.elf] [--app APP.kmfw]
                  [--app-elf APP.elf] [--build-dir DIR] [--baud N]

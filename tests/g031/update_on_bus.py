@@ -119,7 +119,7 @@ def main():
     with open(kmfw, "rb") as f:
         image = f.read()
     tmp = tempfile.TemporaryDirectory(prefix="g031-update-")
-    bus_proc = subprocess.Popen([os.path.join(REPO, "tools/servo-bus"), "--backend", "g031", "--ids", "1,2,3",
+    bus_proc = subprocess.Popen([os.path.join(REPO, "sim/bus/servo-bus"), "--backend", "g031", "--ids", "1,2,3",
                                  "--port", "0", "--build-dir", a.build_stm32, "--monitor-dir", tmp.name,
                                  "--timeout", "30"], stdout=subprocess.PIPE, text=True)
     t0 = time.monotonic()
