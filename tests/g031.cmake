@@ -62,8 +62,8 @@ if(KM_PYTHON3_G031BUS)
   # DISABLED, shown by CTest as "Not Run (Disabled)": on this tree servo 1 drops
   # answers early in the run (177 passed, 5 failed; 182 of 182 before the last
   # rebase), root cause open (issue 22); and 334-496 s is a third of CI's budget.
-  # Run it by hand: ctest --preset host -R g031_conformance -C ignored, or the
-  # command above.
+  # Run it by hand: the command above, from the repository root with
+  # PYTHONPATH=host:sim/bus.
   set_tests_properties(g031_conformance PROPERTIES LABELS "g031;conformance;bus" TIMEOUT 1500 RUN_SERIAL TRUE
     DISABLED TRUE)
 endif()
