@@ -15,6 +15,7 @@
 #     Debian's pyserial itself (kmx/deps.py) and runs.
 # CTest kmx_pip_install; about 60 s on a loaded machine.
 set -eu
+unset PYTHONPATH  # CTest puts host/ on it for every test; an installed kmx must be found without it
 repo=$(cd "$(dirname "$0")/../.." && pwd)
 dir=$(mktemp -d)
 trap 'rm -rf "$dir" "$repo/host/build" "$repo/host/kmx.egg-info"' EXIT
