@@ -21,35 +21,42 @@ static void prv_set(const uint8_t *keys, uint32_t n, uint32_t *v, uint8_t key, u
 
 /* keys[]'s values on page p, whose snapshot is *rec, into cand: the
  * snapshot's, then every delta's, deltas only after a K that reads
- * programmed (docs/store.md). Reads over rec and buf. */
+ * programmed (docs/store.md). One loop over the records, the snapshot
+ * first (off 0). Reads over rec and buf. */
 static void prv_replay(const km_flash_t *f, uint32_t p, km_rec_t *rec, uint8_t *buf, const uint8_t *keys,
                        uint32_t n, uint32_t *cand, uint8_t *snap_keys)
 {
     const uint32_t snap_count = rec->count;
-    uint32_t at = 0u;
-    for (uint32_t i = 0; i < snap_count; i++) {
-        uint32_t v;
-        bool indexed;
-        km_rec_entry(rec, &at, &snap_keys[i], &v, &indexed);
-        prv_set(keys, n, cand, snap_keys[i], v);
-    }
-    uint32_t off = rec->size;
-    if (km_rec_cell_erased(f, p * f->page_size + off)) {
-        return;
-    }
-    off += f->prog_size;
-    while (off < f->page_size && km_rec_read(f, p, off, buf, rec) && rec->type != KM_REC_SNAPSHOT) {
-        at = 0u;
+    uint32_t off = 0u;
+    for (;;) {
+        uint32_t at = 0u;
         for (uint32_t i = 0; i < rec->count; i++) {
             uint8_t id;
             uint32_t v;
             bool indexed;
             km_rec_entry(rec, &at, &id, &v, &indexed);
-            if (!indexed || id < snap_count) {
-                prv_set(keys, n, cand, indexed ? snap_keys[id] : id, v);
+            if (off == 0u) {
+                snap_keys[i] = id;
+            } else if (indexed) {
+                if (id >= snap_count) {
+                    continue;
+                }
+                id = snap_keys[id];
             }
+            prv_set(keys, n, cand, id, v);
         }
-        off += rec->size;
+        if (off == 0u) {
+            off = rec->size;
+            if (km_rec_cell_erased(f, p * f->page_size + off)) {
+                return;
+            }
+            off += f->prog_size;
+        } else {
+            off += rec->size;
+        }
+        if (off >= f->page_size || !km_rec_read(f, p, off, buf, rec) || rec->type == KM_REC_SNAPSHOT) {
+            return;
+        }
     }
 }
 
@@ -58,7 +65,6 @@ bool km_store_peek(const km_flash_t *f, uint16_t version, const uint8_t *keys, u
     uint8_t buf[KM_REC_MAX_BYTES];
     uint8_t snap_keys[KM_STORE_MAX_KEYS];
     uint32_t best[PRV_MAX];
-    uint32_t cand[PRV_MAX];
     bool found = false;
     bool same = false;
     uint32_t best_gen = 0u;
@@ -77,12 +83,10 @@ bool km_store_peek(const km_flash_t *f, uint16_t version, const uint8_t *keys, u
         found = true;
         best_gen = rec.gen;
         same = rec.version == version; /* else the values mean something else */
-        if (!same) {
-            continue;
+        if (same) {
+            memcpy(best, values, n * sizeof best[0]);
+            prv_replay(f, p, &rec, buf, keys, n, best, snap_keys);
         }
-        memcpy(cand, values, n * sizeof cand[0]);
-        prv_replay(f, p, &rec, buf, keys, n, cand, snap_keys);
-        memcpy(best, cand, n * sizeof best[0]);
     }
     if (!found || !same) {
         return false;

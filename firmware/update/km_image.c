@@ -2,23 +2,24 @@
 /* Image header decode and check (docs/update.md §2). */
 #include "km_image.h"
 
+#include <stddef.h>
+#include <string.h>
+
 #include "km_crc32.h"
 
-static uint32_t prv_le32(const uint8_t *p)
-{
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
-}
+/* The header is eight little-endian words in the struct's field order. */
+_Static_assert(sizeof(km_image_header_t) == 8u * sizeof(uint32_t) &&
+                   offsetof(km_image_header_t, head_crc) == 7u * sizeof(uint32_t),
+               "km_image_header_t is the eight header words, in order, unpadded");
 
 void km_image_decode(const uint8_t raw[KM_IMAGE_HEADER_SIZE], km_image_header_t *h)
 {
-    h->magic = prv_le32(raw + 0);
-    h->model = prv_le32(raw + 4);
-    h->length = prv_le32(raw + 8);
-    h->version = prv_le32(raw + 12);
-    h->vectors = prv_le32(raw + 16);
-    h->base = prv_le32(raw + 20);
-    h->body_crc = prv_le32(raw + 24);
-    h->head_crc = prv_le32(raw + 28);
+    uint32_t w[8];
+    for (uint32_t i = 0; i < 8u; i++) {
+        const uint8_t *p = raw + 4u * i;
+        w[i] = (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
+    }
+    memcpy(h, w, sizeof w);
 }
 
 km_image_verdict_t km_image_check(const uint8_t raw[KM_IMAGE_HEADER_SIZE], const km_image_target_t *t,
