@@ -186,6 +186,16 @@ static int32_t prv_position(const km_sensors_t *in, const km_control_params_t *p
     return p->reverse ? -pos : pos;
 }
 
+/* The position control works on: while servo mode holds still (on, the
+ * profile at rest, the move ended), through the hold filter. */
+static int32_t prv_hold_position(km_control_t *c, int32_t pos)
+{
+    const bool hold =
+        !c->motor.active && c->servo.ts == KM_TORQUE_ON && c->servo.profile.done && !c->servo.running;
+    km_hold_filter_set(&c->hold, hold, pos);
+    return km_hold_filter_step(&c->hold, pos);
+}
+
 /* 1. sensing: the position `pos` (master's frame), its speeds, the clock.
  * Returns the fast speed (0.1 deg/s) the loops damp with; *speed_dps the
  * 20 ms window's (0x47). */
@@ -276,6 +286,7 @@ static void prv_drive_servo(km_control_t *c, const km_control_params_t *p, int32
             .speed_ddps = speed_ddps,
             .pwm_max = limit,
             .integrate = sm.holding,
+            .still = c->hold.on,
         };
         pwm = km_position_loop_step(&c->loop, &p->gains, &li, dt_us);
     }
@@ -326,7 +337,7 @@ static void prv_report(km_control_t *c, const km_sensors_t *in, int32_t pos, int
 void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p, uint32_t dt_us,
                      km_live_t *live, km_bridge_t *bridge)
 {
-    const int32_t pos = prv_position(in, p);
+    const int32_t pos = prv_hold_position(c, prv_position(in, p));
     int32_t speed_dps;
     const int32_t speed_ddps = prv_sense(c, pos, dt_us, &speed_dps);
     const bool was_acting = c->action != KM_PROT_ACT_NONE;

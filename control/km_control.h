@@ -72,6 +72,7 @@ typedef struct {
     km_position_loop_t loop;
     km_speed_window_t speed; /* 0x47 */
     km_speed_fast_t fast;    /* the loop's damping input */
+    km_hold_filter_t hold;   /* the position while holding still */
     km_current_limit_t ilim; /* 0x5C / 0x14 */
     km_protect_t prot;       /* the protection supervisor */
     km_selftest_t selftest;  /* 0x35 */

@@ -17,6 +17,35 @@ void km_position_loop_init(km_position_loop_t *l)
     l->last_sp_ddps = 0;
 }
 
+/* The integrator's PWM after this tick: ki x the error (e_u, 0.001 x 0.1
+ * deg) while holding, frozen while the output is saturated the way it
+ * would push; inside the hold band a small remainder (below twice the
+ * friction feedforward: friction holds the shaft) bleeds away, a larger
+ * one is a load and stays. */
+static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g, int32_t e_u, bool in_band,
+                             int32_t before, int32_t pwm_max, uint32_t dt_us)
+{
+    int32_t i_pwm = km_sdiv256000(l->i_acc);
+    if (in_band) {
+        const int32_t small = 2 * (int32_t)g->friction_pwm;
+        if (i_pwm <= small && i_pwm >= -small) {
+            l->i_acc -= l->i_acc / 128;
+        }
+        return km_sdiv256000(l->i_acc);
+    }
+    const int32_t i_max = (g->i_max_pwm > 1000u ? 1000 : (int32_t)g->i_max_pwm) * 256000;
+    const int32_t e_d =
+        prv_clamp(km_sdiv1000(e_u), -100, 100); /* 10 deg: the integrator is for small errors */
+    const int32_t di =
+        km_sdiv100(km_sdiv10((int32_t)g->ki_q8 * e_d) * (int32_t)(dt_us > 2000u ? 2000u : dt_us));
+    before += i_pwm;
+    if (!((before >= pwm_max && di > 0) || (before <= -pwm_max && di < 0))) {
+        l->i_acc = prv_clamp(l->i_acc + di, -i_max, i_max);
+        i_pwm = km_sdiv256000(l->i_acc);
+    }
+    return i_pwm;
+}
+
 int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g,
                               const km_position_loop_in_t *in, uint32_t dt_us)
 {
@@ -24,11 +53,22 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     /* both within +-1e9 u (KM_PROFILE_DDEG_MAX), so the difference fits */
     const int32_t pos_u = prv_clamp(in->position, -1000000, 1000000) * 1000;
     const int32_t sp_u = prv_clamp(in->setpoint_u, -1000000000, 1000000000);
-    const int32_t e_u = prv_clamp(sp_u - pos_u, -2000000, 2000000);
+    int32_t e_u = prv_clamp(sp_u - pos_u, -2000000, 2000000);
     const int32_t vs = prv_clamp(in->setpoint_ddps, -20000, 20000);
-    const int32_t ev = prv_clamp(vs - prv_clamp(in->speed_ddps, -20000, 20000), -20000, 20000);
+    int32_t ev = prv_clamp(vs - prv_clamp(in->speed_ddps, -20000, 20000), -20000, 20000);
+    /* holding: the hold band is a dead band (no P, no D inside it; the
+     * error beyond it outside), so a count of sensor noise moves nothing */
+    const int32_t band_u = in->still ? (int32_t)g->hold_band_ddeg * 1000 : -1;
+    const bool in_band = e_u <= band_u && e_u >= -band_u;
+    if (in_band) {
+        e_u = 0;
+        ev = 0;
+    } else if (band_u > 0) {
+        e_u += e_u > 0 ? -band_u : band_u;
+    }
     /* kp: PWM per 0.1 deg Q8 -> kp x e_u / 1000 / 256; e_u / 100 first keeps 32 bits */
-    int32_t out = km_sdiv2560((int32_t)g->kp_q8 * km_sdiv100(e_u));
+    const int32_t kp = in->still && g->kp_hold_q8 != 0u ? (int32_t)g->kp_hold_q8 : (int32_t)g->kp_q8;
+    int32_t out = km_sdiv2560(kp * km_sdiv100(e_u));
     out += km_sdiv2560((int32_t)g->kd_q8 * ev); /* kd: PWM per deg/s Q8, ev 0.1 deg/s */
     /* acceleration feedforward: tau x dv/dt as a speed, 0.1 deg/s */
     const int32_t dvs = prv_clamp(vs - l->last_sp_ddps, -20000, 20000);
@@ -43,22 +83,11 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     if (vs != 0) {
         out += vs > 0 ? (int32_t)g->friction_pwm : -(int32_t)g->friction_pwm;
     }
-    /* integrator: ki PWM per 0.1 deg.s Q8; acc in PWM x 256000. Its terms
-     * are worked out only while it runs (holding): a moving tick skips
-     * four divisions. */
-    int32_t i_pwm = km_sdiv256000(l->i_acc);
+    /* the integrator runs only while holding: a moving tick skips its divisions */
     if (in->integrate) {
-        const int32_t i_max = (g->i_max_pwm > 1000u ? 1000 : (int32_t)g->i_max_pwm) * 256000;
-        const int32_t e_d =
-            prv_clamp(km_sdiv1000(e_u), -100, 100); /* 10 deg: the integrator is for small errors */
-        const int32_t di =
-            km_sdiv100(km_sdiv10((int32_t)g->ki_q8 * e_d) * (int32_t)(dt_us > 2000u ? 2000u : dt_us));
-        const int32_t before = out + i_pwm;
-        if (!((before >= in->pwm_max && di > 0) || (before <= -in->pwm_max && di < 0))) {
-            l->i_acc = prv_clamp(l->i_acc + di, -i_max, i_max);
-            i_pwm = km_sdiv256000(l->i_acc);
-        }
+        out += prv_integrate(l, g, e_u, in_band, out, in->pwm_max, dt_us);
+    } else {
+        out += km_sdiv256000(l->i_acc);
     }
-    out += i_pwm;
     return prv_clamp(out, -in->pwm_max, in->pwm_max);
 }

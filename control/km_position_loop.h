@@ -28,6 +28,7 @@ typedef struct {
     int32_t speed_ddps;    /* measured, 0.1 deg/s */
     int32_t pwm_max;       /* output bound, 0..1000 */
     bool integrate;        /* the integrator runs (holding: the set-point is at rest) */
+    bool still;            /* the move has ended: the hold band and kp_hold apply */
 } km_position_loop_in_t;
 
 void km_position_loop_init(km_position_loop_t *l);

@@ -164,6 +164,59 @@ void km_profile_move_time(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms
     km_profile_move(p, target_ddeg, v, a);
 }
 
+/* The cruise speed (0.1 deg/s) of a move in time `t` ms over `dm`
+ * (0.001 x 0.1 deg) starting at `v0` (0.1 deg/s, + toward the target),
+ * changing speed at `a` (0.1 deg/s per ms) both ways: slowing to it,
+ * T = v0 / a + (dm - v0^2 / 2a) / vc; speeding up (or turning back),
+ * vc^2 - (v0 + a T) vc + a dm + v0^2 / 2 = 0, its smaller root; the
+ * shortest move when T is too short for either. */
+static int32_t prv_retime_cruise(int32_t v0, int32_t dm, int32_t t, int32_t a)
+{
+    if (v0 > 0) {
+        const int32_t s0 = (int32_t)(((uint32_t)v0 * (uint32_t)v0) / (2u * (uint32_t)a));
+        const int32_t tl = t - v0 / a;
+        if (tl > 0 && dm > s0) {
+            const int32_t vc = (dm - s0) / tl;
+            if (vc <= v0) {
+                return vc;
+            }
+        }
+    }
+    const int64_t b = (int64_t)v0 + (int64_t)a * t;
+    const int64_t c = (int64_t)a * dm + ((int64_t)v0 * v0) / 2;
+    const int64_t disc = b * b - 4 * c;
+    if (b <= 0 || disc < 0) {
+        return (int32_t)prv_isqrt64((uint64_t)c); /* the triangle: as fast as a allows */
+    }
+    return (int32_t)((b - (int64_t)prv_isqrt64((uint64_t)disc)) / 2);
+}
+
+void km_profile_retime(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, int32_t vlimit_ups,
+                       int32_t accel)
+{
+    const int32_t tgt = prv_ddeg_to_u(target_ddeg);
+    const int32_t d = tgt - p->pos;
+    const int32_t dabs = prv_abs(d);
+    const int32_t a = km_sdiv1000(accel > 0 ? (accel < ACCEL_MAX ? accel : ACCEL_MAX) : 1);
+    if (p->done || p->stream || p->vel == 0 || dabs > 1000000 || time_ms == 0u || a < 1) {
+        km_profile_move_time(p, target_ddeg, time_ms, vlimit_ups);
+        return;
+    }
+    const int32_t v0 = km_sdiv1000(d >= 0 ? p->vel : -p->vel); /* 0.1 deg/s toward the target */
+    const int32_t t = time_ms > 65535u ? 65535 : (int32_t)time_ms;
+    int32_t vc = prv_retime_cruise(v0, dabs, t, a);
+    const int32_t vlim = km_sdiv1000(vlimit_ups);
+    vc = vc < 1 ? 1 : (vc > vlim ? vlim : vc);
+    int32_t acc = a * 1000;
+    if (v0 > 0) { /* too fast to stop on the target at `a`: brake harder, never past it */
+        const uint32_t need = ((uint32_t)v0 * (uint32_t)v0) / (2u * (uint32_t)(dabs > 0 ? dabs : 1)) + 1u;
+        if (need * 1000u > (uint32_t)acc) {
+            acc = need > (uint32_t)km_sdiv1000(ACCEL_MAX) ? ACCEL_MAX : (int32_t)need * 1000;
+        }
+    }
+    km_profile_move(p, target_ddeg, vc * 1000, acc);
+}
+
 void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_us, int32_t vlimit_ups)
 {
     p->target = prv_ddeg_to_u(target_ddeg);

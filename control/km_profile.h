@@ -59,6 +59,13 @@ void km_profile_move_time(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms
 
 /* Stream segment: reach target at constant speed in `interval_us`, no
  * faster than `vlimit_ups`. */
+/* A move in time that may start while the profile moves (a retarget or a
+ * reversal): from the profile's speed, changing speed at `accel` (u/s per
+ * ms) both ways, arriving at rest on the target after `time_ms` when the
+ * speed limit and `accel` allow (braking harder when even stopping on the
+ * target needs more); from rest it is km_profile_move_time. */
+void km_profile_retime(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, int32_t vlimit_ups,
+                       int32_t accel);
 void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_us, int32_t vlimit_ups);
 
 /* Advance by dt_us. Returns true once at the target and at rest. */

@@ -30,10 +30,15 @@ int32_t km_servo_mode_clamp(const km_control_params_t *p, int32_t t)
     return t < lo ? lo : (t > hi ? hi : t);
 }
 
-/* Speed limit in profile units: 0x5D, or the product's fastest when 0. */
+/* Speed limit in profile units: 0x5D, never above the product's fastest
+ * (the speed its motor still follows with a margin: docs/tuning.md). */
 static int32_t prv_vlimit(const km_control_params_t *p)
 {
-    const uint32_t dps = p->speed_limit_dps ? p->speed_limit_dps : p->gains.fastest_dps;
+    const uint32_t fastest = p->gains.fastest_dps;
+    uint32_t dps = p->speed_limit_dps ? p->speed_limit_dps : fastest;
+    if (fastest != 0u && dps > fastest) {
+        dps = fastest;
+    }
     return (int32_t)(dps ? dps : 1u) * KM_PROFILE_UPS_PER_DPS;
 }
 
@@ -104,7 +109,7 @@ static void prv_plan(km_servo_mode_t *m, const km_move_t *mv, const km_control_p
         if (mv->time_or_speed == 0u) {
             km_profile_move(&m->profile, target, vlim, prv_accel(p));
         } else {
-            km_profile_move_time(&m->profile, target, mv->time_or_speed, vlim);
+            km_profile_retime(&m->profile, target, mv->time_or_speed, vlim, prv_accel(p));
         }
         return;
     case KM_MOVE_SPEED:
@@ -163,6 +168,21 @@ int32_t km_servo_mode_deviation(const km_servo_mode_t *m, int32_t position)
     return m->ts == KM_TORQUE_ON ? position - m->target : 0;
 }
 
+/* The blocked-shaft clock: runs while the shaft stays within the arrive
+ * band of where it last was, restarts whenever it moved further (a shaft
+ * still on its way is not blocked). */
+static void prv_settle_clock(km_servo_mode_t *m, const km_control_params_t *p, int32_t position,
+                             uint32_t dt_us)
+{
+    const int32_t moved = position - m->settle_pos;
+    const int32_t band = (int32_t)p->gains.arrive_ddeg;
+    if (m->settle_us == 0u || moved > band || moved < -band) {
+        m->settle_pos = position;
+        m->settle_us = 0u;
+    }
+    m->settle_us += dt_us;
+}
+
 void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_t position,
                         int32_t speed_ddps, uint32_t dt_us, km_servo_mode_out_t *out)
 {
@@ -190,7 +210,7 @@ void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_
             m->rotation_ms += ms;
             m->rotation_rem_us -= ms * 1000u;
             if (done) {
-                m->settle_us += dt_us;
+                prv_settle_clock(m, p, position, dt_us);
                 const int32_t dev = position - m->target;
                 const int32_t band = (int32_t)p->gains.arrive_ddeg;
                 const bool slow = speed_ddps <= KM_ARRIVE_SPEED_DDPS && speed_ddps >= -KM_ARRIVE_SPEED_DDPS;

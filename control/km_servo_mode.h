@@ -20,7 +20,8 @@
  * moves never accumulate the tracking error and never pass a limit.
  *
  * Speeds: "fastest" (omitted or 0 parameter) = the speed limit 0x5D (or the
- * product's fastest_dps when 0x5D is 0), at the product acceleration; a
+ * product's fastest_dps when 0x5D is 0; never above fastest_dps), at the
+ * product acceleration; a
  * requested speed above 0x5D is cut to it; a move in time whose speed would
  * exceed 0x5D takes longer; a move's own PWM cap (0x67) bounds the output
  * until the next move. A stream of targets (KM_MOVE_STREAM, 0x68): the
@@ -32,8 +33,10 @@
  *
  * Running (status bit 7) and rotation time (0x4D) start at each accepted
  * rotation command. The motion ends when the profile is at the target and
- * the shaft is within the product's arrive_ddeg of it, or settle_ms after
- * the profile got there (a blocked shaft): bit 7 clears and 0x4D stops.
+ * the shaft is within the product's arrive_ddeg of it, or once the shaft
+ * has stayed within arrive_ddeg of one place for settle_ms after the
+ * profile got there (a blocked shaft; a shaft still creeping toward the
+ * target restarts that clock): bit 7 clears and 0x4D stops.
  * Switching the torque off (0, 1) or protecting ends it at once.
  * Deviation (0x4C) = measured position - target, 0 with the torque off. */
 #ifndef KM_SERVO_MODE_H
@@ -58,7 +61,8 @@ typedef struct {
     bool running;         /* status bit 7 */
     uint32_t rotation_ms; /* 0x4D */
     uint32_t rotation_rem_us;
-    uint32_t settle_us; /* since the profile reached the target */
+    uint32_t settle_us; /* since the profile reached the target and the shaft last moved */
+    int32_t settle_pos; /* where the shaft was when that clock (re)started, 0.1 deg */
     bool streaming;     /* the last move was a stream target */
     uint32_t stream_us; /* since the last stream target */
     bool reset_loop;    /* the loop starts afresh at the next tick */

@@ -80,3 +80,30 @@ int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
     }
     return f->ddps;
 }
+
+void km_hold_filter_set(km_hold_filter_t *h, bool on, int32_t position)
+{
+    if (on && !h->on) {
+        h->out = position;
+        h->frac = 0;
+    }
+    h->on = on;
+}
+
+int32_t km_hold_filter_step(km_hold_filter_t *h, int32_t position)
+{
+    if (!h->on) {
+        return position;
+    }
+    int32_t d = position - h->out;
+    d = d > 100000 ? 100000 : (d < -100000 ? -100000 : d); /* keeps d x 16 in 32 bits */
+    const int32_t e = d * 16 - h->frac;
+    const bool jump = e > KM_HOLD_FILTER_JUMP * 16 || e < -KM_HOLD_FILTER_JUMP * 16;
+    h->frac += jump ? e / 2 : e / 8;
+    if (h->frac > 12 || h->frac < -12) { /* 3/4 count: the hysteresis */
+        const int32_t n = (h->frac + (h->frac > 0 ? 8 : -8)) / 16;
+        h->out += n;
+        h->frac -= n * 16;
+    }
+    return h->out;
+}

@@ -5,7 +5,13 @@
  *    quantise speed to 100 deg/s steps.
  *  - km_speed_fast_t: the position loop's damping input (0.1 deg/s):
  *    position change over the last KM_SPEED_FAST_N ticks (8 ms at 1 kHz,
- *    12.5 deg/s resolution, 4 ms of lag against the plant's ~28 ms). */
+ *    12.5 deg/s resolution, 4 ms of lag against the plant's ~28 ms).
+ *  - km_hold_filter_t: the position a hold works on and reports (0x46)
+ *    while servo mode holds still: a first-order low pass (1/8 per tick,
+ *    1/2 on a jump of more than KM_HOLD_FILTER_JUMP) whose output moves
+ *    only when the filtered value is more than 3/4 count away from it
+ *    (hysteresis), so sensor noise of about a count neither reaches the
+ *    bridge nor 0x46 (docs/tuning.md). Off, it passes the reading through. */
 #ifndef KM_SPEED_EST_H
 #define KM_SPEED_EST_H
 
@@ -31,6 +37,14 @@ typedef struct {
     int32_t ddps; /* the estimate, 0.1 deg/s */
 } km_speed_fast_t;
 
+#define KM_HOLD_FILTER_JUMP 4 /* counts: a real push, followed at 1/2 a tick */
+
+typedef struct {
+    int32_t out;  /* the position given out, 0.1 deg */
+    int32_t frac; /* filtered position - out, 1/16 x 0.1 deg */
+    bool on;
+} km_hold_filter_t;
+
 void km_speed_window_init(km_speed_window_t *w);
 /* Returns the current estimate, deg/s (held until a window completes). */
 int32_t km_speed_window_step(km_speed_window_t *w, int32_t position, uint32_t dt_us);
@@ -38,5 +52,10 @@ int32_t km_speed_window_step(km_speed_window_t *w, int32_t position, uint32_t dt
 void km_speed_fast_init(km_speed_fast_t *f, int32_t position);
 /* Returns the current estimate, 0.1 deg/s. */
 int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us);
+
+/* Starts (on) or stops (off) filtering; starting takes `position` as is. */
+void km_hold_filter_set(km_hold_filter_t *h, bool on, int32_t position);
+/* Returns the position to use this tick: filtered when on, else `position`. */
+int32_t km_hold_filter_step(km_hold_filter_t *h, int32_t position);
 
 #endif

@@ -42,7 +42,7 @@ static const km_product_t s_product = {
     .baud_min_100 = 96,    /* 9600 */
     .baud_max_100 = 10000, /* 1 Mbaud */
     .current_max_ma = 3000,
-    .speed_max_dps = 720,
+    .speed_max_dps = 360,
     .travel_min = -1350,
     .travel_max = 1350,
     /* the plant's stops at +-150.0 deg and 7.5 deg of tolerance; its pot
@@ -71,7 +71,7 @@ static const km_product_t s_product_encoder = {
     .baud_min_100 = 96,
     .baud_max_100 = 10000,
     .current_max_ma = 3000,
-    .speed_max_dps = 720,
+    .speed_max_dps = 360,
     .travel_min = -32000, /* +-3200.0 deg: the widest 0x19/0x1A carry (i16) */
     .travel_max = 32000,
     .zero_offset2_max = 1800, /* +-180 deg: an encoder's zero can be anywhere */

@@ -29,7 +29,7 @@ static const km_product_t s_product = {
     .baud_min_100 = 96, /* USART1 at 64 MHz: 9600 .. 1 Mbaud within 2 % */
     .baud_max_100 = 10000,
     .current_max_ma = 3000,
-    .speed_max_dps = 720,
+    .speed_max_dps = 360,
     .travel_min = -1350,
     .travel_max = 1350,
     /* What a sound pot can read on this mechanics: the end stops must sit

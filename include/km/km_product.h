@@ -14,24 +14,27 @@ typedef enum {
 
 /* Position-loop gains and profile limits, the product's (control/, docs/tuning.md). */
 typedef struct {
-    uint16_t kp_q8;        /* PWM per 0.1 deg of position error, Q8 */
-    uint16_t kd_q8;        /* PWM per deg/s of speed error (profile - measured), Q8 */
-    uint16_t ki_q8;        /* PWM per 0.1 deg.s of integrated error, Q8 */
-    uint16_t i_max_pwm;    /* integrator contribution bound, PWM */
-    uint16_t kv_q8;        /* speed feedforward, PWM per deg/s, Q8 (1000 / no-load speed) */
-    uint16_t friction_pwm; /* feedforward against Coulomb friction while moving, PWM */
-    uint16_t tau_ms;       /* acceleration feedforward: the motor's mechanical time constant, ms */
-    uint32_t accel_dps2;   /* profile acceleration of speed moves and "fastest", deg/s^2 */
-    uint16_t fastest_dps;  /* "fastest" when 0x5D is 0, deg/s */
-    uint16_t arrive_ddeg;  /* a move ends when the shaft is this close to the target, 0.1 deg */
-    uint16_t settle_ms;    /* ... or this long after the profile reached it (blocked shaft) */
+    uint16_t kp_q8;          /* PWM per 0.1 deg of position error, Q8 */
+    uint16_t kd_q8;          /* PWM per deg/s of speed error (profile - measured), Q8 */
+    uint16_t ki_q8;          /* PWM per 0.1 deg.s of integrated error, Q8 */
+    uint16_t i_max_pwm;      /* integrator contribution bound, PWM */
+    uint16_t kv_q8;          /* speed feedforward, PWM per deg/s, Q8 (1000 / no-load speed) */
+    uint16_t friction_pwm;   /* feedforward against Coulomb friction while moving, PWM */
+    uint16_t tau_ms;         /* acceleration feedforward: the motor's mechanical time constant, ms */
+    uint32_t accel_dps2;     /* profile acceleration of speed moves and "fastest", deg/s^2 */
+    uint16_t fastest_dps;    /* "fastest" when 0x5D is 0, deg/s */
+    uint16_t arrive_ddeg;    /* a move ends when the shaft is this close to the target, 0.1 deg */
+    uint16_t settle_ms;      /* ... or this long after the profile reached it (blocked shaft) */
+    uint16_t hold_band_ddeg; /* holding: the position loop's dead band, 0.1 deg (sensor noise) */
+    uint16_t kp_hold_q8;     /* kp while holding (0 = kp_q8): stiffness against a load */
 } km_control_gains_t;
 
 /* The defaults, tuned on the simulated plant: docs/tuning.md. */
-#define KM_CONTROL_GAINS_DEFAULT                                                                         \
-    {                                                                                                    \
-        .kp_q8 = 2560, .kd_q8 = 768, .ki_q8 = 10240, .i_max_pwm = 400, .kv_q8 = 700, .friction_pwm = 15, \
-        .tau_ms = 28, .accel_dps2 = 4000, .fastest_dps = 360, .arrive_ddeg = 5, .settle_ms = 300,        \
+#define KM_CONTROL_GAINS_DEFAULT                                                                          \
+    {                                                                                                     \
+        .kp_q8 = 2560, .kd_q8 = 768, .ki_q8 = 10240, .i_max_pwm = 1000, .kv_q8 = 700, .friction_pwm = 15, \
+        .tau_ms = 28, .accel_dps2 = 4000, .fastest_dps = 360, .arrive_ddeg = 5, .settle_ms = 300,         \
+        .hold_band_ddeg = 1, .kp_hold_q8 = 0,                                                             \
     }
 
 typedef struct {
