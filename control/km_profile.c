@@ -143,6 +143,7 @@ void km_profile_move(km_profile_t *p, int32_t target_ddeg, int32_t vmax_ups, int
     p->vsq_lo = (uint32_t)p->vmax * (uint32_t)p->vmax;
     p->accel = accel > 0 ? (accel < ACCEL_MAX ? accel : ACCEL_MAX) : 1;
     p->stream = false;
+    p->s_period = 0; /* a stream that follows starts afresh */
     p->done = false;
 }
 
@@ -217,24 +218,40 @@ void km_profile_retime(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, i
     km_profile_move(p, target_ddeg, vc * 1000, acc);
 }
 
-void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_us, int32_t vlimit_ups)
+/* d (u) over `us` (>= 100) as u/s, at most `vmax` in size; 32-bit. */
+static int32_t prv_speed_us(int32_t d, int32_t us, int32_t vmax)
 {
-    p->target = prv_ddeg_to_u(target_ddeg);
-    const int32_t d = prv_abs(p->target - p->pos);
-    /* over 5/4 of the interval: in a steady stream each segment then ends
-     * after the next target arrived, so the set-point never stops between
-     * targets; it settles a quarter step behind the extrapolated stream */
-    if (interval_us > 1000000u) {
-        interval_us = 1000000u;
+    const int32_t t = us / 100 > 0 ? us / 100 : 1; /* 0.1 ms */
+    const int32_t m = prv_abs(d), q = m / t;
+    int32_t v = vmax;
+    if (q < vmax / 10000 + 1) {
+        v = q * 10000 + ((m % t) * 10000) / t;
+        v = v < vmax ? v : vmax;
     }
-    uint32_t ms = (interval_us + interval_us / 4u) / 1000u;
-    if (ms < 1u) {
-        ms = 1u;
+    return d < 0 ? -v : v;
+}
+
+void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_us, int32_t vlimit_ups,
+                       int32_t accel)
+{
+    const int32_t tgt = prv_ddeg_to_u(target_ddeg);
+    const int32_t iv = interval_us > 1000000u ? 1000000 : (interval_us < 1000u ? 1000 : (int32_t)interval_us);
+    int32_t n = 1;
+    if (p->s_period <= 0) {
+        p->s_period = iv;
+        p->s_since = 0;
+    } else { /* n periods since the previous target's filtered arrival: n - 1 frames lost */
+        n = (p->s_since + p->s_period / 2) / p->s_period;
+        n = n < 1 ? 1 : (n > 8 ? 8 : n);
+        const int32_t late = p->s_since - n * p->s_period;
+        p->s_period += (iv / n - p->s_period) / 4;
+        p->s_since = late - late / 4; /* since this target's filtered arrival */
     }
-    const int32_t v = prv_speed_for(d, (int32_t)ms, vlimit_ups);
-    p->vmax = v > 0 ? (v < VMAX_MAX ? v : VMAX_MAX) : 1;
-    p->vel = p->target >= p->pos ? p->vmax : -p->vmax;
-    p->vel_rem = 0;
+    p->vmax = vlimit_ups > 0 ? (vlimit_ups < VMAX_MAX ? vlimit_ups : VMAX_MAX) : 1;
+    p->accel = accel > 0 ? (accel < ACCEL_MAX ? accel : ACCEL_MAX) : 1;
+    p->s_vel = prv_speed_us(tgt - p->target, n * p->s_period, p->vmax);
+    p->s_lag = p->s_period * KM_PROFILE_STREAM_LAG_Q2 / 4;
+    p->target = tgt;
     p->stream = true;
     p->done = false;
 }
@@ -281,20 +298,6 @@ static int32_t prv_brake_speed(const km_profile_t *p, uint32_t k, uint32_t d)
     return (int32_t)prv_isqrt64(((uint64_t)hi << 32) | lo);
 }
 
-/* A stream segment's piece: constant speed; it ends on the target, at
- * rest, when it reaches or passes it (e: the distance before the piece). */
-static void prv_step_stream(km_profile_t *p, uint32_t dt_us, int32_t e)
-{
-    (void)prv_advance(p, dt_us);
-    const int32_t left = p->target - p->pos;
-    if (left == 0 || (left > 0) != (e > 0)) {
-        p->pos = p->target;
-        p->pos_rem = 0;
-        p->vel = 0;
-        p->done = true;
-    }
-}
-
 /* The speed change a piece allows: accel (u/s per ms) x dt, the remainder
  * kept for the next piece. */
 static int32_t prv_dv(km_profile_t *p, uint32_t dt_us)
@@ -308,12 +311,56 @@ static int32_t prv_dv(km_profile_t *p, uint32_t dt_us)
     return dvq;
 }
 
+/* A stream piece: the set-point's speed goes toward the targets' speed
+ * plus 1/32 ms of the distance to the reference (KM_PROFILE_STREAM_LAG
+ * periods behind the newest target, or on it once no newer one came), at
+ * most `accel` per ms; at rest on the target once the stream ended. */
+static void prv_step_stream(km_profile_t *p, uint32_t dt_us)
+{
+    const int32_t ahead = p->s_lag - p->s_since; /* us the reference is behind the target */
+    if (ahead <= 0) { /* no newer target: brake on the target at the product's acceleration */
+        p->stream = false;
+        p->accel = p->accel < ACCEL_MAX / 8 ? p->accel * 8 : ACCEL_MAX;
+        p->vsq_hi = km_umulhi((uint32_t)p->vmax, (uint32_t)p->vmax);
+        p->vsq_lo = (uint32_t)p->vmax * (uint32_t)p->vmax;
+        return;
+    }
+    int32_t ref = p->target, vff = 0;
+    if (ahead > 0) {
+        vff = p->s_vel;
+        ref -= km_sdiv1000(vff) * km_sdiv1000(ahead);
+    }
+    int32_t err = ref - p->pos;
+    const int32_t emax = p->vmax / 32 + 1;
+    err = err > emax ? emax : (err < -emax ? -emax : err);
+    int32_t want = vff + err * 32;
+    want = want > p->vmax ? p->vmax : (want < -p->vmax ? -p->vmax : want);
+    const int32_t dv = prv_dv(p, dt_us);
+    if (p->vel < want) {
+        p->vel = p->vel + dv < want ? p->vel + dv : want;
+    } else if (p->vel > want) {
+        p->vel = p->vel - dv > want ? p->vel - dv : want;
+    }
+    (void)prv_advance(p, dt_us);
+    const int32_t left = p->target - p->pos;
+    if (left == 0 && p->vel == 0) {
+        p->pos = p->target;
+        p->pos_rem = 0;
+        p->vel = 0;
+        p->vel_rem = 0;
+        p->done = true;
+    }
+}
+
 /* One piece of at most STEP_MAX_US. */
 static void prv_step(km_profile_t *p, uint32_t dt_us)
 {
+    if (p->s_period > 0 && p->s_since < 4000000) {
+        p->s_since += (int32_t)dt_us;
+    }
     const int32_t e = p->target - p->pos;
     if (p->stream) {
-        prv_step_stream(p, dt_us, e);
+        prv_step_stream(p, dt_us);
         return;
     }
     const int32_t dv = prv_dv(p, dt_us);

@@ -12,12 +12,18 @@
  *  - a move in time T from rest: braking and speeding up take T/4 each, the
  *    cruise speed is D / (3T/4); it arrives in T (+ one tick) unless that
  *    speed is above the speed limit, which wins (the move takes longer).
- *  - a stream segment (0x68): constant speed from the current set-point to
- *    the new target over 5/4 of the time since the previous target (the
- *    master's rate). In a steady stream the next target arrives before a
- *    segment ends, so the set-point runs at the stream's speed without ever
- *    stopping, about 1.25 intervals behind the newest target; when the
- *    stream stops, the last segment ends on the last target. Speed bounded
+ *  - a stream (0x68): a set-point interpolator. The frame period is a
+ *    filtered estimate (1/4 of each new interval, a gap of n periods
+ *    counting as n frames: a dropped frame), and so is each frame's
+ *    arrival time; the targets' speed is their difference over the
+ *    periods between them. The set-point follows a reference that runs at
+ *    that speed KM_PROFILE_STREAM_LAG periods behind the newest target
+ *    (it waits at the target when no newer one comes), at the targets'
+ *    speed plus 1/32 ms of the distance to the reference, its speed
+ *    changing at most `accel` per ms: arrival jitter and single dropped
+ *    frames move neither speed nor acceleration in steps. When the stream
+ *    stops (no target for the lag), the set-point brakes on the last
+ *    target as a move, at 8 x `accel`. Speed bounded
  *    by `vmax`.
  * step(state, dt) advances it, in pieces of at most 2 ms; speeds are cut
  * to 2^30 u/s (107,374 deg/s, past any 0x5D) so a piece stays in 32 bits.
@@ -35,17 +41,21 @@
 #define KM_PROFILE_DDEG_MAX 1000000 /* +-100,000 deg: positions are clamped to it */
 
 typedef struct {
-    int32_t pos;     /* set-point, u */
-    int32_t vel;     /* set-point speed, u/s */
-    int32_t target;  /* u */
-    int32_t vmax;    /* u/s, > 0 */
-    int32_t accel;   /* u/s per ms, > 0 */
-    int32_t pos_rem; /* position remainder, u/1e6 */
-    int32_t vel_rem; /* speed remainder, u/s per 1000 */
-    uint32_t vsq_hi; /* vmax^2 (high, low word), set with vmax by a move: */
-    uint32_t vsq_lo; /* the braking test of every tick compares with it */
-    bool stream;     /* constant-speed segment (0x68) */
-    bool done;       /* at the target, at rest */
+    int32_t pos;      /* set-point, u */
+    int32_t vel;      /* set-point speed, u/s */
+    int32_t target;   /* u */
+    int32_t vmax;     /* u/s, > 0 */
+    int32_t accel;    /* u/s per ms, > 0 */
+    int32_t pos_rem;  /* position remainder, u/1e6 */
+    int32_t vel_rem;  /* speed remainder, u/s per 1000 */
+    uint32_t vsq_hi;  /* vmax^2 (high, low word), set with vmax by a move: */
+    uint32_t vsq_lo;  /* the braking test of every tick compares with it */
+    int32_t s_vel;    /* stream: the targets' speed, u/s */
+    int32_t s_period; /* stream: the filtered frame period, us (0 = none yet) */
+    int32_t s_since;  /* stream: us since the filtered arrival of the newest target */
+    int32_t s_lag;    /* stream: how far behind the newest target the set-point runs, us */
+    bool stream;      /* following a stream of targets (0x68) */
+    bool done;        /* at the target, at rest */
 } km_profile_t;
 
 /* At rest at `pos_ddeg`. */
@@ -57,8 +67,8 @@ void km_profile_move(km_profile_t *p, int32_t target_ddeg, int32_t vmax_ups, int
 /* Move to target in `time_ms` (> 0), no faster than `vlimit_ups`. */
 void km_profile_move_time(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, int32_t vlimit_ups);
 
-/* Stream segment: reach target at constant speed in `interval_us`, no
- * faster than `vlimit_ups`. */
+#define KM_PROFILE_STREAM_LAG_Q2 10 /* the reference's lag, periods x 4 (2.5) */
+
 /* A move in time that may start while the profile moves (a retarget or a
  * reversal): from the profile's speed, changing speed at `accel` (u/s per
  * ms) both ways, arriving at rest on the target after `time_ms` when the
@@ -66,7 +76,10 @@ void km_profile_move_time(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms
  * target needs more); from rest it is km_profile_move_time. */
 void km_profile_retime(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, int32_t vlimit_ups,
                        int32_t accel);
-void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_us, int32_t vlimit_ups);
+/* A stream target, `interval_us` after the previous one; `accel` bounds
+ * the set-point's speed change (u/s per ms), `vlimit_ups` its speed. */
+void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_us, int32_t vlimit_ups,
+                       int32_t accel);
 
 /* Advance by dt_us. Returns true once at the target and at rest. */
 bool km_profile_step(km_profile_t *p, uint32_t dt_us);

@@ -117,7 +117,8 @@ static void prv_plan(km_servo_mode_t *m, const km_move_t *mv, const km_control_p
         return;
     default: /* KM_MOVE_STREAM */
         if (was_on && m->streaming && m->stream_us <= KM_STREAM_GAP_US) {
-            km_profile_stream(&m->profile, target, m->stream_us, vlim);
+            km_profile_stream(&m->profile, target, m->stream_us, vlim,
+                              prv_accel(p) / 8); /* braking at the end: x 8 */
         } else {
             km_profile_move(&m->profile, target, vlim, prv_accel(p)); /* no rate to pace by yet: fastest */
         }

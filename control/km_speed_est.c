@@ -98,8 +98,12 @@ int32_t km_hold_filter_step(km_hold_filter_t *h, int32_t position)
     int32_t d = position - h->out;
     d = d > 100000 ? 100000 : (d < -100000 ? -100000 : d); /* keeps d x 16 in 32 bits */
     const int32_t e = d * 16 - h->frac;
-    const bool jump = e > KM_HOLD_FILTER_JUMP * 16 || e < -KM_HOLD_FILTER_JUMP * 16;
-    h->frac += jump ? e / 2 : e / 8;
+    if (e > KM_HOLD_FILTER_JUMP * 16 || e < -KM_HOLD_FILTER_JUMP * 16) {
+        h->out = position; /* a real push or a new frame (0x16/0x17): taken at once */
+        h->frac = 0;
+        return position;
+    }
+    h->frac += e / 8;
     if (h->frac > 12 || h->frac < -12) { /* 3/4 count: the hysteresis */
         const int32_t n = (h->frac + (h->frac > 0 ? 8 : -8)) / 16;
         h->out += n;

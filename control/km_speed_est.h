@@ -7,8 +7,8 @@
  *    position change over the last KM_SPEED_FAST_N ticks (8 ms at 1 kHz,
  *    12.5 deg/s resolution, 4 ms of lag against the plant's ~28 ms).
  *  - km_hold_filter_t: the position a hold works on and reports (0x46)
- *    while servo mode holds still: a first-order low pass (1/8 per tick,
- *    1/2 on a jump of more than KM_HOLD_FILTER_JUMP) whose output moves
+ *    while servo mode holds still: a first-order low pass (1/8 per tick;
+ *    a reading more than KM_HOLD_FILTER_JUMP away is taken as is) whose output moves
  *    only when the filtered value is more than 3/4 count away from it
  *    (hysteresis), so sensor noise of about a count neither reaches the
  *    bridge nor 0x46 (docs/tuning.md). Off, it passes the reading through. */
@@ -37,7 +37,7 @@ typedef struct {
     int32_t ddps; /* the estimate, 0.1 deg/s */
 } km_speed_fast_t;
 
-#define KM_HOLD_FILTER_JUMP 4 /* counts: a real push, followed at 1/2 a tick */
+#define KM_HOLD_FILTER_JUMP 8 /* counts: a real push, taken at once */
 
 typedef struct {
     int32_t out;  /* the position given out, 0.1 deg */

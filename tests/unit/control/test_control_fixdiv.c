@@ -150,18 +150,55 @@ static void ref_advance(km_profile_t *p, uint32_t dt_us)
     p->pos_rem %= 1000000;
 }
 
+/* The stream interpolator's piece (km_profile.h) with C's divisions. */
+static void ref_stream_piece(km_profile_t *p, uint32_t dt_us)
+{
+    const int32_t ahead = p->s_lag - p->s_since;
+    if (ahead <= 0) {
+        p->stream = false;
+        p->accel = p->accel < 1000000 / 8 ? p->accel * 8 : 1000000;
+        const uint64_t vsq = (uint64_t)(uint32_t)p->vmax * (uint32_t)p->vmax;
+        p->vsq_hi = (uint32_t)(vsq >> 32);
+        p->vsq_lo = (uint32_t)vsq;
+        return;
+    }
+    int32_t ref = p->target, vff = 0;
+    if (ahead > 0) {
+        vff = p->s_vel;
+        ref -= (vff / 1000) * (ahead / 1000);
+    }
+    const int32_t emax = p->vmax / 32 + 1;
+    int32_t err = ref - p->pos;
+    err = err > emax ? emax : (err < -emax ? -emax : err);
+    int32_t want = vff + err * 32;
+    want = want > p->vmax ? p->vmax : (want < -p->vmax ? -p->vmax : want);
+    int32_t dv = p->accel * (int32_t)dt_us + p->vel_rem;
+    p->vel_rem = dv % 1000;
+    dv /= 1000;
+    if (p->vel < want) {
+        p->vel = p->vel + dv < want ? p->vel + dv : want;
+    } else if (p->vel > want) {
+        p->vel = p->vel - dv > want ? p->vel - dv : want;
+    }
+    ref_advance(p, dt_us);
+    const int32_t left = p->target - p->pos;
+    if (left == 0 && p->vel == 0) {
+        p->pos = p->target;
+        p->pos_rem = 0;
+        p->vel = 0;
+        p->vel_rem = 0;
+        p->done = true;
+    }
+}
+
 static void ref_piece(km_profile_t *p, uint32_t dt_us)
 {
+    if (p->s_period > 0 && p->s_since < 4000000) {
+        p->s_since += (int32_t)dt_us;
+    }
     const int32_t e = p->target - p->pos;
     if (p->stream) {
-        ref_advance(p, dt_us);
-        const int32_t left = p->target - p->pos;
-        if (left == 0 || (left > 0) != (e > 0)) {
-            p->pos = p->target;
-            p->pos_rem = 0;
-            p->vel = 0;
-            p->done = true;
-        }
+        ref_stream_piece(p, dt_us);
         return;
     }
     int32_t dv = p->accel * (int32_t)dt_us + p->vel_rem;
@@ -247,8 +284,8 @@ static void test_profile_equals_division_reference(void **state)
             }
             default: {
                 const uint32_t us = rnd() % 40000u + 1u;
-                km_profile_stream(&a, to, us, vmax);
-                km_profile_stream(&b, to, us, vmax);
+                km_profile_stream(&a, to, us, vmax, accel);
+                km_profile_stream(&b, to, us, vmax, accel);
                 break;
             }
             }
