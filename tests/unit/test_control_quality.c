@@ -1,0 +1,128 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Issue 20's control defects, each driven through the real control tick
+ * against the plant (tests/support/km_plant_rig.h): the realistic plant
+ * (sensor noise, friction, backlash; docs/plant.md) where the defect needs
+ * it. docs/protocol.md §5.4 (rotation commands), docs/tuning.md. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <string.h>
+
+#include "km_plant_rig.h"
+
+static kr_rig_t r;
+
+/* |v| */
+static int32_t iabs(int32_t v)
+{
+    return v < 0 ? -v : v;
+}
+
+/* Torque on at `pos` on the named plant, settled 500 ms. */
+static void on_at(const char *plant, int32_t pos)
+{
+    kr_init_at(&r, km_plant_config_named(plant), pos);
+    assert_true(kr_torque(&r, 2));
+    kr_run(&r, 500);
+}
+
+/* D2: holding on the realistic plant (pot noise), the bridge PWM does not
+ * buzz: fewer than 10 sign changes a second over 4 s, and 0x46 moves by
+ * at most one count. */
+static void test_d2_quiet_hold_under_sensor_noise(void **state)
+{
+    (void)state;
+    on_at("realistic", 0);
+    assert_true(kr_move(&r, KM_MOVE_TIME, 100, 300));
+    kr_run(&r, 1500);
+    int32_t last_sign = 0, flips = 0, lo = INT32_MAX, hi = INT32_MIN;
+    for (int i = 0; i < 4000; i++) {
+        kr_tick(&r);
+        const int32_t s = r.bridge.pwm > 0 ? 1 : (r.bridge.pwm < 0 ? -1 : 0);
+        if (s != 0 && last_sign != 0 && s != last_sign) {
+            flips++;
+        }
+        last_sign = s != 0 ? s : last_sign;
+        lo = kr_pos(&r) < lo ? kr_pos(&r) : lo;
+        hi = kr_pos(&r) > hi ? kr_pos(&r) : hi;
+    }
+    print_message("hold: %d PWM sign changes in 4 s, 0x46 %d..%d\n", flips, lo, hi);
+    assert_true(flips < 40);
+    assert_true(hi - lo <= 1);
+}
+
+/* D1: 0x65 +90 deg in 500 ms retargeted at 250 ms to +60 deg in 500 ms
+ * (realistic plant): no overshoot past +60 deg beyond 0.3 deg, never more
+ * than the stall current, and bit 7 clears 500 ms +-10 % after the retarget. */
+static void test_d1_retarget_is_smooth_and_on_time(void **state)
+{
+    (void)state;
+    on_at("realistic", 0);
+    assert_true(kr_move(&r, KM_MOVE_TIME, 900, 500));
+    kr_run(&r, 250);
+    assert_true(kr_move(&r, KM_MOVE_TIME, 600, 500));
+    int32_t peak = 0, end = -1;
+    int64_t top = INT64_MIN;
+    for (int i = 0; i < 1500; i++) {
+        kr_tick(&r);
+        peak = iabs(km_plant_current_ma(&r.plant)) > peak ? iabs(km_plant_current_ma(&r.plant)) : peak;
+        top = km_plant_shaft_udeg(&r.plant) > top ? km_plant_shaft_udeg(&r.plant) : top;
+        if (end < 0 && !r.live.running) {
+            end = i + 1;
+        }
+    }
+    print_message("retarget: peak %d mA, top %lld udeg, bit 7 clears after %d ms\n", peak, (long long)top,
+                  end);
+    assert_true(top <= 60300000);
+    assert_true(peak <= 2265);
+    assert_true(end >= 450 && end <= 550);
+}
+
+/* D10: a fastest move under a 0x67 PWM cap of 100 creeps; bit 7 stays set
+ * while the shaft still moves and clears only once it arrived (or stopped). */
+static void test_d10_blocked_shaft_clock_waits_for_a_moving_shaft(void **state)
+{
+    (void)state;
+    on_at("ideal", 0);
+    assert_true(kr_move_capped(&r, 900, 100));
+    kr_run(&r, 5);
+    for (int i = 0; i < 6000 && r.live.running; i++) {
+        kr_tick(&r);
+        if (!r.live.running) {
+            break;
+        }
+    }
+    print_message("capped move: bit 7 cleared at 0x46 = %d\n", kr_pos(&r));
+    assert_false(r.live.running);
+    assert_true(kr_pos(&r) >= 900 - 50);
+}
+
+/* D8: a speed limit above the product's fastest (0x5D = 720) still caps the
+ * profile at fastest_dps: a fastest move never asks for more. */
+static void test_d8_profile_capped_at_product_fastest(void **state)
+{
+    (void)state;
+    on_at("ideal", -900);
+    r.params.speed_limit_dps = 720;
+    assert_true(kr_move(&r, KM_MOVE_TIME, 900, 200)); /* 180 deg in 200 ms: 1200 deg/s asked */
+    int32_t vmax = 0;
+    for (int i = 0; i < 1500; i++) {
+        kr_tick(&r);
+        vmax = iabs(r.ctl.servo.profile.vel) > vmax ? iabs(r.ctl.servo.profile.vel) : vmax;
+    }
+    assert_true(vmax <= (int32_t)r.params.gains.fastest_dps * KM_PROFILE_UPS_PER_DPS);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_d2_quiet_hold_under_sensor_noise),
+        cmocka_unit_test(test_d1_retarget_is_smooth_and_on_time),
+        cmocka_unit_test(test_d10_blocked_shaft_clock_waits_for_a_moving_shaft),
+        cmocka_unit_test(test_d8_profile_capped_at_product_fastest),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
