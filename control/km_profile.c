@@ -231,6 +231,20 @@ static int32_t prv_speed_us(int32_t d, int32_t us, int32_t vmax)
     return d < 0 ? -v : v;
 }
 
+/* The periods since the previous target (1 + the frames lost): the step
+ * `d` (u) over the last period's step when the stream moves (arrival
+ * jitter of half a period cannot fool it), else the time since the
+ * previous target's filtered arrival; 1..8. */
+static int32_t prv_stream_periods(const km_profile_t *p, int32_t d)
+{
+    int32_t n = (p->s_since + p->s_period / 2) / p->s_period;
+    const uint32_t a = (uint32_t)prv_abs(d), b = (uint32_t)prv_abs(p->s_step);
+    if (b != 0u && a / b <= 8u && (d >= 0) == (p->s_step >= 0)) {
+        n = (int32_t)((a + b / 2u) / b);
+    }
+    return n < 1 ? 1 : (n > 8 ? 8 : n);
+}
+
 void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_us, int32_t vlimit_ups,
                        int32_t accel)
 {
@@ -240,17 +254,26 @@ void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_u
     if (p->s_period <= 0) {
         p->s_period = iv;
         p->s_since = 0;
+        p->s_frames = 0;
+        p->s_step = 0;
     } else { /* n periods since the previous target's filtered arrival: n - 1 frames lost */
-        n = (p->s_since + p->s_period / 2) / p->s_period;
-        n = n < 1 ? 1 : (n > 8 ? 8 : n);
+        n = prv_stream_periods(p, tgt - p->target);
         const int32_t late = p->s_since - n * p->s_period;
-        p->s_period += (iv / n - p->s_period) / 4;
-        p->s_since = late - late / 4; /* since this target's filtered arrival */
+        /* the period: the mean of the intervals so far (each within 1/4
+         * of it: a frame's jitter), then 1/64 of each */
+        int32_t each = iv / n;
+        const int32_t q = p->s_period / 4;
+        each = each < p->s_period - q ? p->s_period - q : (each > p->s_period + q ? p->s_period + q : each);
+        p->s_period += (each - p->s_period) / (p->s_frames + 2);
+        p->s_frames = p->s_frames < 62 ? p->s_frames + 1 : 62;
+        p->s_since = late - late / 8; /* the arrival estimate takes 1/8 of the lateness */
     }
     p->vmax = vlimit_ups > 0 ? (vlimit_ups < VMAX_MAX ? vlimit_ups : VMAX_MAX) : 1;
     p->accel = accel > 0 ? (accel < ACCEL_MAX ? accel : ACCEL_MAX) : 1;
     p->s_vel = prv_speed_us(tgt - p->target, n * p->s_period, p->vmax);
-    p->s_lag = p->s_period * KM_PROFILE_STREAM_LAG_Q2 / 4;
+    p->s_step = (tgt - p->target) / n;
+    p->s_lag = 2 * p->s_period +
+               (p->s_period / 2 > KM_PROFILE_STREAM_SLACK_US ? p->s_period / 2 : KM_PROFILE_STREAM_SLACK_US);
     p->target = tgt;
     p->stream = true;
     p->done = false;

@@ -13,9 +13,12 @@
  *    cruise speed is D / (3T/4); it arrives in T (+ one tick) unless that
  *    speed is above the speed limit, which wins (the move takes longer).
  *  - a stream (0x68): a set-point interpolator. The frame period is a
- *    filtered estimate (1/4 of each new interval, a gap of n periods
- *    counting as n frames: a dropped frame), and so is each frame's
- *    arrival time; the targets' speed is their difference over the
+ *    filtered estimate (the mean of the intervals so far, each taken within
+ *    1/4 of the estimate, then 1/64 of each new one; a gap of n periods
+ *    counts as n frames: a dropped frame, n from the targets' step when
+ *    they move, else from the time), and
+ *    each frame's arrival time is the predicted one plus 1/8 of the
+ *    difference; the targets' speed is their difference over the
  *    periods between them. The set-point follows a reference that runs at
  *    that speed KM_PROFILE_STREAM_LAG periods behind the newest target
  *    (it waits at the target when no newer one comes), at the targets'
@@ -54,6 +57,8 @@ typedef struct {
     int32_t s_period; /* stream: the filtered frame period, us (0 = none yet) */
     int32_t s_since;  /* stream: us since the filtered arrival of the newest target */
     int32_t s_lag;    /* stream: how far behind the newest target the set-point runs, us */
+    int32_t s_frames; /* stream: intervals averaged into s_period (at most 62) */
+    int32_t s_step;   /* stream: the targets' step per period, u */
     bool stream;      /* following a stream of targets (0x68) */
     bool done;        /* at the target, at rest */
 } km_profile_t;
@@ -67,7 +72,7 @@ void km_profile_move(km_profile_t *p, int32_t target_ddeg, int32_t vmax_ups, int
 /* Move to target in `time_ms` (> 0), no faster than `vlimit_ups`. */
 void km_profile_move_time(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, int32_t vlimit_ups);
 
-#define KM_PROFILE_STREAM_LAG_Q2 10 /* the reference's lag, periods x 4 (2.5) */
+#define KM_PROFILE_STREAM_SLACK_US 8000 /* the reference runs 2 periods + max(period / 2, this) behind */
 
 /* A move in time that may start while the profile moves (a retarget or a
  * reversal): from the profile's speed, changing speed at `accel` (u/s per

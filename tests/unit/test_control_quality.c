@@ -116,6 +116,85 @@ static void test_d8_profile_capped_at_product_fastest(void **state)
     assert_true(vmax <= (int32_t)r.params.gains.fastest_dps * KM_PROFILE_UPS_PER_DPS);
 }
 
+static uint32_t s_lcg = 12345u;
+
+/* Uniform integer in [-5, 5] ms of arrival jitter, reproducible. */
+static int32_t jitter(void)
+{
+    s_lcg = s_lcg * 1103515245u + 12345u;
+    return (int32_t)((s_lcg >> 16) % 11u) - 5;
+}
+
+/* D2b: 0x68 at `period` ms, 90 deg/s from -60 to +60 deg, each frame up to
+ * +-5 ms off its time, one in 17 dropped (realistic plant): from 300 ms to
+ * the last frame the shaft's 10 ms mean speed stays within +-10 % of the
+ * stream's, and the current never exceeds 1 A (the steps of the old
+ * acceleration feedforward drew 3.5 A). */
+static void stream_checked(uint32_t period)
+{
+    on_at("realistic", -600);
+    const int32_t step = (int32_t)(period * 9u / 10u);
+    const uint32_t n = 1200u / (uint32_t)step;
+    uint32_t t = 0, last = 0, k = 1, arrive = period + (uint32_t)jitter();
+    int64_t hist[10];
+    int32_t vmin = INT32_MAX, vmax = INT32_MIN, peak = 0;
+    while (k <= n) {
+        while (k <= n && arrive <= t) {
+            if (k % 17u != 8u) {
+                assert_true(kr_move(&r, KM_MOVE_STREAM, (int16_t)(-600 + (int32_t)k * step), 0));
+            }
+            last = arrive;
+            k++;
+            const int32_t due = (int32_t)(k * period) + jitter();
+            arrive = due < (int32_t)last ? last : (uint32_t)due;
+        }
+        kr_tick(&r);
+        const int64_t now = km_plant_shaft_udeg(&r.plant);
+        if (t >= 300u) {
+            const int32_t v = (int32_t)((now - hist[t % 10u]) / 10); /* m deg/s over 10 ms */
+            vmin = v < vmin ? v : vmin;
+            vmax = v > vmax ? v : vmax;
+            peak = iabs(km_plant_current_ma(&r.plant)) > peak ? iabs(km_plant_current_ma(&r.plant)) : peak;
+        }
+        hist[t % 10u] = now;
+        t++;
+    }
+    print_message("stream %u ms: shaft %d..%d m deg/s (90000), peak %d mA\n", period, vmin, vmax, peak);
+    assert_true(vmin >= 81000 && vmax <= 99000);
+    assert_true(peak <= 1000);
+}
+
+static void test_d2b_stream_50hz_jitter_and_drops(void **state)
+{
+    (void)state;
+    stream_checked(20u);
+}
+
+static void test_d2b_stream_100hz_jitter_and_drops(void **state)
+{
+    (void)state;
+    stream_checked(10u);
+}
+
+/* D3: holding against 1.0 N.m (about 55 % of the realistic plant's stall
+ * torque, more than the old integrator bound could hold), the shaft comes
+ * back within 0.2 deg of the target. */
+static void test_d3_hold_against_heavy_load(void **state)
+{
+    (void)state;
+    on_at("realistic", 0);
+    r.in.ext_torque_unm = 1000000;
+    kr_run(&r, 3000);
+    int64_t sum = 0;
+    for (int i = 0; i < 1000; i++) {
+        kr_tick(&r);
+        sum += km_plant_shaft_udeg(&r.plant);
+    }
+    const int64_t mean = sum / 1000;
+    print_message("hold against 1.0 N.m: shaft %lld udeg\n", (long long)mean);
+    assert_true(mean <= 200000 && mean >= -200000);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -123,6 +202,9 @@ int main(void)
         cmocka_unit_test(test_d1_retarget_is_smooth_and_on_time),
         cmocka_unit_test(test_d10_blocked_shaft_clock_waits_for_a_moving_shaft),
         cmocka_unit_test(test_d8_profile_capped_at_product_fastest),
+        cmocka_unit_test(test_d2b_stream_50hz_jitter_and_drops),
+        cmocka_unit_test(test_d2b_stream_100hz_jitter_and_drops),
+        cmocka_unit_test(test_d3_hold_against_heavy_load),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
