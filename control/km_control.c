@@ -285,8 +285,10 @@ static void prv_drive_servo(km_control_t *c, const km_control_params_t *p, int32
             .position = pos,
             .speed_ddps = speed_ddps,
             .pwm_max = limit,
-            .integrate = sm.holding,
-            .still = c->hold.on,
+            /* a protection's hold holds where it tripped: the integrator
+             * stops there (pushing harder would feed the excursion) */
+            .integrate = sm.holding && c->action == KM_PROT_ACT_NONE,
+            .still = c->hold.on && c->action == KM_PROT_ACT_NONE,
         };
         pwm = km_position_loop_step(&c->loop, &p->gains, &li, dt_us);
     }

@@ -14,32 +14,48 @@ static int32_t prv_clamp(int32_t v, int32_t lo, int32_t hi)
 void km_position_loop_init(km_position_loop_t *l)
 {
     l->i_acc = 0;
+    l->still_ms = 0;
+    l->rest_pos = 0;
     l->last_sp_ddps = 0;
 }
 
 /* The integrator's PWM after this tick: ki x the error (e_u, 0.001 x 0.1
  * deg) while holding, frozen while the output is saturated the way it
- * would push; inside the hold band a small remainder (below twice the
- * friction feedforward: friction holds the shaft) bleeds away, a larger
- * one is a load and stays. */
-static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g, int32_t e_u, bool in_band,
-                             int32_t before, int32_t pwm_max, uint32_t dt_us)
+ * would push. Held still (the move over): inside the hold band a small
+ * remainder (below twice the friction feedforward: friction holds the
+ * shaft) bleeds away, a larger one is a load and stays; outside it a
+ * load pushed the shaft: ki_hold takes it up while the shaft stands, and
+ * waits while the shaft is on its way back (no overshoot). */
+static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
+                             const km_position_loop_in_t *in, int32_t e_u, bool in_band, int32_t before,
+                             uint32_t dt_us)
 {
     int32_t i_pwm = km_sdiv256000(l->i_acc);
-    if (in_band) {
+    int32_t ki = (int32_t)g->ki_q8;
+    if (in->still) {
         const int32_t small = 2 * (int32_t)g->friction_pwm;
-        if (i_pwm <= small && i_pwm >= -small) {
-            l->i_acc -= l->i_acc / 128;
+        if (in_band) {
+            if (i_pwm <= small && i_pwm >= -small) {
+                l->i_acc -= l->i_acc / 128;
+            }
+            return km_sdiv256000(l->i_acc);
         }
-        return km_sdiv256000(l->i_acc);
+        const int32_t pushed = in->position - l->rest_pos; /* from where the settled hold rested */
+        if (l->still_ms >= KM_HOLD_SETTLED_MS && g->ki_hold_q4 != 0u &&
+            (pushed > KM_HOLD_PUSH_DDEG || pushed < -KM_HOLD_PUSH_DDEG)) {
+            if ((e_u > 0 && in->speed_ddps > KM_HOLD_RETURN_DDPS) ||
+                (e_u < 0 && in->speed_ddps < -KM_HOLD_RETURN_DDPS)) {
+                return i_pwm;
+            }
+            ki = (int32_t)g->ki_hold_q4 * 16; /* Q4 -> Q8 */
+        }
     }
     const int32_t i_max = (g->i_max_pwm > 1000u ? 1000 : (int32_t)g->i_max_pwm) * 256000;
-    const int32_t e_d =
-        prv_clamp(km_sdiv1000(e_u), -100, 100); /* 10 deg: the integrator is for small errors */
-    const int32_t di =
-        km_sdiv100(km_sdiv10((int32_t)g->ki_q8 * e_d) * (int32_t)(dt_us > 2000u ? 2000u : dt_us));
+    /* 10 deg: the integrator is for small errors */
+    const int32_t e_d = prv_clamp(km_sdiv1000(e_u), -100, 100);
+    const int32_t di = km_sdiv100(km_sdiv10(ki * e_d) * (int32_t)(dt_us > 2000u ? 2000u : dt_us));
     before += i_pwm;
-    if (!((before >= pwm_max && di > 0) || (before <= -pwm_max && di < 0))) {
+    if (!((before >= in->pwm_max && di > 0) || (before <= -in->pwm_max && di < 0))) {
         l->i_acc = prv_clamp(l->i_acc + di, -i_max, i_max);
         i_pwm = km_sdiv256000(l->i_acc);
     }
@@ -67,7 +83,14 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
         e_u += e_u > 0 ? -band_u : band_u;
     }
     /* kp: PWM per 0.1 deg Q8 -> kp x e_u / 1000 / 256; e_u / 100 first keeps 32 bits */
-    const int32_t kp = in->still && g->kp_hold_q8 != 0u ? (int32_t)g->kp_hold_q8 : (int32_t)g->kp_q8;
+    if (!in->still) {
+        l->still_ms = 0;
+    } else if (l->still_ms < KM_HOLD_SETTLED_MS) { /* settled: the position unchanged that long */
+        l->still_ms = in->position == l->rest_pos ? l->still_ms + (dt_us >= 1000u ? 1 : 0) : 0;
+        l->rest_pos = in->position;
+    }
+    const bool settled = l->still_ms >= KM_HOLD_SETTLED_MS && g->kp_hold_q8 != 0u;
+    const int32_t kp = settled ? (int32_t)g->kp_hold_q8 : (int32_t)g->kp_q8;
     int32_t out = km_sdiv2560(kp * km_sdiv100(e_u));
     out += km_sdiv2560((int32_t)g->kd_q8 * ev); /* kd: PWM per deg/s Q8, ev 0.1 deg/s */
     /* acceleration feedforward: tau x dv/dt as a speed, 0.1 deg/s */
@@ -85,7 +108,7 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     }
     /* the integrator runs only while holding: a moving tick skips its divisions */
     if (in->integrate) {
-        out += prv_integrate(l, g, e_u, in_band, out, in->pwm_max, dt_us);
+        out += prv_integrate(l, g, in, e_u, in_band, out, dt_us);
     } else {
         out += km_sdiv256000(l->i_acc);
     }

@@ -16,9 +16,25 @@
 
 #include "km_product.h"
 
+/* Held still, the integrator waits while the shaft returns faster than
+ * this toward the target (0.1 deg/s). */
+#define KM_HOLD_RETURN_DDPS 20
+#define KM_HOLD_RETURN_BLEED 64 /* ... and gives back 1/64 a tick (stick-slip: no jump past) */
+/* kp_hold and ki_hold apply once the held position (the hold filter's)
+ * has not changed for this long (ticks):
+ * the end of a move settles on kp and ki, a push on a settled hold is
+ * met by the stiffer gains. */
+#define KM_HOLD_SETTLED_MS 200
+/* ki_hold takes up a push: the shaft more than this away from where the
+ * settled hold rested (0.1 deg); a move's residue inside the band is
+ * left to ki (a fast integrator there breaks stiction into a jump). */
+#define KM_HOLD_PUSH_DDEG 2
+
 typedef struct {
     int32_t i_acc;        /* integrator, PWM x 256000 */
     int32_t last_sp_ddps; /* set-point speed of the last tick, for its acceleration */
+    int32_t still_ms;     /* ticks the hold has lasted, up to KM_HOLD_SETTLED_MS */
+    int32_t rest_pos;     /* where the shaft rested when the hold settled, 0.1 deg */
 } km_position_loop_t;
 
 typedef struct {

@@ -86,6 +86,7 @@ void km_hold_filter_set(km_hold_filter_t *h, bool on, int32_t position)
     if (on && !h->on) {
         h->out = position;
         h->frac = 0;
+        h->ticks = 0;
     }
     h->on = on;
 }
@@ -103,7 +104,12 @@ int32_t km_hold_filter_step(km_hold_filter_t *h, int32_t position)
         h->frac = 0;
         return position;
     }
-    h->frac += e / 8;
+    if (h->ticks < KM_HOLD_FILTER_SETTLE) {
+        h->ticks++;
+        h->frac += e / 8; /* the end of a move: follow it closer */
+    } else {
+        h->frac += e / 16;
+    }
     if (h->frac > 12 || h->frac < -12) { /* 3/4 count: the hysteresis */
         const int32_t n = (h->frac + (h->frac > 0 ? 8 : -8)) / 16;
         h->out += n;

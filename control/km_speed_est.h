@@ -7,7 +7,8 @@
  *    position change over the last KM_SPEED_FAST_N ticks (8 ms at 1 kHz,
  *    12.5 deg/s resolution, 4 ms of lag against the plant's ~28 ms).
  *  - km_hold_filter_t: the position a hold works on and reports (0x46)
- *    while servo mode holds still: a first-order low pass (1/8 per tick;
+ *    while servo mode holds still: a first-order low pass (1/8 per tick
+ *    for KM_HOLD_FILTER_SETTLE ticks, then 1/16;
  *    a reading more than KM_HOLD_FILTER_JUMP away is taken as is) whose output moves
  *    only when the filtered value is more than 3/4 count away from it
  *    (hysteresis), so sensor noise of about a count neither reaches the
@@ -37,11 +38,13 @@ typedef struct {
     int32_t ddps; /* the estimate, 0.1 deg/s */
 } km_speed_fast_t;
 
-#define KM_HOLD_FILTER_JUMP 8 /* counts: a real push, taken at once */
+#define KM_HOLD_FILTER_SETTLE 200 /* ticks at 1/8 before 1/16 (the end of a move settles) */
+#define KM_HOLD_FILTER_JUMP 8     /* counts: a real push, taken at once */
 
 typedef struct {
-    int32_t out;  /* the position given out, 0.1 deg */
-    int32_t frac; /* filtered position - out, 1/16 x 0.1 deg */
+    int32_t out;   /* the position given out, 0.1 deg */
+    int32_t frac;  /* filtered position - out, 1/16 x 0.1 deg */
+    int32_t ticks; /* since it started, up to KM_HOLD_FILTER_SETTLE */
     bool on;
 } km_hold_filter_t;
 

@@ -236,9 +236,13 @@ class Image:
         relocations (linked without --emit-relocs)."""
         out = run("readelf", "-r", "-W", str(self.elf))
         sites = set()
+        debug = False  # relocations of .debug_* sections hold section offsets, not loaded addresses
         for line in out.splitlines():
+            if line.startswith("Relocation section '"):
+                debug = line.split("'")[1].startswith((".rel.debug", ".rela.debug"))
+                continue
             parts = line.split()
-            if len(parts) >= 3 and parts[2] == "R_ARM_ABS32":
+            if not debug and len(parts) >= 3 and parts[2] == "R_ARM_ABS32":
                 sites.add(int(parts[0], 16))
         if not sites:
             return None
