@@ -19,7 +19,6 @@
 /* Held still, the integrator waits while the shaft returns faster than
  * this toward the target (0.1 deg/s). */
 #define KM_HOLD_RETURN_DDPS 20
-#define KM_HOLD_RETURN_BLEED 64 /* ... and gives back 1/64 a tick (stick-slip: no jump past) */
 /* kp_hold and ki_hold apply once the held position (the hold filter's)
  * has not changed for this long (ticks):
  * the end of a move settles on kp and ki, a push on a settled hold is

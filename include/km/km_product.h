@@ -26,8 +26,8 @@ typedef struct {
     uint16_t arrive_ddeg;    /* a move ends when the shaft is this close to the target, 0.1 deg */
     uint16_t settle_ms;      /* ... or this long after the profile reached it (blocked shaft) */
     uint16_t hold_band_ddeg; /* holding: the position loop's dead band, 0.1 deg (sensor noise) */
-    uint16_t kp_hold_q8;     /* kp once the move ended (0 = kp_q8): stiffness against a load */
-    uint16_t ki_hold_q4;     /* ki once the move ended, PWM per 0.1 deg.s Q4 (0 = ki_q8): how fast a load is taken up */
+    uint16_t kp_hold_q8;     /* kp once settled (0 = kp_q8): stiffness against a load */
+    uint16_t ki_hold_q4;     /* ki once settled, PWM per 0.1 deg.s Q4 (0 = ki_q8): a push taken up */
 } km_control_gains_t;
 
 /* The defaults, tuned on the simulated plant: docs/tuning.md. */
@@ -35,7 +35,7 @@ typedef struct {
     {                                                                                                     \
         .kp_q8 = 2560, .kd_q8 = 768, .ki_q8 = 10240, .i_max_pwm = 1000, .kv_q8 = 700, .friction_pwm = 15, \
         .tau_ms = 28, .accel_dps2 = 4000, .fastest_dps = 360, .arrive_ddeg = 5, .settle_ms = 300,         \
-        .hold_band_ddeg = 1, .kp_hold_q8 = 3840, .ki_hold_q4 = 4096,                                     \
+        .hold_band_ddeg = 1, .kp_hold_q8 = 3840, .ki_hold_q4 = 4096,                                      \
     }
 
 typedef struct {
