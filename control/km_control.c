@@ -191,7 +191,10 @@ static int32_t prv_position(const km_sensors_t *in, const km_control_params_t *p
 static int32_t prv_hold_position(km_control_t *c, int32_t pos)
 {
     const bool hold =
-        !c->motor.active && c->servo.ts == KM_TORQUE_ON && c->servo.profile.done && !c->servo.running;
+        !c->servo.running && c->servo.profile.done && c->servo.ts == KM_TORQUE_ON && !c->motor.active;
+    if (!hold && !c->hold.on) {
+        return pos; /* moving: the reading as is */
+    }
     km_hold_filter_set(&c->hold, hold, pos);
     return km_hold_filter_step(&c->hold, pos);
 }

@@ -62,6 +62,30 @@ static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
     return i_pwm;
 }
 
+/* Holding still (the move over): the hold band is a dead band (no P, no
+ * D inside it, the error beyond it outside), so a count of sensor noise
+ * moves nothing; the settled clock runs while the position stays put.
+ * Returns kp (kp_hold once settled); *in_band says where the error is. */
+static int32_t prv_hold_terms(km_position_loop_t *l, const km_control_gains_t *g,
+                              const km_position_loop_in_t *in, int32_t *e_u, int32_t *ev, uint32_t dt_us,
+                              bool *in_band)
+{
+    const int32_t band_u = (int32_t)g->hold_band_ddeg * 1000;
+    *in_band = *e_u <= band_u && *e_u >= -band_u;
+    if (*in_band) {
+        *e_u = 0;
+        *ev = 0;
+    } else {
+        *e_u += *e_u > 0 ? -band_u : band_u;
+    }
+    if (l->still_ms < KM_HOLD_SETTLED_MS) { /* settled: the position unchanged that long */
+        l->still_ms = in->position == l->rest_pos ? l->still_ms + (dt_us >= 1000u ? 1 : 0) : 0;
+        l->rest_pos = in->position;
+    }
+    const bool settled = l->still_ms >= KM_HOLD_SETTLED_MS && g->kp_hold_q8 != 0u;
+    return settled ? (int32_t)g->kp_hold_q8 : (int32_t)g->kp_q8;
+}
+
 int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g,
                               const km_position_loop_in_t *in, uint32_t dt_us)
 {
@@ -72,25 +96,14 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     int32_t e_u = prv_clamp(sp_u - pos_u, -2000000, 2000000);
     const int32_t vs = prv_clamp(in->setpoint_ddps, -20000, 20000);
     int32_t ev = prv_clamp(vs - prv_clamp(in->speed_ddps, -20000, 20000), -20000, 20000);
-    /* holding: the hold band is a dead band (no P, no D inside it; the
-     * error beyond it outside), so a count of sensor noise moves nothing */
-    const int32_t band_u = in->still ? (int32_t)g->hold_band_ddeg * 1000 : -1;
-    const bool in_band = e_u <= band_u && e_u >= -band_u;
-    if (in_band) {
-        e_u = 0;
-        ev = 0;
-    } else if (band_u > 0) {
-        e_u += e_u > 0 ? -band_u : band_u;
+    int32_t kp = (int32_t)g->kp_q8;
+    bool in_band = false;
+    if (in->still) {
+        kp = prv_hold_terms(l, g, in, &e_u, &ev, dt_us, &in_band);
+    } else {
+        l->still_ms = 0;
     }
     /* kp: PWM per 0.1 deg Q8 -> kp x e_u / 1000 / 256; e_u / 100 first keeps 32 bits */
-    if (!in->still) {
-        l->still_ms = 0;
-    } else if (l->still_ms < KM_HOLD_SETTLED_MS) { /* settled: the position unchanged that long */
-        l->still_ms = in->position == l->rest_pos ? l->still_ms + (dt_us >= 1000u ? 1 : 0) : 0;
-        l->rest_pos = in->position;
-    }
-    const bool settled = l->still_ms >= KM_HOLD_SETTLED_MS && g->kp_hold_q8 != 0u;
-    const int32_t kp = settled ? (int32_t)g->kp_hold_q8 : (int32_t)g->kp_q8;
     int32_t out = km_sdiv2560(kp * km_sdiv100(e_u));
     out += km_sdiv2560((int32_t)g->kd_q8 * ev); /* kd: PWM per deg/s Q8, ev 0.1 deg/s */
     /* acceleration feedforward: tau x dv/dt as a speed, 0.1 deg/s */
