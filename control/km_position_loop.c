@@ -19,6 +19,30 @@ void km_position_loop_init(km_position_loop_t *l)
     l->last_sp_ddps = 0;
 }
 
+/* The integrator gain while holding still (prv_integrate's rules), or -1 when it does not integrate this
+ * tick: inside the band (a small remainder bleeds away), or a pushed shaft on its way back. */
+static int32_t prv_hold_ki(km_position_loop_t *l, const km_control_gains_t *g,
+                           const km_position_loop_in_t *in, int32_t e_u, bool in_band)
+{
+    if (in_band) {
+        const int32_t small = 2 * (int32_t)g->friction_pwm, i_pwm = km_sdiv256000(l->i_acc);
+        if (i_pwm <= small && i_pwm >= -small) {
+            l->i_acc -= l->i_acc / 128;
+        }
+        return -1;
+    }
+    const int32_t pushed = in->position - l->rest_pos; /* from where the settled hold rested */
+    if (l->still_ms < KM_HOLD_SETTLED_MS || g->ki_hold_q4 == 0u ||
+        (pushed <= KM_HOLD_PUSH_DDEG && pushed >= -KM_HOLD_PUSH_DDEG)) {
+        return (int32_t)g->ki_q8;
+    }
+    if ((e_u > 0 && in->speed_ddps > KM_HOLD_RETURN_DDPS) ||
+        (e_u < 0 && in->speed_ddps < -KM_HOLD_RETURN_DDPS)) {
+        return -1;
+    }
+    return (int32_t)g->ki_hold_q4 * 16; /* Q4 -> Q8 */
+}
+
 /* The integrator's PWM after this tick: ki x the error (e_u, 0.001 x 0.1
  * deg) while holding, frozen while the output is saturated the way it
  * would push. Held still (the move over): inside the hold band a small
@@ -33,21 +57,9 @@ static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
     int32_t i_pwm = km_sdiv256000(l->i_acc);
     int32_t ki = (int32_t)g->ki_q8;
     if (in->still) {
-        const int32_t small = 2 * (int32_t)g->friction_pwm;
-        if (in_band) {
-            if (i_pwm <= small && i_pwm >= -small) {
-                l->i_acc -= l->i_acc / 128;
-            }
+        ki = prv_hold_ki(l, g, in, e_u, in_band);
+        if (ki < 0) {
             return km_sdiv256000(l->i_acc);
-        }
-        const int32_t pushed = in->position - l->rest_pos; /* from where the settled hold rested */
-        if (l->still_ms >= KM_HOLD_SETTLED_MS && g->ki_hold_q4 != 0u &&
-            (pushed > KM_HOLD_PUSH_DDEG || pushed < -KM_HOLD_PUSH_DDEG)) {
-            if ((e_u > 0 && in->speed_ddps > KM_HOLD_RETURN_DDPS) ||
-                (e_u < 0 && in->speed_ddps < -KM_HOLD_RETURN_DDPS)) {
-                return i_pwm;
-            }
-            ki = (int32_t)g->ki_hold_q4 * 16; /* Q4 -> Q8 */
         }
     }
     const int32_t i_max = (g->i_max_pwm > 1000u ? 1000 : (int32_t)g->i_max_pwm) * 256000;

@@ -192,6 +192,20 @@ static int32_t prv_retime_cruise(int32_t v0, int32_t dm, int32_t t, int32_t a)
     return (int32_t)((b - (int64_t)prv_isqrt64((uint64_t)disc)) / 2);
 }
 
+/* `acc` (u/s per ms), or the harder braking a speed `v0` (0.1 deg/s toward
+ * the target) needs to stop within `dabs` (u): never past the target. */
+static int32_t prv_brake_accel(int32_t v0, int32_t dabs, int32_t acc)
+{
+    if (v0 <= 0) {
+        return acc;
+    }
+    const uint32_t need = ((uint32_t)v0 * (uint32_t)v0) / (2u * (uint32_t)(dabs > 0 ? dabs : 1)) + 1u;
+    if (need * 1000u <= (uint32_t)acc) {
+        return acc;
+    }
+    return need > (uint32_t)km_sdiv1000(ACCEL_MAX) ? ACCEL_MAX : (int32_t)need * 1000;
+}
+
 void km_profile_retime(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, int32_t vlimit_ups,
                        int32_t accel)
 {
@@ -208,14 +222,7 @@ void km_profile_retime(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, i
     int32_t vc = prv_retime_cruise(v0, dabs, t, a);
     const int32_t vlim = km_sdiv1000(vlimit_ups);
     vc = vc < 1 ? 1 : (vc > vlim ? vlim : vc);
-    int32_t acc = a * 1000;
-    if (v0 > 0) { /* too fast to stop on the target at `a`: brake harder, never past it */
-        const uint32_t need = ((uint32_t)v0 * (uint32_t)v0) / (2u * (uint32_t)(dabs > 0 ? dabs : 1)) + 1u;
-        if (need * 1000u > (uint32_t)acc) {
-            acc = need > (uint32_t)km_sdiv1000(ACCEL_MAX) ? ACCEL_MAX : (int32_t)need * 1000;
-        }
-    }
-    km_profile_move(p, target_ddeg, vc * 1000, acc);
+    km_profile_move(p, target_ddeg, vc * 1000, prv_brake_accel(v0, dabs, a * 1000));
 }
 
 /* d (u) over `us` (>= 100) as u/s, at most `vmax` in size; 32-bit. */
@@ -378,9 +385,6 @@ static void prv_step_stream(km_profile_t *p, uint32_t dt_us)
 /* One piece of at most STEP_MAX_US. */
 static void prv_step(km_profile_t *p, uint32_t dt_us)
 {
-    if (p->s_period > 0 && p->s_since < 4000000) {
-        p->s_since += (int32_t)dt_us;
-    }
     const int32_t e = p->target - p->pos;
     if (p->stream) {
         prv_step_stream(p, dt_us);
@@ -419,6 +423,9 @@ bool km_profile_step(km_profile_t *p, uint32_t dt_us)
 {
     while (!p->done && dt_us > 0u) {
         const uint32_t piece = dt_us > STEP_MAX_US ? STEP_MAX_US : dt_us;
+        if (p->s_period > 0 && p->s_since < 4000000) { /* a stream's clock, also while braking at its end */
+            p->s_since += (int32_t)piece;
+        }
         prv_step(p, piece);
         dt_us -= piece;
     }
