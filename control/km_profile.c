@@ -342,9 +342,9 @@ static int32_t prv_dv(km_profile_t *p, uint32_t dt_us)
 }
 
 /* A stream piece: the set-point's speed goes toward the targets' speed
- * plus 1/32 ms of the distance to the reference (KM_PROFILE_STREAM_LAG
- * periods behind the newest target, or on it once no newer one came), at
- * most `accel` per ms; at rest on the target once the stream ended. */
+ * plus 1/32 ms of the distance to the reference (s_lag behind the newest
+ * target), at most `accel` per ms; once no newer target came within
+ * s_lag, a move that brakes onto the last one. */
 static void prv_step_stream(km_profile_t *p, uint32_t dt_us)
 {
     const int32_t ahead = p->s_lag - p->s_since; /* us the reference is behind the target */
@@ -355,11 +355,8 @@ static void prv_step_stream(km_profile_t *p, uint32_t dt_us)
         p->vsq_lo = (uint32_t)p->vmax * (uint32_t)p->vmax;
         return;
     }
-    int32_t ref = p->target, vff = 0;
-    if (ahead > 0) {
-        vff = p->s_vel;
-        ref -= km_sdiv1000(vff) * km_sdiv1000(ahead);
-    }
+    const int32_t vff = p->s_vel;
+    const int32_t ref = p->target - km_sdiv1000(vff) * km_sdiv1000(ahead);
     int32_t err = ref - p->pos;
     const int32_t emax = p->vmax / 32 + 1;
     err = err > emax ? emax : (err < -emax ? -emax : err);

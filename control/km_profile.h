@@ -20,7 +20,7 @@
  *    each frame's arrival time is the predicted one plus 1/8 of the
  *    difference; the targets' speed is their difference over the
  *    periods between them. The set-point follows a reference that runs at
- *    that speed KM_PROFILE_STREAM_LAG periods behind the newest target
+ *    that speed 2 periods + max(P/2, KM_PROFILE_STREAM_SLACK_US) behind the newest target
  *    (it waits at the target when no newer one comes), at the targets'
  *    speed plus 1/32 ms of the distance to the reference, its speed
  *    changing at most `accel` per ms: arrival jitter and single dropped
