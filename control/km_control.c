@@ -19,8 +19,60 @@ void km_control_init(km_control_t *c, const km_control_params_t *p)
     km_protect_init(&c->prot);
     km_selftest_init(&c->selftest);
     c->action = KM_PROT_ACT_NONE;
+    c->frame = km_axis_of(p);
     /* §5.1 0x11 bit 0: the power-on output until the first tick says otherwise */
     c->bridge = km_output_bridge(p->power_on_brake ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE, 0, 0, false);
+}
+
+/* The speed estimates' positions into the new frame (sign: the
+ * direction flipped), so no speed step appears. */
+static void prv_rebase_axis_speeds(km_control_t *c, const km_axis_t *was, const km_axis_t *now, int32_t sign)
+{
+    for (uint32_t k = 0; k < KM_SPEED_FAST_N; k++) {
+        c->fast.pos[k] = km_axis_map(was, now, c->fast.pos[k]);
+    }
+    c->fast.ddps *= sign;
+    c->speed.last_position = km_axis_map(was, now, c->speed.last_position);
+    c->speed.acc *= sign;
+    c->speed.dps *= sign;
+    c->hold.out = km_axis_map(was, now, c->hold.out); /* the hold filter holds the same shaft angle */
+    c->hold.frac *= sign;
+}
+
+/* 0. the master's frame changed (km_control.h): servo mode holds the
+ * same shaft angle (a move ends at its set-point, still running until it
+ * arrives), the loop keeps its integral (negated with the direction), a
+ * motor run keeps turning the same way (km_motor_mode_reaxis). */
+static void prv_rebase_axis(km_control_t *c, const km_axis_t *now)
+{
+    const km_axis_t was = c->frame;
+    const int32_t sign = km_axis_sign(&was, now);
+    c->frame = *now;
+    if (!c->have_position) {
+        return;
+    }
+    prv_rebase_axis_speeds(c, &was, now, sign);
+    c->position = km_axis_map(&was, now, c->position);
+    if (c->motor.active) {
+        km_motor_mode_reaxis(&c->motor, &was, now);
+    } else if (c->servo.ts == KM_TORQUE_ON) {
+        const bool moving = c->servo.running;
+        const int32_t held = moving ? km_profile_pos_ddeg(&c->servo.profile) : c->servo.target;
+        km_servo_mode_rebase(&c->servo, km_axis_map(&was, now, held));
+        c->servo.running = moving;
+        c->servo.reset_loop = false;
+        c->loop.i_acc *= sign;
+        c->loop.last_sp_ddps = 0;
+    }
+}
+
+/* Follows the master's frame of `p` (km_axis.h) when it changed. */
+static void prv_follow_axis(km_control_t *c, const km_control_params_t *p)
+{
+    const km_axis_t now = km_axis_of(p);
+    if (km_axis_changed(&now, &c->frame)) {
+        prv_rebase_axis(c, &now);
+    }
 }
 
 /* A torque switch for servo mode: motor mode lets go of the bridge. */
@@ -93,6 +145,7 @@ static bool prv_clear(km_control_t *c, uint8_t mask)
 
 bool km_control_request(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
 {
+    prv_follow_axis(c, p); /* a request is in the frame of the params it comes with */
     c->requests++;
     c->last_request = *req;
     if (req->kind == KM_REQ_PROTECTION_CLEAR) {
@@ -179,11 +232,11 @@ static void prv_hw_fault(km_control_t *c)
 }
 
 /* §5.1: reported position = sensor + level-1 + level-2 zero offsets, with
- * the sign flipped when 0x11 bit 2 makes counter-clockwise positive. */
-static int32_t prv_position(const km_sensors_t *in, const km_control_params_t *p)
+ * the sign flipped when 0x11 bit 2 makes counter-clockwise positive
+ * (km_axis.h: modular, the int32 wrap defined). */
+static int32_t prv_position(const km_control_t *c, const km_sensors_t *in)
 {
-    const int32_t pos = in->position + p->zero_offset1 + p->zero_offset2;
-    return p->reverse ? -pos : pos;
+    return km_axis_position(&c->frame, in->position);
 }
 
 /* The position control works on: while servo mode holds still (on, the
@@ -342,7 +395,8 @@ static void prv_report(km_control_t *c, const km_sensors_t *in, int32_t pos, int
 void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p, uint32_t dt_us,
                      km_live_t *live, km_bridge_t *bridge)
 {
-    const int32_t pos = prv_hold_position(c, prv_position(in, p));
+    prv_follow_axis(c, p);
+    const int32_t pos = prv_hold_position(c, prv_position(c, in));
     int32_t speed_dps;
     const int32_t speed_ddps = prv_sense(c, pos, dt_us, &speed_dps);
     const bool was_acting = c->action != KM_PROT_ACT_NONE;

@@ -20,6 +20,10 @@
  *      nothing reaches the bridge without passing the supervisor.
  * Motor mode (0x6E..0x70, km_motor_mode) replaces step 3 while it owns
  * the bridge (hand-over rules in km_motor_mode.h).
+ * A change of the master's frame (0x17, 0x18, 0x46 zeroing, 0x11 bit 2)
+ * is rebased before step 1: the held target, a move's set-point, a run's
+ * start and the speed estimates follow it, so the shaft does not move (a
+ * move in progress ends at its set-point of that tick).
  *
  * While protecting, 0x64 reads 5; motion requests and 0x64 = 2/3 are
  * refused (status bit 6); a request for less motion (km_request.h) is
@@ -39,6 +43,7 @@
 #include <stdint.h>
 
 #include "km_current_limit.h"
+#include "km_axis.h"
 #include "km_hal_sensors.h"
 #include "km_output.h"
 #include "km_motor_mode.h"
@@ -78,6 +83,7 @@ typedef struct {
     km_selftest_t selftest;  /* 0x35 */
     uint32_t requests;       /* typed requests received (diagnostics) */
     km_request_t last_request;
+    km_axis_t frame; /* the master's frame of the last tick (km_axis.h) */
 } km_control_t;
 
 void km_control_init(km_control_t *c, const km_control_params_t *p);

@@ -86,9 +86,17 @@ void km_motor_mode_run(km_motor_mode_t *m, const km_motor_run_t *run, const km_c
     }
 }
 
-/* 0x4D and the counted run: time off, or travel done (modular distance:
- * defined across the int32 wrap of a long run); stops the motor when it
- * ends. */
+/* How far a counted run has turned from its start (modular distance:
+ * defined across the int32 wrap of a long run). */
+static int32_t prv_moved(const km_motor_mode_t *m, int32_t position)
+{
+    uint32_t moved = (uint32_t)position - (uint32_t)m->start_pos;
+    moved = moved > 0x80000000u ? 0u - moved : moved;
+    return moved > 0x7FFFFFFFu ? INT32_MAX : (int32_t)moved;
+}
+
+/* 0x4D and the counted run: time off, or travel done; stops the motor
+ * when it ends. */
 static void prv_count(km_motor_mode_t *m, int32_t position, uint32_t dt_us)
 {
     m->rotation_rem_us += dt_us;
@@ -101,9 +109,7 @@ static void prv_count(km_motor_mode_t *m, int32_t position, uint32_t dt_us)
             km_motor_mode_stop(m, m->stop_bridge);
         }
     } else if (m->count_kind >= KM_UNTIL_ANGLE) {
-        uint32_t moved = (uint32_t)position - (uint32_t)m->start_pos;
-        moved = moved > 0x80000000u ? 0u - moved : moved;
-        if (moved >= (uint32_t)m->travel) {
+        if (prv_moved(m, position) >= m->travel) {
             km_motor_mode_stop(m, m->stop_bridge);
         }
     }
@@ -111,22 +117,108 @@ static void prv_count(km_motor_mode_t *m, int32_t position, uint32_t dt_us)
 
 /* The speed loop (0.1 deg/s): feedforward kv x speed and friction, kd x
  * the speed error and a bounded integrator; the PWM in +-1000. */
-static int32_t prv_speed_loop(km_motor_mode_t *m, const km_control_gains_t *g, int32_t speed_ddps,
-                              uint32_t dt_us)
+static int32_t prv_speed_loop(km_motor_mode_t *m, const km_control_gains_t *g, int32_t sp_ddps,
+                              int32_t speed_ddps, uint32_t dt_us)
 {
-    const int32_t sp = m->speed_dps;
+    const int32_t sp = sp_ddps > 200000 ? 200000 : (sp_ddps < -200000 ? -200000 : sp_ddps);
     const int32_t v = speed_ddps > 1000000 ? 1000000 : (speed_ddps < -1000000 ? -1000000 : speed_ddps);
-    int32_t err = sp * 10 - v;
+    int32_t err = sp - v;
     err = err > 20000 ? 20000 : (err < -20000 ? -20000 : err);
     const uint32_t dt = dt_us > 2000u ? 2000u : dt_us;
     m->i_acc += km_sdiv10(km_sdiv1000(KM_MOTOR_KI_Q8 * err) * (int32_t)dt); /* PWM x 256000 */
     const int32_t imax = (int32_t)(g->i_max_pwm > 1000u ? 1000u : g->i_max_pwm) * 256000;
     m->i_acc = m->i_acc > imax ? imax : (m->i_acc < -imax ? -imax : m->i_acc);
-    int32_t pwm = (int32_t)g->kv_q8 * sp / 256;
+    int32_t pwm = km_sdiv2560((int32_t)g->kv_q8 * sp);
     pwm += sp > 0 ? (int32_t)g->friction_pwm : (sp < 0 ? -(int32_t)g->friction_pwm : 0);
     pwm += km_sdiv2560((int32_t)g->kd_q8 * err);
     pwm += km_sdiv256000(m->i_acc);
     return pwm > 1000 ? 1000 : (pwm < -1000 ? -1000 : pwm);
+}
+
+/* floor(sqrt(n)), two bits a step: no divide. */
+static uint32_t prv_isqrt(uint32_t n)
+{
+    uint32_t root = 0u;
+    uint32_t bit = 1u << 30;
+    while (bit > n) {
+        bit >>= 2;
+    }
+    while (bit != 0u) {
+        if (n >= root + bit) {
+            n -= root + bit;
+            root = (root >> 1) + bit;
+        } else {
+            root >>= 1;
+        }
+        bit >>= 2;
+    }
+    return root;
+}
+
+/* The room (0.1 deg) the run has left in its direction `dir`: to the end
+ * of a counted run and, on a potentiometer product, to the edge of the
+ * travel (km_axis_travel); KM_MOTOR_ROOM_FREE when nothing ends it. */
+static int32_t prv_room(const km_motor_mode_t *m, const km_control_params_t *p, int32_t position, int32_t dir)
+{
+    int32_t room = KM_MOTOR_ROOM_FREE;
+    if (m->count_kind >= KM_UNTIL_ANGLE) {
+        room = m->travel - prv_moved(m, position);
+    }
+    if (p->variant == KM_VARIANT_POTENTIOMETER) {
+        int32_t lo, hi;
+        km_axis_travel(p, &lo, &hi);
+        const int32_t edge = dir > 0 ? hi - position : position - lo;
+        room = edge < room ? edge : room;
+    }
+    return room;
+}
+
+/* The fastest speed (0.1 deg/s) from which the run still stops within
+ * `room` at half the product acceleration, and never below
+ * KM_MOTOR_CREEP_DDPS: v^2 = 2 (a/2) d, in 0.1 deg/s and 0.1 deg. */
+static int32_t prv_approach_ddps(const km_control_gains_t *g, int32_t room)
+{
+    const uint32_t a = g->accel_dps2 > 20000u ? 20000u : (g->accel_dps2 ? g->accel_dps2 : 1u);
+    const uint32_t d = room > 20000 ? 20000u : (room < 0 ? 0u : (uint32_t)room);
+    const int32_t v = (int32_t)prv_isqrt(a * d * 10u);
+    return v < KM_MOTOR_CREEP_DDPS ? KM_MOTOR_CREEP_DDPS : v;
+}
+
+/* A run with an end ahead (a count or the travel's edge): ends at it, and
+ * slows down before it instead of driving through (the speed set-point,
+ * or a constant PWM, cut by the approach speed). */
+static int32_t prv_drive(km_motor_mode_t *m, const km_control_params_t *p, int32_t position,
+                         int32_t speed_ddps, uint32_t dt_us)
+{
+    const int32_t want = m->speed_mode ? m->speed_dps * 10 : m->pwm;
+    const int32_t dir = want > 0 ? 1 : (want < 0 ? -1 : 0);
+    const int32_t room = dir != 0 ? prv_room(m, p, position, dir) : KM_MOTOR_ROOM_FREE;
+    if (room <= 0) {
+        km_motor_mode_stop(m, m->stop_bridge); /* at the edge of the travel */
+        return 0;
+    }
+    /* the loop's lag: what the shaft covers before a slower set-point bites */
+    const int32_t fast = speed_ddps * dir;
+    const int32_t lag = fast > 0 ? km_sdiv1000((fast > 20000 ? 20000 : fast) * KM_MOTOR_LAG_MS) : 0;
+    const int32_t vcap = room < KM_MOTOR_ROOM_FREE ? prv_approach_ddps(&p->gains, room - lag) : 200000;
+    if (m->speed_mode) {
+        const int32_t sp = want > vcap ? vcap : (want < -vcap ? -vcap : want);
+        return prv_speed_loop(m, &p->gains, sp, speed_ddps, dt_us);
+    }
+    if (vcap >= 200000 || fast + KM_MOTOR_CREEP_DDPS < vcap) {
+        return m->pwm; /* far from the end: the constant PWM */
+    }
+    const int32_t slow = prv_speed_loop(m, &p->gains, dir * vcap, speed_ddps, dt_us);
+    return dir > 0 ? (slow < m->pwm ? slow : m->pwm) : (slow > m->pwm ? slow : m->pwm);
+}
+
+void km_motor_mode_reaxis(km_motor_mode_t *m, const km_axis_t *was, const km_axis_t *now)
+{
+    const int32_t sign = km_axis_sign(was, now);
+    m->start_pos = km_axis_map(was, now, m->start_pos);
+    m->pwm *= sign;
+    m->speed_dps *= sign;
+    m->i_acc *= sign;
 }
 
 int32_t km_motor_mode_step(km_motor_mode_t *m, const km_control_params_t *p, int32_t position,
@@ -137,10 +229,7 @@ int32_t km_motor_mode_step(km_motor_mode_t *m, const km_control_params_t *p, int
         return 0;
     }
     prv_count(m, position, dt_us);
-    if (!m->running) {
-        *mode = m->stop_bridge;
-        return 0;
-    }
-    *mode = KM_BRIDGE_PWM;
-    return m->speed_mode ? prv_speed_loop(m, &p->gains, speed_ddps, dt_us) : m->pwm;
+    const int32_t pwm = m->running ? prv_drive(m, p, position, speed_ddps, dt_us) : 0;
+    *mode = m->running ? KM_BRIDGE_PWM : m->stop_bridge;
+    return pwm;
 }

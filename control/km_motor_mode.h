@@ -13,7 +13,14 @@
  *        a PWM or a speed, on and on or until a time, an angle or a number
  *        of turns of travel from where the request found the shaft, either
  *        direction, then the output free or braked. A run of 0 (time,
- *        angle or turns 0) ends at once.
+ *        angle or turns 0) ends at once. A counted run slows down before
+ *        its end (v^2 = 2 x a/2 x distance left, a = the product's
+ *        acceleration, at least KM_MOTOR_CREEP_DDPS) so that it stops on
+ *        the count instead of coasting past it.
+ * Potentiometer products: no run turns past the product travel (in the
+ * master's frame, km_axis_travel): a run slows down the same way toward
+ * its edge and ends there, with its stop output; a run away from the edge
+ * is taken (docs/protocol-decisions.md "Motor mode and the travel").
  * All three arrive decoded as one km_motor_run_t (include/km/km_request.h).
  * A stop by 0x6E/0x6F = 0 leaves the idle output of 0x11 bit 1.
  *
@@ -43,11 +50,15 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "km_axis.h"
 #include "km_output.h"
 #include "km_params.h"
 #include "km_request.h"
 
-#define KM_MOTOR_KI_Q8 5120 /* speed loop integrator: PWM per deg of speed error x s, Q8 (20) */
+#define KM_MOTOR_KI_Q8 5120          /* speed loop integrator: PWM per deg of speed error x s, Q8 (20) */
+#define KM_MOTOR_CREEP_DDPS 50       /* the slowest approach to a run's end, 0.1 deg/s (5 deg/s) */
+#define KM_MOTOR_ROOM_FREE INT32_MAX /* no end ahead of the run */
+#define KM_MOTOR_LAG_MS 40           /* the speed loop's lag, taken off the room an approach plans with */
 
 typedef struct {
     bool active;                  /* motor mode owns the bridge */
@@ -73,6 +84,10 @@ void km_motor_mode_run(km_motor_mode_t *m, const km_motor_run_t *run, const km_c
 
 /* Ends motor mode (the other mode takes the bridge). */
 void km_motor_mode_release(km_motor_mode_t *m);
+
+/* The master's frame changed (km_axis.h): the run keeps its start and
+ * its direction on the shaft. */
+void km_motor_mode_reaxis(km_motor_mode_t *m, const km_axis_t *was, const km_axis_t *now);
 
 /* Stops the motor with `bridge` as the output (stays active). */
 void km_motor_mode_stop(km_motor_mode_t *m, km_bridge_mode_t bridge);

@@ -5,6 +5,8 @@
 
 #include <string.h>
 
+#include "km_axis.h"
+
 #define PRV_N 4u
 #define PRV_US_PER_100MS 100000u
 
@@ -19,7 +21,7 @@ static uint8_t prv_index(uint8_t bit)
 
 static int32_t prv_abs(int32_t v)
 {
-    return v < 0 ? -v : v;
+    return v < 0 ? (v == INT32_MIN ? INT32_MAX : -v) : v;
 }
 
 void km_protect_init(km_protect_t *s)
@@ -65,7 +67,8 @@ static uint8_t prv_excursions(km_protect_t *s, const km_protect_in_t *in, const 
     }
 
     if (prv_abs(in->drive_pwm) >= (int32_t)p->stall_pwm && p->stall_pwm != 0u) {
-        if (!s->stall_anchored || prv_abs(in->position - s->stall_anchor) > KM_PROTECT_STALL_WINDOW) {
+        if (!s->stall_anchored ||
+            prv_abs(km_pos_diff(in->position, s->stall_anchor)) > KM_PROTECT_STALL_WINDOW) {
             /* first driven tick, or it moved on: timing starts again here */
             s->stall_anchor = in->position;
             if (s->stall_anchored) {

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "km_fixdiv.h"
+#include "km_axis.h"
 
 void km_servo_mode_init(km_servo_mode_t *m, const km_control_params_t *p)
 {
@@ -17,7 +18,8 @@ void km_servo_mode_init(km_servo_mode_t *m, const km_control_params_t *p)
 
 int32_t km_servo_mode_clamp(const km_control_params_t *p, int32_t t)
 {
-    int32_t lo = p->travel_min, hi = p->travel_max;
+    int32_t lo, hi;
+    km_axis_travel(p, &lo, &hi); /* the travel moves with the zero offsets */
     if (p->angle_min != 0 && p->angle_min > lo) {
         lo = p->angle_min;
     }
@@ -137,7 +139,8 @@ bool km_servo_mode_move(km_servo_mode_t *m, const km_move_t *mv, const km_contro
         prv_on_at(m, position); /* armed: on at the next move */
     }
     /* relative: from the target in force (or the position if just on) */
-    const int32_t target = km_servo_mode_clamp(p, mv->relative ? m->target + mv->target : mv->target);
+    const int32_t target =
+        km_servo_mode_clamp(p, mv->relative ? km_pos_add(m->target, mv->target) : mv->target);
     prv_plan(m, mv, p, target, was_on);
     m->pwm_cap = mv->pwm_cap > 1000u ? 1000 : (int32_t)mv->pwm_cap;
     m->streaming = mv->kind == KM_MOVE_STREAM;
@@ -166,7 +169,7 @@ void km_servo_mode_protect(km_servo_mode_t *m)
 
 int32_t km_servo_mode_deviation(const km_servo_mode_t *m, int32_t position)
 {
-    return m->ts == KM_TORQUE_ON ? position - m->target : 0;
+    return m->ts == KM_TORQUE_ON ? km_pos_diff(position, m->target) : 0;
 }
 
 /* The blocked-shaft clock: runs while the shaft stays within the arrive
@@ -175,7 +178,7 @@ int32_t km_servo_mode_deviation(const km_servo_mode_t *m, int32_t position)
 static void prv_settle_clock(km_servo_mode_t *m, const km_control_params_t *p, int32_t position,
                              uint32_t dt_us)
 {
-    const int32_t moved = position - m->settle_pos;
+    const int32_t moved = km_pos_diff(position, m->settle_pos);
     const int32_t band = (int32_t)p->gains.arrive_ddeg;
     if (m->settle_us == 0u || moved > band || moved < -band) {
         m->settle_pos = position;
@@ -212,7 +215,7 @@ void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_
             m->rotation_rem_us -= ms * 1000u;
             if (done) {
                 prv_settle_clock(m, p, position, dt_us);
-                const int32_t dev = position - m->target;
+                const int32_t dev = km_pos_diff(position, m->target);
                 const int32_t band = (int32_t)p->gains.arrive_ddeg;
                 const bool slow = speed_ddps <= KM_ARRIVE_SPEED_DDPS && speed_ddps >= -KM_ARRIVE_SPEED_DDPS;
                 if ((dev <= band && dev >= -band && slow) ||

@@ -13,6 +13,7 @@
  *            protection supervisor (a later issue): motion stops, free.
  *
  * Targets (0.1 deg, the master's frame) are clamped to the product travel
+ * (in the sensor's frame, moved into the master's: km_axis.h)
  * and to the angle limits 0x19/0x1A when they are set (0 = no limit). A
  * relative move (km_move_t.relative, 0x67) adds to the target in force (the
  * last one commanded, or the held position), or to the measured position

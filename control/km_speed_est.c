@@ -4,6 +4,7 @@
 
 #include <string.h>
 
+#include "km_axis.h"
 #include "km_fixdiv.h"
 
 _Static_assert(100000u % KM_SPEED_WINDOW_US == 0u, "the window's exact fast path");
@@ -16,7 +17,7 @@ void km_speed_window_init(km_speed_window_t *w)
 int32_t km_speed_window_step(km_speed_window_t *w, int32_t position, uint32_t dt_us)
 {
     if (w->have_position) {
-        w->acc += position - w->last_position;
+        w->acc += km_pos_diff(position, w->last_position);
         w->us += dt_us;
         if (w->us >= KM_SPEED_WINDOW_US) {
             /* 0.1 deg per us -> deg/s: x 1e6 / 10. Clamped so the product
@@ -66,7 +67,7 @@ int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
     }
     const uint32_t span = f->span_us;
     const uint8_t i = (uint8_t)((f->head + KM_SPEED_FAST_N + 1u - f->count) % KM_SPEED_FAST_N);
-    int32_t d = position - f->pos[i];
+    int32_t d = km_pos_diff(position, f->pos[i]);
     d = d > 2000 ? 2000 : (d < -2000 ? -2000 : d); /* keeps d x 1e6 in 32 bits */
     if (span == (KM_SPEED_FAST_N - 1u) * 1000u) {
         /* the steady 1 kHz tick: d x 1e6 / 7000 = d x 1000 / 7, and for
@@ -96,7 +97,7 @@ int32_t km_hold_filter_step(km_hold_filter_t *h, int32_t position)
     if (!h->on) {
         return position;
     }
-    int32_t d = position - h->out;
+    int32_t d = km_pos_diff(position, h->out);
     d = d > 100000 ? 100000 : (d < -100000 ? -100000 : d); /* keeps d x 16 in 32 bits */
     const int32_t e = d * 16 - h->frac;
     if (e > KM_HOLD_FILTER_JUMP * 16 || e < -KM_HOLD_FILTER_JUMP * 16) {

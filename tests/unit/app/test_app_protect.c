@@ -233,8 +233,9 @@ static const uint8_t k_restart[5] = {0x02, 0xE1, 0xE2, 0xE3, 0xE4};
 /* §5.2 0x35 bit 5, §5.4 0x64/0x65/0x6E (issue 18 item 2): the potentiometer
  * product booting with its horn resting on the -150.0 deg end stop (pushed
  * there by hand, past the +-135.0 deg travel) has no position fault, again
- * after a restart; it takes 0x64 = 2, 0x6E = -500 (into the stop) and
- * 0x6E = 0, and a 0x65 back inside its travel, and gets there. */
+ * after a restart; it takes 0x64 = 2, 0x6E = -500 (into the stop: ends at
+ * once, the shaft is past the travel), 0x6E = +500 (runs) and 0x6E = 0,
+ * and a 0x65 back inside its travel, and gets there. */
 static void test_s5_2_boot_on_end_stop_no_fault_moves_back(void **state)
 {
     (void)state;
@@ -254,7 +255,11 @@ static void test_s5_2_boot_on_end_stop_no_fault_moves_back(void **state)
     assert_int_equal(ping(), 0x00);
     assert_int_equal(read_u8(0x64), 2);
     write_i16(0x6E, -500);
-    assert_int_equal(ping(), 0x80); /* running (bit 7), not refused */
+    run_ms(2);
+    assert_int_equal(ping(), 0x00); /* taken (no bit 6), ended: past the travel (km_motor_mode.h) */
+    write_i16(0x6E, 500);
+    run_ms(2);
+    assert_int_equal(ping(), 0x80); /* back toward the travel: running (bit 7), not refused */
     run_ms(200);
     write_i16(0x6E, 0);
     assert_int_equal(ping(), 0x00);

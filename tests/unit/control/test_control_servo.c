@@ -273,7 +273,7 @@ static void test_s5_1_zero_offsets_apply_to_targets(void **state)
     on_at(0);
     r.params.zero_offset1 = 37;
     r.params.zero_offset2 = 100;
-    kr_run(&r, 5); /* position jumped by 13.7 deg: the hold follows 0x46's frame */
+    kr_run(&r, 5); /* 0x46 jumped by 13.7 deg: the hold is rebased, the shaft stays */
     assert_true(kr_move(&r, KM_MOVE_TIME, 450, 500));
     run_watch(1500);
     near(kr_pos(&r), 450, FINAL_DDEG);
@@ -347,10 +347,11 @@ static void test_s5_4_stop_free_and_brake(void **state)
 }
 
 /* 0x4C deviation = reported position - target in force, while moving and
- * holding; 0 with the torque off. Zero offsets written while holding keep
- * the target in 0x46's frame, so the shaft moves by the change (§5.1 0x17:
- * "writing while holding position makes the servo jump"). */
-static void test_s5_3_deviation_and_offset_jump(void **state)
+ * holding; 0 with the torque off. Zero offsets written while holding
+ * rebase the hold (docs/protocol-decisions.md "Zero offsets, direction and
+ * the travel"; §5.1 0x17 warns the vendor's servo jumps): 0x46 and the
+ * target both move by the change, the shaft stays. */
+static void test_s5_3_deviation_and_offset_rebase(void **state)
 {
     (void)state;
     on_at(0);
@@ -362,10 +363,10 @@ static void test_s5_3_deviation_and_offset_jump(void **state)
     near(r.live.deviation, 0, FINAL_DDEG);
     r.params.zero_offset2 = 50; /* +5.0 deg: 0x46 reads 5 deg more at once */
     kr_tick(&r);
-    near(r.live.deviation, 50, FINAL_DDEG);
+    near(r.live.deviation, 0, FINAL_DDEG); /* the hold is rebased: the target moved with 0x46 */
     kr_run(&r, 1000);
-    near(kr_pos(&r), -600, FINAL_DDEG);                       /* the target, in 0x46's frame */
-    near(km_plant_position_ddeg(&r.plant), -650, FINAL_DDEG); /* the shaft moved 5 deg */
+    near(kr_pos(&r), -550, FINAL_DDEG);                       /* the same angle, in the new frame */
+    near(km_plant_position_ddeg(&r.plant), -600, FINAL_DDEG); /* the shaft did not move */
     assert_true(kr_torque(&r, 0));
     kr_tick(&r);
     assert_int_equal(r.live.deviation, 0);
@@ -452,7 +453,7 @@ int main(void)
         cmocka_unit_test(test_s5_1_zero_offsets_apply_to_targets),
         cmocka_unit_test(test_s5_4_armed_turns_on_at_rotation),
         cmocka_unit_test(test_s5_4_stop_free_and_brake),
-        cmocka_unit_test(test_s5_3_deviation_and_offset_jump),
+        cmocka_unit_test(test_s5_3_deviation_and_offset_rebase),
         cmocka_unit_test(test_hold_against_load),
         cmocka_unit_test(test_s5_4_interpolation_50hz),
         cmocka_unit_test(test_s5_4_interpolation_100hz),

@@ -1301,8 +1301,13 @@ static void prv_boot(kr_rig_t *r, const row_t *w, bool with_faults)
     kr_tick(r);
 }
 
+/* The motor rows drive the shaft onto the +-150 deg stop: it stands in
+ * for a jam inside the travel, so the product travel is lifted for them
+ * (motor mode stops a pot product's run at its travel: km_motor_mode.h). */
 static bool prv_motor(kr_rig_t *r, int16_t pwm)
 {
+    r->params.travel_min = INT16_MIN;
+    r->params.travel_max = INT16_MAX;
     return kr_motor_signed(r, KM_RUN_PWM, pwm);
 }
 

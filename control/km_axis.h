@@ -1,0 +1,58 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* The master's frame (docs/protocol.md §5.1): position = (sensor + 0x16 +
+ * 0x17), negated when 0x11 bit 2 is set. The product's travel is a fact of
+ * the mechanics, so it is fixed in the sensor's frame and moves with the
+ * offsets (docs/protocol-decisions.md "Zero offsets, direction and the
+ * travel"). A frame change (0x17, 0x18, 0x46 zeroing, 0x11 bit 2) is an
+ * affine map of master positions, x -> sign x + shift, which control
+ * applies to its state so that the shaft does not move. */
+#ifndef KM_AXIS_H
+#define KM_AXIS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "km_params.h"
+
+typedef struct {
+    int32_t offset; /* 0x16 + 0x17, 0.1 deg */
+    bool reverse;   /* 0x11 bit 2 */
+} km_axis_t;
+
+/* a - b on positions, modular: the multi-turn count wraps at int32
+ * (docs/protocol-decisions.md "Multi-turn position and its wrap"), so the
+ * difference of two positions either side of the wrap is the short way
+ * round, with no signed overflow. */
+static inline int32_t km_pos_diff(int32_t a, int32_t b)
+{
+    const uint32_t u = (uint32_t)a - (uint32_t)b;
+    return u <= 0x7FFFFFFFu ? (int32_t)u : -(int32_t)(~u) - 1;
+}
+
+/* a + b on positions, modular like km_pos_diff. */
+static inline int32_t km_pos_add(int32_t a, int32_t b)
+{
+    const uint32_t u = (uint32_t)a + (uint32_t)b;
+    return u <= 0x7FFFFFFFu ? (int32_t)u : -(int32_t)(~u) - 1;
+}
+
+/* A sensor reading as a master position in frame `a`. */
+int32_t km_axis_position(const km_axis_t *a, int32_t sensor);
+
+/* The frame `p` describes. */
+km_axis_t km_axis_of(const km_control_params_t *p);
+
+/* True when the two frames differ. */
+bool km_axis_changed(const km_axis_t *a, const km_axis_t *b);
+
+/* A master position of frame `from` as a position of frame `to` (the same
+ * shaft angle); modular on int32 like the positions themselves. */
+int32_t km_axis_map(const km_axis_t *from, const km_axis_t *to, int32_t pos);
+
+/* -1 when the two frames count in opposite directions, else 1. */
+int32_t km_axis_sign(const km_axis_t *from, const km_axis_t *to);
+
+/* The product travel in the master's frame of `p`: [*lo, *hi]. */
+void km_axis_travel(const km_control_params_t *p, int32_t *lo, int32_t *hi);
+
+#endif

@@ -1,0 +1,332 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* Limits and frames of control on the realistic plant (issue 20 criteria
+ * 5-7, defects D4 D6 D9 D11; docs/protocol.md §5.1 0x11/0x16/0x17, §5.4
+ * 0x6E..0x70, §6; docs/protocol-decisions.md "Zero offsets, direction and
+ * the travel", "Motor mode and the travel", "Multi-turn position and its
+ * wrap"). Control stepped against the `realistic` plant at the 1 kHz tick
+ * (tests/support/km_plant_rig.h); angles are the plant's true output shaft
+ * in the sensor's frame unless a check says 0x46.
+ *
+ * Bounds and why:
+ *  - D4: the pot product's travel is +-135.0 deg of the sensor; with 0x17 =
+ *    +10 deg a move to -135.0 deg (master) is clamped to -125.0 deg, so the
+ *    shaft stays within 0.5 deg of the sensor's -135.0 deg (the arrive band
+ *    plus the plant's backlash); today it goes to -145.0 deg;
+ *  - D6: a zero offset or direction change while holding moves the shaft
+ *    less than 0.3 deg (the hold's own wander under the plant's sensor
+ *    noise is below 0.1 deg) and draws no more than 600 mA (the hold
+ *    against the 0.3 N.m load draws ~400 mA); today: a 10 deg / 60 deg jump
+ *    at over 2 A;
+ *  - D9: 0x70 angle/turn runs at 360 deg/s end within +-2 deg of the count
+ *    (criterion 8's target), braked or free;
+ *  - D11: 0x6E on the pot product stops at the travel's edge, never on the
+ *    end stop (+-150 deg), drawing nothing once stopped;
+ *  - the int32 wrap: positions and speeds through +2^31 x 0.1 deg are
+ *    modular (no signed overflow: the host-asan build traps on one). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <string.h>
+
+#include "km_plant_rig.h"
+
+static kr_rig_t r;
+
+/* The true output angle, 0.1 deg (sensor frame). */
+static int32_t shaft_ddeg(void)
+{
+    return km_plant_turns_ddeg(&r.plant);
+}
+
+static int32_t iabs(int32_t v)
+{
+    return v < 0 ? -v : v;
+}
+
+/* The pot product on the realistic plant at rest at `pos`, torque on. */
+static void rig_pot_at(int32_t pos)
+{
+    kr_init_at(&r, &km_plant_realistic_config, pos);
+    kr_run(&r, 20);
+}
+
+/* The encoder product on the realistic plant without pot or stops. */
+static void rig_encoder(void)
+{
+    static km_plant_config_t cfg; /* the plant keeps a pointer to it */
+    cfg = km_plant_realistic_config;
+    cfg.pot_travel_ddeg = 0;
+    cfg.endstop_ddeg = 0;
+    kr_init_at(&r, &cfg, 0);
+    r.encoder = true;
+    r.params.variant = KM_VARIANT_ENCODER;
+    r.params.travel_min = INT16_MIN;
+    r.params.travel_max = INT16_MAX;
+    r.params.angle_min = 0;
+    r.params.angle_max = 0;
+    kr_run(&r, 20);
+}
+
+/* Runs `ms` ticks; the lowest and highest shaft angle and the largest
+ * |current| seen. */
+static void run_watch(uint32_t ms, int32_t *lo, int32_t *hi, int32_t *peak_ma)
+{
+    for (uint32_t i = 0; i < ms; i++) {
+        kr_tick(&r);
+        const int32_t a = shaft_ddeg();
+        *lo = a < *lo ? a : *lo;
+        *hi = a > *hi ? a : *hi;
+        const int32_t ma = iabs(km_plant_current_ma(&r.plant));
+        *peak_ma = ma > *peak_ma ? ma : *peak_ma;
+    }
+}
+
+/* D4: the travel moves with the zero offsets: with 0x17 = +10 deg the
+ * product still never turns past its -135.0 deg of travel. */
+static void test_d4_travel_moves_with_zero_offset(void **state)
+{
+    (void)state;
+    rig_pot_at(0);
+    r.params.zero_offset2 = 100;
+    kr_run(&r, 5);
+    assert_true(kr_torque(&r, 2));
+    assert_true(kr_move(&r, KM_MOVE_SPEED, -1350, 0));
+    int32_t lo = INT32_MAX, hi = INT32_MIN, peak = 0;
+    run_watch(2500, &lo, &hi, &peak);
+    print_message("D4 0x17 +10 deg, move to -135: shaft %d..%d, 0x46 %d, peak %d mA\n", (int)lo, (int)hi,
+                  (int)kr_pos(&r), (int)peak);
+    assert_true(lo >= -1355);
+    assert_true(iabs(kr_pos(&r) - -1250) <= 5); /* the clamped target, master's frame */
+    assert_false(r.live.running);
+}
+
+/* D4 with 0x11 bit 2: the travel is mirrored with the frame. */
+static void test_d4_travel_mirrors_with_direction(void **state)
+{
+    (void)state;
+    rig_pot_at(0);
+    r.params.zero_offset2 = 100;
+    r.params.reverse = true;
+    kr_run(&r, 5);
+    assert_true(kr_torque(&r, 2));
+    assert_true(kr_move(&r, KM_MOVE_SPEED, 1350, 0)); /* master +135 = sensor -145 */
+    int32_t lo = INT32_MAX, hi = INT32_MIN, peak = 0;
+    run_watch(2500, &lo, &hi, &peak);
+    print_message("D4 reversed: shaft %d..%d, 0x46 %d\n", (int)lo, (int)hi, (int)kr_pos(&r));
+    assert_true(lo >= -1355);
+    assert_true(iabs(kr_pos(&r) - 1250) <= 5);
+}
+
+/* Holding +30 deg against 0.3 N.m, settled. */
+static void hold_loaded(void)
+{
+    rig_pot_at(0);
+    assert_true(kr_torque(&r, 2));
+    assert_true(kr_move(&r, KM_MOVE_TIME, 300, 400));
+    kr_run(&r, 800);
+    r.in.ext_torque_unm = -300000;
+    kr_run(&r, 2000);
+}
+
+/* D6: a new zero offset while holding: the shaft stays, 0x46 reads the
+ * same angle in the new frame. */
+static void test_d6_offset_while_holding_rebases(void **state)
+{
+    (void)state;
+    hold_loaded();
+    const int32_t at = shaft_ddeg();
+    r.params.zero_offset2 = 100;
+    int32_t lo = at, hi = at, peak = 0;
+    run_watch(1500, &lo, &hi, &peak);
+    print_message("D6 0x17 +10 deg while holding: shaft %d..%d (was %d), peak %d mA, 0x46 %d\n", (int)lo,
+                  (int)hi, (int)at, (int)peak, (int)kr_pos(&r));
+    assert_true(hi - at <= 3 && at - lo <= 3);
+    assert_true(peak <= 600);
+    assert_true(iabs(kr_pos(&r) - 400) <= 3);
+    assert_int_equal(r.live.torque_switch, 2);
+}
+
+/* D6: the direction bit flipped while holding under load: the shaft stays
+ * (the integrator's push is kept, mirrored), 0x46 reads the mirror. */
+static void test_d6_direction_while_holding_rebases(void **state)
+{
+    (void)state;
+    hold_loaded();
+    const int32_t at = shaft_ddeg();
+    r.params.reverse = true;
+    int32_t lo = at, hi = at, peak = 0;
+    run_watch(1500, &lo, &hi, &peak);
+    print_message("D6 0x11 bit 2 while holding: shaft %d..%d (was %d), peak %d mA, 0x46 %d\n", (int)lo,
+                  (int)hi, (int)at, (int)peak, (int)kr_pos(&r));
+    assert_true(hi - at <= 3 && at - lo <= 3);
+    assert_true(peak <= 600);
+    assert_true(iabs(kr_pos(&r) - -300) <= 3);
+    /* and a move afterwards is in the new frame: -20 deg master = +20 sensor */
+    assert_true(kr_move(&r, KM_MOVE_TIME, -200, 300));
+    kr_run(&r, 1500);
+    assert_true(iabs(shaft_ddeg() - 200) <= 5);
+}
+
+/* D6 mid-move: the move ends at the set-point of that tick, still running
+ * (bit 7) until the shaft is there; no step. */
+static void test_d6_offset_mid_move_no_step(void **state)
+{
+    (void)state;
+    rig_pot_at(0);
+    assert_true(kr_torque(&r, 2));
+    kr_run(&r, 300);
+    assert_true(kr_move(&r, KM_MOVE_TIME, 900, 1000));
+    kr_run(&r, 400);
+    r.params.zero_offset2 = -100;
+    int32_t lo = INT32_MAX, hi = INT32_MIN, peak = 0;
+    run_watch(1000, &lo, &hi, &peak);
+    print_message("D6 0x17 -10 deg mid-move: shaft %d..%d, peak %d mA\n", (int)lo, (int)hi, (int)peak);
+    assert_true(peak <= 2265); /* never above the plant's stall current */
+    assert_true(hi <= 900);
+    assert_false(r.live.running);
+    assert_true(iabs(kr_pos(&r) - (shaft_ddeg() - 100)) <= 5);
+}
+
+/* 0x70 at 360 deg/s until `amount` (`until`), then `after`: where the
+ * shaft ends, 1 s after bit 7 cleared. */
+static int32_t counted_run(km_run_until_t until, uint16_t amount, km_run_after_t after)
+{
+    rig_encoder();
+    assert_true(kr_run_motor(&r, KM_RUN_SPEED, false, 360, until, amount, after));
+    kr_tick(&r); /* bit 7 reads with the next tick's live values */
+    assert_true(r.live.running);
+    uint32_t t = 0;
+    while (r.live.running && t < 20000u) {
+        kr_tick(&r);
+        t++;
+    }
+    assert_false(r.live.running);
+    kr_run(&r, 1000);
+    return shaft_ddeg();
+}
+
+/* D9: counted runs slow down before their count and stop on it. */
+static void test_d9_counted_runs_stop_on_the_count(void **state)
+{
+    (void)state;
+    const int32_t a720 = counted_run(KM_UNTIL_ANGLE, 720, KM_AFTER_BRAKE);
+    const int32_t t30 = counted_run(KM_UNTIL_TURNS, 30, KM_AFTER_BRAKE);
+    const int32_t a90 = counted_run(KM_UNTIL_ANGLE, 90, KM_AFTER_FREE);
+    print_message("D9 720 deg brake: %d, 3.0 turns brake: %d, 90 deg free: %d (x0.1 deg)\n", (int)a720,
+                  (int)t30, (int)a90);
+    assert_true(iabs(a720 - 7200) <= 20);
+    assert_true(iabs(t30 - 10800) <= 20);
+    assert_true(iabs(a90 - 900) <= 20);
+}
+
+/* D11: 0x6E on the pot product stops at the travel's edge (+135.0 deg),
+ * not on the end stop; a run away from the edge is taken. */
+static void test_d11_pot_motor_stops_at_travel(void **state)
+{
+    (void)state;
+    rig_pot_at(0);
+    assert_true(kr_motor_signed(&r, KM_RUN_PWM, 400));
+    int32_t lo = INT32_MAX, hi = INT32_MIN, peak = 0;
+    run_watch(3000, &lo, &hi, &peak);
+    const int32_t ma = iabs(km_plant_current_ma(&r.plant));
+    print_message("D11 0x6E 400: shaft up to %d, end stop %d, now %d mA\n", (int)hi,
+                  (int)km_plant_at_endstop(&r.plant), (int)ma);
+    assert_true(hi <= 1350 + 20);
+    assert_false(km_plant_at_endstop(&r.plant));
+    assert_true(ma <= 20);
+    assert_false(r.live.running);
+    assert_true(kr_motor_signed(&r, KM_RUN_PWM, -400));
+    kr_run(&r, 300);
+    assert_true(r.live.running);
+    assert_true(shaft_ddeg() < hi - 100);
+}
+
+/* D11 for 0x6F-like speed runs is the same path; the encoder product has
+ * no travel edge: 0x6E runs on (multi-turn). */
+static void test_d11_encoder_runs_on(void **state)
+{
+    (void)state;
+    rig_encoder();
+    assert_true(kr_motor_signed(&r, KM_RUN_PWM, 600));
+    kr_run(&r, 3000);
+    assert_true(r.live.running);
+    assert_true(shaft_ddeg() > 3000);
+}
+
+/* A synthetic encoder reading 4 counts per tick through +2^31 x 0.1 deg
+ * (wrapping, as km_turn_counter's int32 does) under a 0x6F run with the
+ * stall protection armed and a zero offset: 0x46 wraps, the speeds stay
+ * 400 deg/s, no signed overflow anywhere in the tick. */
+static void test_wrap_tick_is_defined(void **state)
+{
+    (void)state;
+    km_control_params_t p;
+    kr_default_params(&p);
+    p.variant = KM_VARIANT_ENCODER;
+    p.travel_min = INT16_MIN;
+    p.travel_max = INT16_MAX;
+    p.angle_min = 0;
+    p.angle_max = 0;
+    p.zero_offset2 = 1000;
+    p.prot_enable = 0x0F;
+    p.stall_pwm = 1;
+    p.stall_time_100ms = 50;
+    p.current_trip_ma = 3000;
+    p.current_time_100ms = 50;
+    p.voltage_high_v = 20;
+    p.voltage_low_v = 1;
+    p.temp_trip_c = 100;
+    static km_control_t c;
+    km_control_init(&c, &p);
+    km_sensors_t s;
+    memset(&s, 0, sizeof s);
+    s.voltage_mv = 7400;
+    s.temperature_c10 = 250;
+    s.current_ma = 300;
+    uint32_t raw = 0x7FFFFFFFu - 1000u - 600u;
+    km_live_t live;
+    km_bridge_t bridge;
+    s.position = (int32_t)raw;
+    km_control_step(&c, &s, &p, 1000u, &live, &bridge);
+    km_request_t q;
+    memset(&q, 0, sizeof q);
+    q.kind = KM_REQ_MOTOR;
+    q.u.run.mode = KM_RUN_SPEED;
+    q.u.run.value = 400;
+    assert_true(km_control_request(&c, &q, &p));
+    int32_t last = live.position;
+    bool wrapped = false;
+    for (int k = 0; k < 400; k++) {
+        raw += 4u;
+        s.position = raw <= 0x7FFFFFFFu ? (int32_t)raw : -(int32_t)(~raw) - 1;
+        km_control_step(&c, &s, &p, 1000u, &live, &bridge);
+        const uint32_t step = (uint32_t)live.position - (uint32_t)last;
+        assert_int_equal(step, 4u);
+        wrapped = wrapped || live.position < last;
+        last = live.position;
+        if (k >= 30) {
+            assert_true(live.speed >= 390 && live.speed <= 410);
+        }
+    }
+    assert_true(wrapped);
+    assert_true(live.running);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_d4_travel_moves_with_zero_offset),
+        cmocka_unit_test(test_d4_travel_mirrors_with_direction),
+        cmocka_unit_test(test_d6_offset_while_holding_rebases),
+        cmocka_unit_test(test_d6_direction_while_holding_rebases),
+        cmocka_unit_test(test_d6_offset_mid_move_no_step),
+        cmocka_unit_test(test_d9_counted_runs_stop_on_the_count),
+        cmocka_unit_test(test_d11_pot_motor_stops_at_travel),
+        cmocka_unit_test(test_d11_encoder_runs_on),
+        cmocka_unit_test(test_wrap_tick_is_defined),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
