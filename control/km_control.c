@@ -319,6 +319,27 @@ static void prv_drive_motor(km_control_t *c, const km_control_params_t *p, int32
     c->bridge = km_output_bridge(mode, mpwm, limit, p->reverse);
 }
 
+/* 4. 0x5D bounds the shaft, not only the profile: while the shaft turns
+ * faster than 0.9 x 0x5D (the speed estimate lags the shaft) in the
+ * drive's direction, the drive is cut to what holds that (kv, friction)
+ * less kd x the excess. Only a 0x5D below the product's fastest governs:
+ * at full speed the motor is the limit. */
+static int32_t prv_speed_governor(const km_control_params_t *p, int32_t pwm, int32_t speed_ddps)
+{
+    const int32_t dps = (int32_t)p->speed_limit_dps;
+    const int32_t v = pwm >= 0 ? speed_ddps : -speed_ddps;
+    if (dps == 0 || dps >= (int32_t)p->gains.fastest_dps || v <= dps * 9) {
+        return pwm;
+    }
+    const int32_t excess = v - dps * 9 > 20000 ? 20000 : v - dps * 9;
+    const int32_t cap = km_sdiv2560((int32_t)p->gains.kv_q8 * dps * 9) + (int32_t)p->gains.friction_pwm -
+                        km_sdiv2560((int32_t)p->gains.kd_q8 * excess);
+    if (pwm >= 0) {
+        return pwm > cap ? cap : pwm;
+    }
+    return -pwm > cap ? -cap : pwm;
+}
+
 /* 3. servo mode, the position loop, 4. output. Not stepped while the motor
  * owns the bridge: its output would be unused, and the hand-back
  * (km_control_request) restarts it from where the shaft is. */
@@ -346,7 +367,7 @@ static void prv_drive_servo(km_control_t *c, const km_control_params_t *p, int32
             .integrate = sm.holding && c->action == KM_PROT_ACT_NONE,
             .still = c->hold.on && c->action == KM_PROT_ACT_NONE,
         };
-        pwm = km_position_loop_step(&c->loop, &p->gains, &li, dt_us);
+        pwm = prv_speed_governor(p, km_position_loop_step(&c->loop, &p->gains, &li, dt_us), speed_ddps);
     }
     c->bridge = km_output_bridge(sm.bridge, pwm, limit, p->reverse);
 }

@@ -216,7 +216,7 @@ void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_
             if (done) {
                 prv_settle_clock(m, p, position, dt_us);
                 const int32_t dev = km_pos_diff(position, m->target);
-                const int32_t band = (int32_t)p->gains.arrive_ddeg;
+                const int32_t band = (int32_t)p->gains.arrive_ddeg - KM_ARRIVE_MARGIN_DDEG;
                 const bool slow = speed_ddps <= KM_ARRIVE_SPEED_DDPS && speed_ddps >= -KM_ARRIVE_SPEED_DDPS;
                 if ((dev <= band && dev >= -band && slow) ||
                     m->settle_us >= (uint32_t)p->gains.settle_ms * 1000u) {

@@ -94,6 +94,11 @@ bool km_servo_mode_move(km_servo_mode_t *m, const km_move_t *mv, const km_contro
  * the shaft is inside the product's arrive band and slower than this: a
  * shaft passing through the band is still moving (0.1 deg/s). */
 #define KM_ARRIVE_SPEED_DDPS 200
+/* ... and the reading inside the band by this much (0.1 deg): what the
+ * reading can be off the shaft (one ADC step, noise, the oversampling
+ * lag), so that a shaft reported arrived is inside the band (issue 20
+ * criterion 6). */
+#define KM_ARRIVE_MARGIN_DDEG 1
 
 /* One tick: advances the profile and the running state; `speed_ddps` is
  * the measured speed (0.1 deg/s). */
