@@ -19,31 +19,44 @@ typedef struct {
     bool reverse;   /* 0x11 bit 2 */
 } km_axis_t;
 
+/* uint32 to int32 modulo 2^32: what C11 leaves implementation-defined
+ * (6.3.1.3) and GCC and Clang define so (their manuals, "Integers
+ * implementation"); one instruction or none on the M0. */
+static inline int32_t km_s32(uint32_t u)
+{
+    return (int32_t)u;
+}
+
 /* a - b on positions, modular: the multi-turn count wraps at int32
  * (docs/protocol-decisions.md "Multi-turn position and its wrap"), so the
  * difference of two positions either side of the wrap is the short way
  * round, with no signed overflow. */
 static inline int32_t km_pos_diff(int32_t a, int32_t b)
 {
-    const uint32_t u = (uint32_t)a - (uint32_t)b;
-    return u <= 0x7FFFFFFFu ? (int32_t)u : -(int32_t)(~u) - 1;
+    return km_s32((uint32_t)a - (uint32_t)b);
 }
 
 /* a + b on positions, modular like km_pos_diff. */
 static inline int32_t km_pos_add(int32_t a, int32_t b)
 {
-    const uint32_t u = (uint32_t)a + (uint32_t)b;
-    return u <= 0x7FFFFFFFu ? (int32_t)u : -(int32_t)(~u) - 1;
+    return km_s32((uint32_t)a + (uint32_t)b);
 }
 
 /* A sensor reading as a master position in frame `a`. */
-int32_t km_axis_position(const km_axis_t *a, int32_t sensor);
+static inline int32_t km_axis_position(const km_axis_t *a, int32_t sensor)
+{
+    const uint32_t pos = (uint32_t)sensor + (uint32_t)a->offset;
+    return km_s32(a->reverse ? 0u - pos : pos);
+}
+
+/* True when `a` is not the frame `p` describes. */
+static inline bool km_axis_differs(const km_axis_t *a, const km_control_params_t *p)
+{
+    return a->offset != (int32_t)p->zero_offset1 + (int32_t)p->zero_offset2 || a->reverse != p->reverse;
+}
 
 /* The frame `p` describes. */
 km_axis_t km_axis_of(const km_control_params_t *p);
-
-/* True when the two frames differ. */
-bool km_axis_changed(const km_axis_t *a, const km_axis_t *b);
 
 /* A master position of frame `from` as a position of frame `to` (the same
  * shaft angle); modular on int32 like the positions themselves. */
@@ -53,6 +66,13 @@ int32_t km_axis_map(const km_axis_t *from, const km_axis_t *to, int32_t pos);
 int32_t km_axis_sign(const km_axis_t *from, const km_axis_t *to);
 
 /* The product travel in the master's frame of `p`: [*lo, *hi]. */
-void km_axis_travel(const km_control_params_t *p, int32_t *lo, int32_t *hi);
+static inline void km_axis_travel(const km_control_params_t *p, int32_t *lo, int32_t *hi)
+{
+    const int32_t off = (int32_t)p->zero_offset1 + (int32_t)p->zero_offset2;
+    const int32_t a = (int32_t)p->travel_min + off;
+    const int32_t b = (int32_t)p->travel_max + off;
+    *lo = p->reverse ? -b : a;
+    *hi = p->reverse ? -a : b;
+}
 
 #endif

@@ -69,8 +69,8 @@ static void prv_rebase_axis(km_control_t *c, const km_axis_t *now)
 /* Follows the master's frame of `p` (km_axis.h) when it changed. */
 static void prv_follow_axis(km_control_t *c, const km_control_params_t *p)
 {
-    const km_axis_t now = km_axis_of(p);
-    if (km_axis_changed(&now, &c->frame)) {
+    if (km_axis_differs(&c->frame, p)) {
+        const km_axis_t now = km_axis_of(p);
         prv_rebase_axis(c, &now);
     }
 }
@@ -327,13 +327,15 @@ static void prv_drive_motor(km_control_t *c, const km_control_params_t *p, int32
 static int32_t prv_speed_governor(const km_control_params_t *p, int32_t pwm, int32_t speed_ddps)
 {
     const int32_t dps = (int32_t)p->speed_limit_dps;
-    const int32_t v = pwm >= 0 ? speed_ddps : -speed_ddps;
-    if (dps == 0 || dps >= (int32_t)p->gains.fastest_dps || v <= dps * 9) {
+    if (dps == 0 || dps >= (int32_t)p->gains.fastest_dps) {
         return pwm;
     }
-    const int32_t excess = v - dps * 9 > 20000 ? 20000 : v - dps * 9;
+    const int32_t excess = (pwm >= 0 ? speed_ddps : -speed_ddps) - dps * 9;
+    if (excess <= 0) {
+        return pwm;
+    }
     const int32_t cap = km_sdiv2560((int32_t)p->gains.kv_q8 * dps * 9) + (int32_t)p->gains.friction_pwm -
-                        km_sdiv2560((int32_t)p->gains.kd_q8 * excess);
+                        km_sdiv2560((int32_t)p->gains.kd_q8 * (excess > 20000 ? 20000 : excess));
     if (pwm >= 0) {
         return pwm > cap ? cap : pwm;
     }

@@ -66,6 +66,7 @@ typedef struct {
     uint8_t hw;       /* 0x35 bits found */
     uint8_t cleared;  /* protections a clear request released since the last tick */
     bool have_position;
+    km_axis_t frame;    /* the master's frame of the last tick (km_axis.h) */
     km_bridge_t bridge; /* the last command */
     int32_t position;   /* 0.1 deg, master's frame, last tick */
     int32_t temp_c10;   /* the last temperature read, 0.1 degC, */
@@ -83,7 +84,6 @@ typedef struct {
     km_selftest_t selftest;  /* 0x35 */
     uint32_t requests;       /* typed requests received (diagnostics) */
     km_request_t last_request;
-    km_axis_t frame; /* the master's frame of the last tick (km_axis.h) */
 } km_control_t;
 
 void km_control_init(km_control_t *c, const km_control_params_t *p);

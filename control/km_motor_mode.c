@@ -173,42 +173,60 @@ static int32_t prv_room(const km_motor_mode_t *m, const km_control_params_t *p, 
     return room;
 }
 
-/* The fastest speed (0.1 deg/s) from which the run still stops within
- * `room` at half the product acceleration, and never below
- * KM_MOTOR_CREEP_DDPS: v^2 = 2 (a/2) d, in 0.1 deg/s and 0.1 deg. */
-static int32_t prv_approach_ddps(const km_control_gains_t *g, int32_t room)
+/* The square of the fastest speed ((0.1 deg/s)^2) from which the run
+ * still stops within `room` (0.1 deg) at half the product acceleration:
+ * v^2 = 2 (a/2) d = a d (deg/s^2, deg) x 10 in these units. */
+static uint32_t prv_approach_sq(const km_control_gains_t *g, int32_t room)
 {
     const uint32_t a = g->accel_dps2 > 20000u ? 20000u : (g->accel_dps2 ? g->accel_dps2 : 1u);
     const uint32_t d = room > 20000 ? 20000u : (room < 0 ? 0u : (uint32_t)room);
-    const int32_t v = (int32_t)prv_isqrt(a * d * 10u);
+    return a * d * 10u;
+}
+
+/* `sq` = v^2 as a speed (0.1 deg/s), at least KM_MOTOR_CREEP_DDPS. */
+static int32_t prv_approach_ddps(uint32_t sq)
+{
+    const int32_t v = (int32_t)prv_isqrt(sq);
     return v < KM_MOTOR_CREEP_DDPS ? KM_MOTOR_CREEP_DDPS : v;
+}
+
+/* |v| bounded to 20000 (0.1 deg/s): its square fits 32 bits. */
+static uint32_t prv_sq(int32_t v)
+{
+    const uint32_t m = v < 0 ? (uint32_t)(-v) : (uint32_t)v;
+    const uint32_t b = m > 20000u ? 20000u : m;
+    return b * b;
 }
 
 /* A run with an end ahead (a count or the travel's edge): ends at it, and
  * slows down before it instead of driving through (the speed set-point,
- * or a constant PWM, cut by the approach speed). */
+ * or a constant PWM, cut by the approach speed; the square root is taken
+ * only once the end is near). */
 static int32_t prv_drive(km_motor_mode_t *m, const km_control_params_t *p, int32_t position,
                          int32_t speed_ddps, uint32_t dt_us)
 {
     const int32_t want = m->speed_mode ? m->speed_dps * 10 : m->pwm;
-    const int32_t dir = want > 0 ? 1 : (want < 0 ? -1 : 0);
-    const int32_t room = dir != 0 ? prv_room(m, p, position, dir) : KM_MOTOR_ROOM_FREE;
+    const int32_t dir = want > 0 ? 1 : -1;
+    const int32_t room = prv_room(m, p, position, dir);
     if (room <= 0) {
         km_motor_mode_stop(m, m->stop_bridge); /* at the edge of the travel */
         return 0;
     }
+    if (room == KM_MOTOR_ROOM_FREE) {
+        return m->speed_mode ? prv_speed_loop(m, &p->gains, want, speed_ddps, dt_us) : m->pwm;
+    }
     /* the loop's lag: what the shaft covers before a slower set-point bites */
     const int32_t fast = speed_ddps * dir;
     const int32_t lag = fast > 0 ? km_sdiv1000((fast > 20000 ? 20000 : fast) * KM_MOTOR_LAG_MS) : 0;
-    const int32_t vcap = room < KM_MOTOR_ROOM_FREE ? prv_approach_ddps(&p->gains, room - lag) : 200000;
+    const uint32_t sq = prv_approach_sq(&p->gains, room - lag);
     if (m->speed_mode) {
-        const int32_t sp = want > vcap ? vcap : (want < -vcap ? -vcap : want);
+        const int32_t sp = sq >= prv_sq(want) ? want : dir * prv_approach_ddps(sq);
         return prv_speed_loop(m, &p->gains, sp, speed_ddps, dt_us);
     }
-    if (vcap >= 200000 || fast + KM_MOTOR_CREEP_DDPS < vcap) {
+    if (fast < 0 || sq > prv_sq(fast + KM_MOTOR_CREEP_DDPS)) {
         return m->pwm; /* far from the end: the constant PWM */
     }
-    const int32_t slow = prv_speed_loop(m, &p->gains, dir * vcap, speed_ddps, dt_us);
+    const int32_t slow = prv_speed_loop(m, &p->gains, dir * prv_approach_ddps(sq), speed_ddps, dt_us);
     return dir > 0 ? (slow < m->pwm ? slow : m->pwm) : (slow > m->pwm ? slow : m->pwm);
 }
 

@@ -60,7 +60,7 @@ static int prv_usage(const char *argv0)
 {
     fprintf(stderr,
             "usage: %s (--listen HOST:PORT | --pty) --flash FILE [--baud N] [--gap-floor-us N]\n"
-            "          [--product pot|encoder] [--scenario FILE]\n"
+            "          [--product pot|encoder] [--plant realistic|ideal] [--scenario FILE]\n"
             "  --gap-floor-us N  least silence inside a frame that drops it, in us, when it\n"
             "                    exceeds the parser's max(10 byte times, 1 ms); default %u\n"
             "                    (host scheduling stalls); 0 = the real rule\n"
@@ -69,6 +69,9 @@ static int prv_usage(const char *argv0)
             "  --product P       pot (default, KM-SIM-P135) or encoder (KM-SIM-ENCODER,\n"
             "                    multi-turn); a restart keeps it and the shaft where it\n"
             "                    is; the encoder then reads its angle within one turn\n"
+            "  --plant NAME      the simulated plant (docs/plant.md): realistic (default:\n"
+            "                    sensor noise, friction, backlash, a shared supply) or ideal\n"
+            "                    (exact sensors; regression tests)\n"
             "  --scenario FILE   a bench scenario played on the plant's clock: lines\n"
             "                    T_MS KEY VALUE, keys supply_mv, ambient_dc (0.1 degC),\n"
             "                    load_mnm (mN*m), faults (1 pot, 2 motor, 4 NTC open),\n"
@@ -119,6 +122,17 @@ static int prv_product(const char *value, const char *argv0)
     return 0;
 }
 
+/* --plant realistic|ideal (0 = taken, else the exit code). */
+static int prv_plant(const char *value, const char *argv0)
+{
+    const km_plant_config_t *cfg = km_plant_config_named(value);
+    if (cfg == NULL) {
+        return prv_usage(argv0);
+    }
+    km_sim_board_select_plant(cfg);
+    return 0;
+}
+
 /* What the options say: where the bus and the flash are, and the bus
  * floors handed to the app. */
 typedef struct {
@@ -155,6 +169,9 @@ static int prv_option(prv_args_t *a, const char *name, const char *value, const 
     }
     if (strcmp(name, "--scenario") == 0) {
         return hs_scenario_load(value) ? 0 : 2;
+    }
+    if (strcmp(name, "--plant") == 0) {
+        return prv_plant(value, argv0);
     }
     return -1;
 }

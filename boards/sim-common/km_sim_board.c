@@ -30,6 +30,16 @@ static km_scn_player_t s_scenario;
  * stops, as the control tests build it (tests/unit/control/test_control_motor.c).
  * The plant keeps a pointer, so it lives here. */
 static km_plant_config_t s_encoder_config;
+#ifdef KM_SIM_PLANT_IDEAL
+static const km_plant_config_t *s_plant_config = &km_plant_ideal_config;
+#else
+static const km_plant_config_t *s_plant_config = &km_plant_realistic_config;
+#endif
+
+void km_sim_board_select_plant(const km_plant_config_t *cfg)
+{
+    s_plant_config = cfg;
+}
 
 void km_hal_motor_init(void)
 {
@@ -70,12 +80,12 @@ void km_hal_sensors_init(void)
      * the zero offsets (docs/protocol.md §5.3, §6; docs/protocol-decisions.md). */
     s_encoder = km_board_product()->variant == KM_VARIANT_ENCODER;
     if (s_encoder) {
-        s_encoder_config = km_plant_default_config;
+        s_encoder_config = *s_plant_config;
         s_encoder_config.pot_travel_ddeg = 0;
         s_encoder_config.endstop_ddeg = 0;
         (void)km_plant_init(&s_plant, &s_encoder_config);
     } else {
-        (void)km_plant_init(&s_plant, &km_plant_default_config);
+        (void)km_plant_init(&s_plant, s_plant_config);
     }
     km_plant_physics_t kept;
     if (km_sim_board_recall(&kept)) {

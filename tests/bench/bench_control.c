@@ -359,6 +359,8 @@ static void prv_defect(const char *fmt, ...)
     va_end(ap);
 }
 
+#include "bench_control_bus.h"
+
 /* ---- figures over the record --------------------------------------------- */
 
 /* Mean |current| (mA) and rms over ticks [from, to). */
@@ -1369,8 +1371,10 @@ static void prv_print(void)
         printf("%-3u %-74s %-34s %s  [%s]\n", c->criterion, c->what, c->target, c->measured,
                c->meets ? "meets" : "MISSES");
     }
-    printf("\n%u of %u checks meet their target.\n\nThe issue's defects, measured on this plant:\n%s",
-           prv_met(), s_nchecks, s_defects);
+    printf(
+        "\n%u of %u checks meet their target.\n\nThe issue's defects, measured on this plant:\n%s\nOver the "
+        "bus:\n%s",
+        prv_met(), s_nchecks, s_defects, s_bus_text);
 }
 
 /* A table cell: '|' would end it, so it is escaped. */
@@ -1410,6 +1414,7 @@ static bool prv_markdown(const char *dir)
         fprintf(f, "| %s |\n", c->meets ? "meets" : "**misses**");
     }
     fprintf(f, "\nThe defects the issue lists, on the same plant:\n\n%s\n", s_defects);
+    fprintf(f, "Over the bus:\n\n%s\n", s_bus_text);
     for (unsigned k = 1; k <= 8u; k++) {
         fprintf(f, "![%u. %s](control-quality/c%u.png)\n\n", k, k_criterion[k], k);
     }
@@ -1483,6 +1488,7 @@ int main(int argc, char **argv)
     prv_c7_same_hold();
     prv_c7_wrap();
     prv_c8();
+    prv_bus_supply();
     prv_print();
     if (fclose(s_csv) != 0 || !prv_markdown(dir)) {
         printf("BROKEN RUN: cannot finish the outputs in %s\n", dir);

@@ -454,8 +454,10 @@ def encoder(backend, opts):
         a = read_pos(bus, 1)
         time.sleep(0.2)
         b = read_pos(bus, 1)
-        check(a is not None and a == b and a >= 3700,
-              "§5.4 0x6F 0 stops it: 0x46 %s then %s 200 ms later" % (a, b))
+        # the realistic plant's encoder toggles by a count at rest (0.4 count
+        # rms, docs/plant.md): a shaft at rest reads within one 0.1 deg count
+        check(a is not None and b is not None and abs(a - b) <= 1 and a >= 3700,
+              "§5.4 0x6F 0 stops it: 0x46 %s then %s 200 ms later (at rest: within 1 count)" % (a, b))
         # The shaft is physics: a restart of the MCU leaves it where it is.
         # The encoder is absolute within one turn and the turn count is RAM,
         # so after the restart 0x46 is the angle within one turn.
@@ -909,7 +911,8 @@ def selftest(backend, opts):
             st = ping_status(bus, d)
             hw = read_show(bus, d, 0x35)
             pos = read_show(bus, d, 0x46)
-            check(st == 0 and hw == 0 and pos == rest,
+            # the pot reading's noise (docs/plant.md, ~0.04 deg): one count either way
+            check(st == 0 and hw == 0 and pos is not None and rest is not None and abs(pos - rest) <= 1,
                   "§5.2 0x35 after restart %d with the shaft resting on its stop (0x46 %s): 0x35 reads "
                   "%s, status %s (no position fault: a rail reading is an open wiper, the stop is not)"
                   % (n, pos, hw, None if st is None else "0x%02x" % st))
