@@ -120,6 +120,31 @@ static void test_d4_travel_mirrors_with_direction(void **state)
     assert_true(iabs(kr_pos(&r) - 1250) <= 5);
 }
 
+/* D5: the pot reads past the travel (its ADC spans +-165 deg, the stops
+ * sit at +-150, the travel is +-135: docs/protocol-decisions.md "Position
+ * fault = a reading the mechanics cannot give"), so an overshoot past +135 deg is seen and corrected: a
+ * full-range fastest move at twice the inertia rests within the arrive
+ * band of +135.0 deg and 0x46 reads the shaft (within 0.2 deg). A
+ * regression test: main already passes it since the plant's pot was
+ * widened past the travel (the issue measured 5.2 deg past with 0x46 at
+ * 135.0 on a pot spanning only the travel). */
+static void test_d5_overshoot_past_travel_is_seen(void **state)
+{
+    (void)state;
+    static km_plant_config_t cfg;
+    cfg = km_plant_realistic_config;
+    cfg.load_j_gmm2 *= 2u;
+    kr_init_at(&r, &cfg, -1350);
+    kr_run(&r, 20);
+    assert_true(kr_torque(&r, 2));
+    kr_run(&r, 300);
+    assert_true(kr_move(&r, KM_MOVE_SPEED, 1350, 0));
+    kr_run(&r, 2500);
+    print_message("D5 -135 -> +135 at 2x inertia: shaft %d, 0x46 %d\n", (int)shaft_ddeg(), (int)kr_pos(&r));
+    assert_true(iabs(shaft_ddeg() - 1350) <= 5);
+    assert_true(iabs(kr_pos(&r) - shaft_ddeg()) <= 2);
+}
+
 /* Holding +30 deg against 0.3 N.m, settled. */
 static void hold_loaded(void)
 {
@@ -391,6 +416,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_d4_travel_moves_with_zero_offset),
         cmocka_unit_test(test_d4_travel_mirrors_with_direction),
+        cmocka_unit_test(test_d5_overshoot_past_travel_is_seen),
         cmocka_unit_test(test_d6_offset_while_holding_rebases),
         cmocka_unit_test(test_d6_direction_while_holding_rebases),
         cmocka_unit_test(test_d6_offset_mid_move_no_step),
