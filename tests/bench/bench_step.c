@@ -9,8 +9,10 @@
  * refused command, a move that never starts or never moves the shaft, an
  * impossible reading, or a CSV it cannot write; never on a figure.
  *
- * Usage: bench_step [csv-dir]   (else $KM_BENCH_STEP_DIR, else the current
- * directory; CTest runs it in the build tree). Writes <dir>/step_traces.csv.
+ * Usage: bench_step [--plant ideal|realistic] [csv-dir]   (else
+ * $KM_BENCH_STEP_DIR, else the current directory; CTest runs it in the
+ * build tree). Writes <dir>/step_traces.csv. The plant: `realistic` by
+ * default (docs/plant.md); `ideal` is the regression case.
  *
  * Each scenario: the plant at rest at the start position, torque on (0x64 =
  * 2), the load applied, HOLD_MS of holding, then the command at t = 0. The
@@ -81,8 +83,9 @@ typedef struct {
 } prv_figures_t;
 
 static kr_rig_t s_rig;
-static km_plant_config_t s_cfg;   /* the plant keeps a pointer to it */
-static int32_t s_pos[MAX_MS + 1]; /* 0x46 per tick after the command */
+static const km_plant_config_t *s_base = &km_plant_realistic_config; /* --plant; realistic by default */
+static km_plant_config_t s_cfg;                                      /* the plant keeps a pointer to it */
+static int32_t s_pos[MAX_MS + 1];                                    /* 0x46 per tick after the command */
 static FILE *s_csv;
 static int s_broken;
 
@@ -125,7 +128,7 @@ static void prv_log(const kr_rig_t *r, const prv_scenario_t *sc, int32_t t_ms, i
 /* Plant, params and load for the scenario; torque on and held. */
 static bool prv_setup(kr_rig_t *r, const prv_scenario_t *sc)
 {
-    s_cfg = km_plant_default_config;
+    s_cfg = *s_base;
     if (sc->encoder) { /* as boards/sim-common/km_sim_board.c: no pot, no end stops */
         s_cfg.pot_travel_ddeg = 0;
         s_cfg.endstop_ddeg = 0;
@@ -289,7 +292,18 @@ static unsigned prv_scenarios(prv_scenario_t *out, unsigned max)
 
 int main(int argc, char **argv)
 {
-    const char *dir = argc > 1 ? argv[1] : getenv("KM_BENCH_STEP_DIR");
+    const char *dir = getenv("KM_BENCH_STEP_DIR");
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--plant") == 0 && i + 1 < argc) {
+            s_base = km_plant_config_named(argv[++i]);
+            if (s_base == NULL) {
+                printf("BROKEN RUN: --plant %s: not a plant (ideal, realistic)\n", argv[i]);
+                return 1;
+            }
+        } else {
+            dir = argv[i];
+        }
+    }
     if (dir == NULL || dir[0] == '\0') {
         dir = ".";
     }
@@ -309,14 +323,14 @@ int main(int argc, char **argv)
     printf(
         "Step response: host (x86) runs of the fixed-point control code (control/, default gains)\n"
         "on the simulated plant (sim/plant, 20 kg.cm class), 1 kHz tick, one-tick PWM delay.\n"
-        "Reproduce: %s [csv-dir]   (ctest -R bench_step -V)\n"
+        "Plant: %s. Reproduce: %s [--plant ideal|realistic] [csv-dir]   (ctest -R bench_step -V)\n"
         "t500 = 0x65 move in 500 ms; fast = 0x66 speed 0 (fastest: 0x5D = 360 deg/s, 4000 deg/s^2).\n"
         "light = default load, 7.4 V; inertia = +0.01 kg.m^2 (total x2); torque = 0.6 N.m (30 %% of stall)\n"
         "against the move; 6.0V = default load at a 6.0 V supply. pot starts at -45.0 deg, enc at 360.0 "
         "deg.\n"
         "rise 10-90 %%; settle into +-0.5 deg from the command; end = bit 7 cleared; ss err 1 s after "
         "end.\n\n",
-        argv[0]);
+        s_base == &km_plant_ideal_config ? "ideal" : "realistic", argv[0]);
     printf("%-22s %6s %6s %13s %7s %6s %6s %9s %7s\n", "scenario", "rise", "settle", "overshoot", "end",
            "0x4D", "ss err", "peak I", "Vmin");
     printf("%-22s %6s %6s %13s %7s %6s %6s %9s %7s\n", "", "ms", "ms", "deg (%)", "ms", "ms", "deg", "mA",
