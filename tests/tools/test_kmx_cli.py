@@ -142,10 +142,12 @@ class KmxOverTcp(unittest.TestCase):
         self.assertEqual(self.ok("fault-log", "0"),
                          "ID 0: 0 events recorded, 0 held (0 from before the last reset); last reset: power-on; "
                          "user data: product defaults: flash erased (first boot)\nno entries\n")
-        # §5.2: a current threshold of 100 mA over 0.1 s trips during a move
-        # (the sim's motor draws more while accelerating) and releases by
-        # itself (0x33 = 0) once the move is over
-        self.ok("set", "0", "current_limit", "100", "0.1")
+        # §5.2: a current threshold of 50 mA over 0.1 s trips during a move
+        # and releases by itself (0x33 = 0) once the move is over: on the
+        # realistic plant (host-sim's default, docs/plant.md) this move draws
+        # 56..82 mA while cruising and more while accelerating, the hold
+        # after it 25 mA on average (above 50 mA for at most 10 ms at a time)
+        self.ok("set", "0", "current_limit", "50", "0.1")
         self.ok("torque", "0", "on")
         self.ok("move", "0", "90", "--time", "200")
         deadline = time.monotonic() + 3
@@ -159,7 +161,7 @@ class KmxOverTcp(unittest.TestCase):
         self.assertRegex(lines[1], r"^#\s+boot\s+t_ms\s+event\s+what\s+supply\s+current\s+temperature\s+position$")
         self.assertRegex(lines[2], r"^0\s+this\s+\d+\s+released by itself\s+current\s+\d\.\d{3} V\s+-?\d+ mA\s+25\.0 °C")
         self.assertRegex(lines[3], r"^1\s+this\s+\d+\s+tripped\s+current\s+\d\.\d{3} V\s+(\d+) mA\s+25\.0 °C")
-        self.assertGreater(int(re.search(r"(\d+) mA", lines[3]).group(1)), 100)  # above the threshold
+        self.assertGreater(int(re.search(r"(\d+) mA", lines[3]).group(1)), 50)  # above the threshold
 
     def test_plot_step_and_trace(self):
         self.ok("torque", "0", "on")
