@@ -271,8 +271,9 @@ def check_motor_for_time(bus, dev_id):
     b = read_pos(bus, dev_id)
     r = bus.exchange(kmframe.read(dev_id, 0x01), 1, timeout=0.5)
     stopped = len(r) == 1 and r[0].params[:1] and not r[0].params[0] & 0x80
-    check(a is not None and a == b and a > mid and stopped,
-          "§5.4 0x70 ... stops by itself after its time: 0x46 %s then %s 200 ms later, "
+    # at rest the realistic plant's pot reading toggles by a count (docs/plant.md)
+    check(a is not None and b is not None and abs(a - b) <= 1 and a > mid and stopped,
+          "§5.4 0x70 ... stops by itself after its time: 0x46 %s then %s 200 ms later (within 1 count), "
           "status bit 7 clear (%s)" % (a, b, r[0].params.hex() if r else None))
 
 
