@@ -22,7 +22,7 @@ EXPECT = {  # example -> regular expressions its output must match, in order
     "scan.py": [r"^3 servos on tcp:", r"^ID 1: KM-SIM-P135, firmware 0x[0-9A-F]{8}, 7\.400 V, status: ok$",
                 r"^ID 3: KM-SIM-P135"],
     "registers.py": [r"^max_speed is \d+ °/s \(the number: \d+\)$", r"^after set: 300 °/s$",
-                     r"^refused: max_speed: 5000 °/s is above ID 1's limit 720 °/s \(speed_max_dps of KM-SIM-P135\); "
+                     r"^refused: max_speed: 5000 °/s is above ID 1's limit 360 °/s \(speed_max_dps of KM-SIM-P135\); "
                      r"nothing sent$", r"^restored: \d+ °/s$"],
     "group.py": [r"^voltage of \[1, 2, 3\] in one 0x82 frame: \{1: '7\.400 V', 2: '7\.400 V', 3: '7\.400 V'\}$",
                  r"^positions: \{1: '", r"^back at: \{1: '-?0\.\d °', 2: '-?0\.\d °', 3: '-?0\.\d °'\}$"],

@@ -51,7 +51,7 @@ class OnHostSim(unittest.TestCase):
         self.assertEqual(self.get("max_current"), before)
         self.refused("zero_offset2: -20.0 ° is below ID 0's limit -10.0 ° (-zero_offset2_max of KM-SIM-P135); "
                      "nothing sent", "set", "0", "zero_offset2", "-20")
-        self.refused("speed_limit: 800 °/s is above ID 0's limit 720 °/s (speed_max_dps of KM-SIM-P135); "
+        self.refused("speed_limit: 800 °/s is above ID 0's limit 360 °/s (speed_max_dps of KM-SIM-P135); "
                      "nothing sent", "set", "0", "speed_limit", "800")
         self.assertEqual(kmx(self.sim.spec, "set", "0", "max_current", "2500").returncode, 0)
 

@@ -146,7 +146,7 @@ function toggleLive() {
   if (kmx.live) { if (!kmx.charts.position) makeCharts(); liveLoop(); }
 }
 
-// The range text of a field: "0..720 °/s" (product bounds say "product").
+// The range text of a field: "0..360 °/s" (product bounds say "product").
 function rangeText(f) {
   const show = (b) => (typeof b === "number" ? +(b * (f.unit ? f.scale : 1)).toFixed(3) : b);
   if (f.min === null && f.max === null) return "";
