@@ -50,6 +50,9 @@ def kmx(bus, *args, process=False, timeout=30):
     return Result(code, out.getvalue(), err.getvalue())
 
 
+AT_45 = tuple("position (0x46) = %s °\n" % v for v in ("44.9", "45.0", "45.1"))
+
+
 class KmxOverTcp(unittest.TestCase):
     def setUp(self):
         self.sim = HostSim()
@@ -82,13 +85,15 @@ class KmxOverTcp(unittest.TestCase):
         self.assertEqual(self.ok("set", "0", "temp_limits", "70", "5"), "temp_limits (0x3D) = 70 °C, 5 °C\n")
         self.assertEqual(self.ok("set", "0", "move_time", "45", "300"),
                          "move_time (0x65) <- 45.0 °, 300 ms  [C2 01 2C 01]\n")
+        # within one count (0.1 °): host-sim's realistic plant has the pot's
+        # noise and the arrive band (docs/plant.md, docs/tuning.md)
         deadline = time.monotonic() + 3
         while True:
             out = self.ok("get", "0", "position")
-            if out == "position (0x46) = 45.0 °\n" or time.monotonic() > deadline:
+            if out in AT_45 or time.monotonic() > deadline:
                 break
             time.sleep(0.1)
-        self.assertEqual(out, "position (0x46) = 45.0 °\n")
+        self.assertIn(out, AT_45)
 
     def test_set_id_then_scan_finds_it(self):
         self.assertEqual(self.ok("set", "0", "id", "5"), "id (0x0F) = 5  (the servo answers at ID 5 now)\n")
@@ -130,7 +135,7 @@ class KmxOverTcp(unittest.TestCase):
             self.assertRegex(volt, r"^\d+\.\d{3}$")
         out = self.ok("monitor", "0", "--count", "2", "--interval", "50")
         self.assertEqual(len(re.findall(r"^t = \d+\.\d\d s \(sample every 50 ms, 0x82[^)]*\)\nID\s+position\s+speed\s+current\s+temperature"
-                                        r"\s+voltage\s+status\n0\s+0\.0 °\s+0 °/s", out, re.M)), 2, out)
+                                        r"\s+voltage\s+status\n0\s+-?0\.[01] °\s+-?[0-5] °/s", out, re.M)), 2, out)
 
     def test_set_id_survives_restart(self):
         self.assertRegex(self.ok("set-id", "0", "4"), r"^ID 0 -> 4: answers at ID 4 after a restart \(\d+ ms\)\n$")

@@ -178,7 +178,7 @@ class Lifecycle(unittest.TestCase):
         self.assertEqual(r.returncode, 2)
         self.assertEqual(r.stderr.splitlines()[-1],
                          "servo-bus: error: argument --backend: invalid choice: 'qemuu' (choose from "
-                         "'host-sim', 'qemu')")
+                         "'g031', 'host-sim', 'qemu')")
 
 
 if __name__ == "__main__":
