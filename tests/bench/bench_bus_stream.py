@@ -23,7 +23,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "tests", "bus"))
 import bus_check  # noqa: E402  (its Bus, reads and writes; it puts kmbus on the path)
-import kmbus  # noqa: E402
+from kmx import frame as kmbus  # noqa: E402  (kmx on PYTHONPATH)
 
 SPEED_DPS = 90
 FROM_DDEG, TO_DDEG = -600, 600
