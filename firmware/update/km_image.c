@@ -15,8 +15,8 @@ _Static_assert(sizeof(km_image_header_t) == 8u * sizeof(uint32_t) &&
 void km_image_decode(const uint8_t raw[KM_IMAGE_HEADER_SIZE], km_image_header_t *h)
 {
     uint32_t w[8];
-    for (uint32_t i = 0; i < 8u; i++) {
-        const uint8_t *p = raw + 4u * i;
+    const uint8_t *p = raw;
+    for (uint32_t i = 0; i < 8u; i++, p += 4) {
         w[i] = (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
     }
     memcpy(h, w, sizeof w);
