@@ -8,7 +8,7 @@ one (--one-by-one: every frame to the servo's own ID, for comparison).
                  [--monitor-dir DIR --resets N --seed S]
     kmx --bus ... update --rescue image.kmfw      (one servo alone on the bus, any ID)
 
-image.kmfw: an update image (tools/make-image). Before any frame that
+image.kmfw: an update image (tools/gen/make-image). Before any frame that
 changes a servo: the image is read and checked (magic, length, header and
 body CRC-32), and every listed ID must answer a ping and report a
 bootloader in 0x0C (bits 31..24, docs/update.md §10; an application run
@@ -41,7 +41,7 @@ time), so it lands while the frame is on the wire, while the servo decodes
 it, or while it erases or programs for it. QEMU's NVMC completes an erase or
 a program inside one guest instruction, so a reset lands between two flash
 operations, never inside one (no torn cell: that is the host runner's job,
-tests/unit/test_update_powercut.c). After each reset every servo must answer
+tests/unit/update/test_update_powercut.c). After each reset every servo must answer
 a ping (bootloader or application) and its STATUS state is recorded; the
 pass then notices a lost session and starts again. Figures (bytes of image, frames, seconds,
 bytes of image per second) are printed at the end.
@@ -425,7 +425,7 @@ def add_update_arguments(ap, with_bus):
     ap.add_argument("--one-by-one", action="store_true",
                     help="update the servos one after the other, every frame to its ID "
                          "(the comparison for the broadcast pass)")
-    ap.add_argument("image", help="the update image (tools/make-image)")
+    ap.add_argument("image", help="the update image (tools/gen/make-image)")
 
 
 def check_args(a):
@@ -459,7 +459,7 @@ def load_image(path):
     except OSError as e:
         raise Refused("cannot read the image %s: %s" % (path, e.strerror or e), 2) from None
     if len(image) < 0x108 or image[:4] != b"KMFW":
-        raise Refused("%s is not an update image (tools/make-image)" % path, 2)
+        raise Refused("%s is not an update image (tools/gen/make-image)" % path, 2)
     if zlib.crc32(image[:28]) & 0xFFFFFFFF != struct.unpack_from("<I", image, 28)[0]:
         raise Refused("%s: header CRC does not match" % path, 2)
     length = struct.unpack_from("<I", image, 8)[0]

@@ -26,7 +26,7 @@ UPDATE = os.path.join(REPO, "tools", "servo-update")
 
 
 def make_image(body_len=1024, model=0x4B4D0001, version=0x00100102):
-    """An update image as tools/make-image writes one (docs/update.md §2):
+    """An update image as tools/gen/make-image writes one (docs/update.md §2):
     the 32-byte header, FF to 0x100, then the body."""
     length = 0x100 + body_len
     body = bytes((7 * i) & 0xFF for i in range(body_len))
@@ -69,7 +69,7 @@ class BadInput(unittest.TestCase):
         self.refused("cannot read the image %s: No such file or directory" % missing, *bus, missing)
         self.refused("cannot read the image %s: Is a directory" % self.dir.name, *bus, self.dir.name)
         text = self.file("notes.txt", b"not an image\n" * 40)
-        self.refused("%s is not an update image (tools/make-image)" % text, *bus, text)
+        self.refused("%s is not an update image (tools/gen/make-image)" % text, *bus, text)
         image = bytearray(make_image())
         image[12] ^= 1
         bad = self.file("header.kmfw", bytes(image))

@@ -4,7 +4,7 @@
 benchmark of the shipped stm32g031 image (bench_realpath.py: instructions
 and estimated M0+ cycles per byte, per command, per list length, per
 control tick) and the image's flash and RAM per module from its linker map
-(tools/footprint). Everything in it is deterministic for a given image
+(tools/check/footprint). Everything in it is deterministic for a given image
 (virtual time on sim/g031; the map), so CTest's `figures_doc_current`
 checks that the committed file is what this prints.
 
@@ -28,7 +28,7 @@ STEP = 8  # list lengths: 1, 9, 17, ... and the longest
 
 
 def footprint(map_path):
-    """tools/footprint's table for one image, as its lines."""
+    """tools/check/footprint's table for one image, as its lines."""
     tool = os.path.join(ROOT, "tools", "footprint")
     if not os.path.exists(tool):  # tools/ may be sorted into subfolders
         for dirpath, _dirs, files in os.walk(os.path.join(ROOT, "tools")):
