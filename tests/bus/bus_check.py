@@ -607,7 +607,7 @@ def protect(backend, opts):
     opts.scenario = PROTECT_SCENARIO
     sup = scenario_times(PROTECT_SCENARIO, "supply_mv")  # short sag, back, long sag, back
     heat = scenario_times(PROTECT_SCENARIO, "temp_dc")   # heated, cooled
-    load = scenario_times(PROTECT_SCENARIO, "load_mnm")  # 3 N*m, off, 1.4 N*m, off
+    load = scenario_times(PROTECT_SCENARIO, "load_mnm")  # 3 N*m, off, 1.5 N*m, off
     check(len(sup) == 4 and len(heat) == 2 and len(load) == 4,
           "bench: scenario %s" % os.path.relpath(PROTECT_SCENARIO, ROOT))
     d = 1
@@ -783,7 +783,7 @@ def protect(backend, opts):
               "§5.2 0x33 = 0x08 (stall released only by 0x36), 0x34 = 0x94 (stall: hold)")
         t_load, v = poll(bus, lambda: (lambda x: x if x is not None and x >= 600 else None)(
             read_int(bus, d, 0x49)), 8.0)
-        check(t_load is not None, "plant: a 1.4 N*m load on the held shaft: 0x49 rises to %s PWM" % v)
+        check(t_load is not None, "plant: a 1.5 N*m load on the held shaft: 0x49 rises to %s PWM" % v)
         t_trip, seen = wait_status(bus, d, ST_STALL, True, 8.0)
         dt = None if t_trip is None else t_trip - t_load
         check(dt is not None and 1.8 <= dt <= 6.0,
