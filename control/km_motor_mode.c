@@ -128,7 +128,8 @@ static int32_t prv_speed_loop(km_motor_mode_t *m, const km_control_gains_t *g, i
     m->i_acc += km_sdiv10(km_sdiv1000(KM_MOTOR_KI_Q8 * err) * (int32_t)dt); /* PWM x 256000 */
     const int32_t imax = (int32_t)(g->i_max_pwm > 1000u ? 1000u : g->i_max_pwm) * 256000;
     m->i_acc = m->i_acc > imax ? imax : (m->i_acc < -imax ? -imax : m->i_acc);
-    int32_t pwm = km_sdiv2560((int32_t)g->kv_q8 * sp);
+    const int32_t kv = g->kv_q8 > 10000u ? 10000 : (int32_t)g->kv_q8; /* kv x 200000 stays in int32 */
+    int32_t pwm = km_sdiv2560(kv * sp);
     pwm += sp > 0 ? (int32_t)g->friction_pwm : (sp < 0 ? -(int32_t)g->friction_pwm : 0);
     pwm += km_sdiv2560((int32_t)g->kd_q8 * err);
     pwm += km_sdiv256000(m->i_acc);
