@@ -18,105 +18,17 @@
 #include <stdint.h>
 #include <cmocka.h>
 
-#include "parser_rig.h"
+#include "parser_stream.h"
 
 #define GAP 8u
 #define STREAM 200000u
 
-static uint32_t s_rng;
+static ps_stream_t s_ps;
 
-static uint32_t rnd(void) /* xorshift32 */
+/* The next number of the stream's generator, for the test's own draws. */
+static uint32_t rnd(void)
 {
-    s_rng ^= s_rng << 13;
-    s_rng ^= s_rng >> 17;
-    s_rng ^= s_rng << 5;
-    return s_rng;
-}
-
-static uint8_t s_bytes[STREAM + 512u];
-static uint32_t s_ticks[STREAM + 512u];
-static uint8_t s_overrun[STREAM + 512u]; /* 1: an overrun before this byte */
-static size_t s_len;
-
-static void put(uint8_t b)
-{
-    s_bytes[s_len++] = b;
-}
-
-static void put_frame(uint8_t hdr1, uint8_t id, size_t body_len, bool corrupt, bool truncate)
-{
-    uint8_t f[KM_FRAME_MAX];
-    uint8_t body[KM_BODY_MAX];
-    for (size_t i = 0; i < body_len; i++) {
-        /* Now and then a header inside a body: a candidate inside a frame. */
-        body[i] = (rnd() % 16u == 0u) ? (uint8_t)((i & 1u) ? 0xFFu : 0xF9u) : (uint8_t)rnd();
-    }
-    size_t n = rig_command(f, id, (uint8_t)rnd(), body, body_len);
-    f[1] = hdr1;
-    if (corrupt) {
-        f[n - 1u] = (uint8_t)(f[n - 1u] ^ (1u + rnd() % 255u));
-    }
-    if (truncate) {
-        n = 1u + rnd() % (n - 1u);
-    }
-    for (size_t i = 0; i < n; i++) {
-        put(f[i]);
-    }
-}
-
-static uint8_t any_id(void)
-{
-    const uint32_t r = rnd() % 16u;
-    return r == 0u ? 0xFDu : r == 1u ? 0xFEu : r == 2u ? (uint8_t)rnd() : (uint8_t)(r - 3u);
-}
-
-/* One stream: pieces of every kind, then ticks and overruns over it. */
-static void make_stream(void)
-{
-    s_len = 0;
-    while (s_len < STREAM) {
-        const uint32_t kind = rnd() % 10u;
-        const size_t body_len = (rnd() % 8u == 0u) ? rnd() % (KM_BODY_MAX + 1u) : rnd() % 12u;
-        switch (kind) {
-        case 0:
-        case 1:
-        case 2:
-            put_frame(0xFF, any_id(), body_len, false, false);
-            break;
-        case 3:
-            put_frame(0xF5, (uint8_t)(rnd() % 12u), body_len, false, false);
-            break;
-        case 4:
-            put_frame(0xFF, any_id(), body_len, true, false);
-            break;
-        case 5:
-            put_frame(0xF5, (uint8_t)(rnd() % 12u), body_len, true, false);
-            break;
-        case 6:
-            put_frame(rnd() % 2u ? 0xFFu : 0xF5u, any_id(), body_len, false, true);
-            break;
-        case 7: { /* a bad length or ID after a real header */
-            put(0xF9);
-            put(0xFF);
-            put(rnd() % 2u ? (uint8_t)(251u + rnd() % 2u) : 1u);
-            put((uint8_t)(rnd() % 2u ? 0u : 253u + rnd() % 3u));
-            break;
-        }
-        default: /* noise, F9 and F9 FF in it */
-            for (uint32_t i = 1u + rnd() % 6u; i > 0u; i--) {
-                const uint32_t r = rnd() % 8u;
-                put(r == 0u ? 0xF9u : r == 1u ? 0xFFu : (uint8_t)rnd());
-            }
-            break;
-        }
-    }
-    uint32_t t = rnd(); /* anywhere, so the 32-bit wrap is crossed at times */
-    for (size_t i = 0; i < s_len; i++) {
-        const uint32_t r = rnd() % 64u;
-        t += r == 0u ? GAP + 1u + rnd() % 20u : r == 1u ? GAP : r < 8u ? 0u : 1u;
-        s_ticks[i] = t;
-        s_overrun[i] = rnd() % 997u == 0u;
-    }
+    return ps_rnd(&s_ps);
 }
 
 static void check_same_frame(const km_frame_t *copy, const km_frame_view_t *view)
@@ -158,35 +70,34 @@ static void run_stream(uint32_t seed, uint32_t max_run)
     static km_parser_t by_byte;
     static km_parser_t by_run;
     static km_parser_out_t out;
-    s_rng = seed;
-    make_stream();
+    ps_make(&s_ps, seed, STREAM, GAP, false);
     km_parser_init(&by_byte, GAP);
     km_parser_init(&by_run, GAP);
     unsigned frames = 0;
     size_t i = 0;
-    while (i < s_len) {
-        if (s_overrun[i]) {
+    while (i < s_ps.len) {
+        if (s_ps.lost[i]) {
             km_parser_overrun(&by_byte);
             km_parser_overrun(&by_run);
         }
         /* A run stops before the next overrun, as the RX queue's does. */
         uint32_t n = 1u + rnd() % max_run;
-        if (n > s_len - i) {
-            n = (uint32_t)(s_len - i);
+        if (n > s_ps.len - i) {
+            n = (uint32_t)(s_ps.len - i);
         }
         for (uint32_t k = 1; k < n; k++) {
-            if (s_overrun[i + k]) {
+            if (s_ps.lost[i + k]) {
                 n = k;
                 break;
             }
         }
         uint32_t used = 0;
-        const unsigned ev = km_parser_feed_bytes(&by_run, &s_bytes[i], &s_ticks[i], n, &used, &out);
+        const unsigned ev = km_parser_feed_bytes(&by_run, &s_ps.bytes[i], &s_ps.ticks[i], n, &used, &out);
         assert_true(used >= 1u && used <= n);
         unsigned ev_bytes = 0;
         km_frame_t copy;
         for (uint32_t k = 0; k < used; k++) {
-            const unsigned e = km_parser_feed(&by_byte, s_bytes[i + k], s_ticks[i + k], &copy);
+            const unsigned e = km_parser_feed(&by_byte, s_ps.bytes[i + k], s_ps.ticks[i + k], &copy);
             ev_bytes |= e;
             /* A frame ends the run, and only the last byte's feed hands one. */
             assert_true(!(e & KM_PARSE_FRAME) || k + 1u == used);
@@ -204,7 +115,7 @@ static void run_stream(uint32_t seed, uint32_t max_run)
                              km_parser_take_checksum_error(&by_run, id));
         }
         if (rnd() % 8u == 0u) { /* a poll between runs, at or after the last byte */
-            const uint32_t now = s_ticks[i - 1u] + rnd() % (2u * GAP);
+            const uint32_t now = s_ps.ticks[i - 1u] + rnd() % (2u * GAP);
             for (;;) {
                 const unsigned a = km_parser_poll(&by_byte, now, &copy);
                 const unsigned b = km_parser_poll_view(&by_run, now, &out);
@@ -223,7 +134,7 @@ static void run_stream(uint32_t seed, uint32_t max_run)
         check_same_state(&by_byte, &by_run);
     }
     /* The streams are not all noise: many frames came out both ways. */
-    assert_true(frames > s_len / 100u);
+    assert_true(frames > s_ps.len / 100u);
     assert_true(by_run.stats.checksum_errors > 0u && by_run.stats.timeouts > 0u &&
                 by_run.stats.responses_skipped > 0u && by_run.stats.framing_errors > 0u);
 }

@@ -22,96 +22,17 @@
 #include <stdint.h>
 #include <cmocka.h>
 
-#include "parser_rig.h"
+#include "parser_stream.h"
 
 #define GAP 8u
 #define STREAM 100000u
 
-static uint32_t s_rng;
+static ps_stream_t s_ps;
 
-static uint32_t rnd(void) /* xorshift32 */
+/* The next number of the stream's generator, for the test's own draws. */
+static uint32_t rnd(void)
 {
-    s_rng ^= s_rng << 13;
-    s_rng ^= s_rng >> 17;
-    s_rng ^= s_rng << 5;
-    return s_rng;
-}
-
-static uint8_t s_bytes[STREAM + 512u];
-static uint32_t s_ticks[STREAM + 512u];
-static uint8_t s_lost[STREAM + 512u];
-static uint8_t s_last[STREAM + 512u]; /* 1: the last byte of a whole frame */
-static size_t s_len;
-
-static void put(uint8_t b)
-{
-    s_bytes[s_len] = b;
-    s_last[s_len] = 0u;
-    s_len++;
-}
-
-/* A frame (command FF or response F5) with a random body; broken on request. */
-static void put_frame(uint8_t hdr1, uint8_t id, size_t body_len, bool corrupt, bool truncate)
-{
-    uint8_t f[KM_FRAME_MAX];
-    uint8_t body[KM_BODY_MAX];
-    for (size_t i = 0; i < body_len; i++) {
-        body[i] = (rnd() % 16u == 0u) ? (uint8_t)((i & 1u) ? 0xFFu : 0xF9u) : (uint8_t)rnd();
-    }
-    size_t n = rig_command(f, id, (uint8_t)rnd(), body, body_len);
-    f[1] = hdr1;
-    if (corrupt) {
-        f[n - 1u] = (uint8_t)(f[n - 1u] ^ (1u + rnd() % 255u));
-    }
-    if (truncate) {
-        n = 1u + rnd() % (n - 1u);
-    }
-    for (size_t i = 0; i < n; i++) {
-        put(f[i]);
-    }
-    s_last[s_len - 1u] = (uint8_t)(!corrupt && !truncate);
-}
-
-static uint8_t any_id(void)
-{
-    const uint32_t r = rnd() % 16u;
-    return r == 0u ? 0xFDu : r == 1u ? 0xFEu : r == 2u ? (uint8_t)rnd() : (uint8_t)(r - 3u);
-}
-
-/* A stream; `clean`: whole frames only, back to back, no gap, no loss. */
-static void make_stream(bool clean)
-{
-    s_len = 0;
-    while (s_len < STREAM) {
-        const uint32_t kind = clean ? rnd() % 4u : rnd() % 10u;
-        const size_t body_len = (rnd() % 8u == 0u) ? rnd() % (KM_BODY_MAX + 1u) : rnd() % 12u;
-        if (kind <= 2u) {
-            put_frame(0xFF, clean ? (uint8_t)(rnd() % 251u) : any_id(), body_len, false, false);
-        } else if (kind == 3u) {
-            put_frame(0xF5, (uint8_t)(rnd() % 12u), body_len, false, false);
-        } else if (kind <= 5u) {
-            put_frame(kind == 4u ? 0xFFu : 0xF5u, any_id(), body_len, true, false);
-        } else if (kind == 6u) {
-            put_frame(rnd() % 2u ? 0xFFu : 0xF5u, any_id(), body_len, false, true);
-        } else if (kind == 7u) { /* a bad length or ID after a real header */
-            put(0xF9);
-            put(rnd() % 2u ? 0xFFu : 0xF5u);
-            put(rnd() % 2u ? (uint8_t)(251u + rnd() % 5u) : 1u);
-            put((uint8_t)(rnd() % 2u ? rnd() % 2u : 253u + rnd() % 3u));
-        } else { /* noise, F9 and F9 FF in it */
-            for (uint32_t i = 1u + rnd() % 6u; i > 0u; i--) {
-                const uint32_t r = rnd() % 8u;
-                put(r == 0u ? 0xF9u : r == 1u ? 0xFFu : (uint8_t)rnd());
-            }
-        }
-    }
-    uint32_t t = rnd(); /* anywhere, so the 32-bit wrap is crossed at times */
-    for (size_t i = 0; i < s_len; i++) {
-        const uint32_t r = rnd() % 64u;
-        t += clean ? 1u : r == 0u ? GAP + 1u + rnd() % 20u : r == 1u ? GAP : r < 8u ? 0u : 1u;
-        s_ticks[i] = t;
-        s_lost[i] = !clean && rnd() % 997u == 0u;
-    }
+    return ps_rnd(&s_ps);
 }
 
 /* Runs one stream through both; returns the tracker's wake-ups. */
@@ -120,26 +41,25 @@ static size_t run_stream(uint32_t seed, bool clean, size_t *frames_out)
     static km_parser_t ref;
     static km_parser_t fw;
     km_rx_track_t track = {0};
-    s_rng = seed;
-    make_stream(clean);
+    ps_make(&s_ps, seed, STREAM, GAP, clean);
     km_parser_init(&ref, GAP);
     km_parser_init(&fw, GAP);
     track.gap_ticks = GAP;
-    track.last_tick = s_ticks[0];
+    track.last_tick = s_ps.ticks[0];
     size_t queued = 0; /* bytes received, not yet fed to fw */
     size_t wakes = 0;
     size_t frames_ref = 0;
     size_t frames_fw = 0;
     km_frame_t f_ref;
     km_frame_t f_fw;
-    for (size_t i = 0; i < s_len; i++) {
-        if (s_lost[i]) {
+    for (size_t i = 0; i < s_ps.len; i++) {
+        if (s_ps.lost[i]) {
             km_parser_overrun(&ref);
         }
-        const unsigned ev_ref = km_parser_feed(&ref, s_bytes[i], s_ticks[i], &f_ref);
-        const bool wake = km_rx_track_byte(&track, s_bytes[i], s_ticks[i], s_lost[i] != 0u);
+        const unsigned ev_ref = km_parser_feed(&ref, s_ps.bytes[i], s_ps.ticks[i], &f_ref);
+        const bool wake = km_rx_track_byte(&track, s_ps.bytes[i], s_ps.ticks[i], s_ps.lost[i] != 0u);
         wakes += wake;
-        if (clean && s_last[i]) {
+        if (clean && s_ps.last[i]) {
             assert_true(wake);
         } else if (clean) { /* no pass for a byte inside a frame but every 64 of a long one */
             assert_true(!wake || (track.state == KM_TRACK_COUNT && (track.left & 63u) == 0u));
@@ -150,10 +70,10 @@ static size_t run_stream(uint32_t seed, bool clean, size_t *frames_out)
         }
         if (wake || rnd() % 50u == 0u) { /* a pass of the main loop */
             for (size_t k = queued; k <= i; k++) {
-                if (s_lost[k]) {
+                if (s_ps.lost[k]) {
                     km_parser_overrun(&fw);
                 }
-                const unsigned ev = km_parser_feed(&fw, s_bytes[k], s_ticks[k], &f_fw);
+                const unsigned ev = km_parser_feed(&fw, s_ps.bytes[k], s_ps.ticks[k], &f_fw);
                 if (ev & KM_PARSE_FRAME) {
                     frames_fw++;
                     assert_int_equal(k, i); /* only on the byte the reference did */
@@ -181,7 +101,7 @@ static void test_tracker_never_late_on_rough_streams(void **state)
         size_t frames = 0;
         const size_t wakes = run_stream(0x9E3779B9u * seed, false, &frames);
         assert_true(frames > 1000u);
-        assert_true(wakes < s_len / 2u); /* a rough stream still skips most bytes */
+        assert_true(wakes < s_ps.len / 2u); /* a rough stream still skips most bytes */
     }
 }
 
