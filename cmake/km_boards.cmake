@@ -20,6 +20,7 @@
 #                             board that names one (tests/bus.cmake, tests/conformance.cmake)
 #   KM_BOARD_BUS_OPTIONS      the servo-bus options those tests give it
 #   KM_BOARD_BUS_LOAD         the transactions of the conformance load run on it
+#   KM_BOARD_BUS_IMAGE        the servo image servo-bus runs, relative to the board's build tree
 # Its CMakeLists.txt then builds the board (km_board and its images).
 #
 # Included by CMakeLists.txt and tests/; run as a script it prints one line
@@ -28,12 +29,15 @@
 #   cmake -P cmake/km_boards.cmake
 # The build dir is the binaryDir of the CMakePresets.json configure preset
 # whose KM_BOARD names the board, else build/<name>.
+# With -DKM_BOARDS_QUERY=bus it prints one line per simulated board instead,
+# "<bus backend> <name> <build dir> <preset or -> <image>", for sim/bus/servo-bus:
+#   cmake -DKM_BOARDS_QUERY=bus -P cmake/km_boards.cmake
 include_guard(GLOBAL)
 get_filename_component(KM_ROOT_DIR ${CMAKE_CURRENT_LIST_DIR}/.. ABSOLUTE)
 
 set(KM_BOARD_VARIABLES KM_BOARD_DESCRIPTION KM_BOARD_TOOLCHAIN KM_BOARD_BUILD_TYPE
     KM_BOARD_COMPILE_OPTIONS KM_BOARD_LINK_OPTIONS KM_BOARD_HOST_SOURCES
-    KM_BOARD_BUS_BACKEND KM_BOARD_BUS_OPTIONS KM_BOARD_BUS_LOAD)
+    KM_BOARD_BUS_BACKEND KM_BOARD_BUS_OPTIONS KM_BOARD_BUS_LOAD KM_BOARD_BUS_IMAGE)
 
 # The discovered boards' names, sorted, into `out`.
 function(km_boards_list out)
@@ -91,6 +95,13 @@ if(CMAKE_SCRIPT_MODE_FILE STREQUAL CMAKE_CURRENT_LIST_FILE)
   foreach(name ${names})
     km_board_read(${name})
     km_board_build_dir(${name} dir preset)
+    if(KM_BOARDS_QUERY STREQUAL "bus")
+      if(KM_BOARD_BUS_BACKEND)
+        execute_process(COMMAND ${CMAKE_COMMAND} -E echo
+                        "${KM_BOARD_BUS_BACKEND} ${name} ${dir} ${preset} ${KM_BOARD_BUS_IMAGE}")
+      endif()
+      continue()
+    endif()
     set(toolchain "-")
     if(KM_BOARD_TOOLCHAIN)
       set(toolchain ${KM_BOARD_TOOLCHAIN})

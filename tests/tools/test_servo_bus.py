@@ -3,8 +3,10 @@
 host-sim program, speaking its command-line contract): provisioning of IDs,
 the shared-bus relay, missing images, child death and stopping, and the
 per-servo options (--gap-floor-us, --build-dir). No QEMU."""
+import contextlib
 import importlib.machinery
 import importlib.util
+import json
 import os
 import signal
 import socket
@@ -32,6 +34,21 @@ def pid_alive(pid):
             return f.read().split(")")[-1].split()[0] != "Z"
     except FileNotFoundError:
         return False
+
+
+@contextlib.contextmanager
+def build_env(**values):
+    """The environment without any KM_BUILD_DIR_* but these, for the block."""
+    saved = {k: v for k, v in os.environ.items() if k.startswith("KM_BUILD_DIR_")}
+    for k in saved:
+        del os.environ[k]
+    os.environ.update(values)
+    try:
+        yield
+    finally:
+        for k in values:
+            os.environ.pop(k, None)
+        os.environ.update(saved)
 
 
 def load_launcher_module():
@@ -294,21 +311,37 @@ class GapFloorOption(unittest.TestCase):
         sb = load_launcher_module()
         self.assertEqual(sb.default_image("host-sim", "build/x"),
                          os.path.join(REPO, "build/x/boards/host-sim/km-servo-host-sim"))
-        old = os.environ.get("KM_BUILD_QEMU")
-        os.environ["KM_BUILD_QEMU"] = "build/q2"
-        try:
+        with build_env(KM_BUILD_DIR_qemu_microbit="build/q2"):
             self.assertEqual(sb.default_image("qemu"), os.path.join(
                 REPO, "build/q2/boards/qemu-microbit/km-servo-qemu-microbit.elf"))
-        finally:
-            if old is None:
-                del os.environ["KM_BUILD_QEMU"]
-            else:
-                os.environ["KM_BUILD_QEMU"] = old
         r = subprocess.run([sys.executable, LAUNCHER, "--ids", "1", "--port", "0",
                             "--backend", "host-sim", "--build-dir", "/nonexistent-build"],
                            capture_output=True, text=True, timeout=10)
         self.assertEqual(r.returncode, 2)
         self.assertIn("/nonexistent-build/boards/host-sim/km-servo-host-sim", r.stderr)
+
+    def test_build_found_by_board_discovery(self):
+        """Issue 19: the image is the one of the board whose board.cmake names
+        the backend, in the binaryDir of the preset that builds it; a missing
+        build says the commands that make it; a backend no board names is refused."""
+        import simbus
+        with open(os.path.join(REPO, "CMakePresets.json")) as f:
+            presets = {p["name"]: p for p in json.load(f)["configurePresets"]}
+        with build_env():
+            for backend, preset, image in (("qemu", "qemu", "boards/qemu-microbit/km-servo-qemu-microbit.elf"),
+                                           ("host-sim", "host-sim", "boards/host-sim/km-servo-host-sim")):
+                tree = presets[preset]["binaryDir"].replace("${sourceDir}", REPO)
+                self.assertEqual(simbus.default_image(backend), (
+                    os.path.join(tree, image), "cmake --preset %s && cmake --build --preset %s" % (preset, preset)))
+        with build_env(KM_BUILD_DIR_host_sim="/nonexistent-build"):
+            r = subprocess.run([sys.executable, LAUNCHER, "--ids", "1", "--port", "0", "--backend", "host-sim"],
+                               capture_output=True, text=True, timeout=10)
+        self.assertEqual((r.returncode, r.stderr), (2, (
+            "servo-bus: no host-sim image at /nonexistent-build/boards/host-sim/km-servo-host-sim; build it "
+            "first: cmake -S %s -B /nonexistent-build -DKM_BOARD=host-sim && cmake --build /nonexistent-build\n"
+            % REPO)))
+        with self.assertRaisesRegex(simbus.BuildMissing, "no board names the bus backend 'nothing'"):
+            simbus.default_image("nothing")
 
     def test_every_servo_gets_the_floor(self):
         with tempfile.TemporaryDirectory() as tmp:
