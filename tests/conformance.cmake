@@ -3,7 +3,7 @@
 # the emulated buses: three servos on host-sim and on QEMU, each started on
 # a free port by run_on_bus.py, which always stops the bus afterwards.
 #
-# Every one of the 182 checks runs, once: run_on_bus.py names them to the
+# Every one of the 183 checks runs, once: run_on_bus.py names them to the
 # suite one by one and fails a check with no result ("not run"); its last
 # line is "total: N passed, M failed, K skipped", each skip listed above it
 # with its reason. Where the host allows SCHED_FIFO (root on CI), the bus

@@ -22,7 +22,7 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "tests", "bus"))
-import bus_check  # noqa: E402  (its Bus, reads and writes; it puts kmbus on the path)
+import bus_check  # noqa: E402  (its Bus, reads and writes; tests/conformance on PYTHONPATH for its master)
 from kmx import frame as kmbus  # noqa: E402  (kmx on PYTHONPATH)
 
 SPEED_DPS = 90
@@ -58,7 +58,7 @@ def stream(bus, period_ms, rng):
             dropped += 1
             continue
         target = FROM_DDEG + (TO_DDEG - FROM_DDEG) * k // n
-        bus.sock.sendall(kmbus.write(1, 0x68, struct.pack("<h", target)))
+        bus.send(kmbus.write(1, 0x68, struct.pack("<h", target)))
     return samples, n + 1, dropped, (n * period_ms) / 1000.0
 
 
@@ -79,7 +79,7 @@ def main():
     ap.add_argument("--build-dir", default=os.path.join(ROOT, "build", "host-sim"))
     a = ap.parse_args()
     opts = argparse.Namespace(gap_floor_us=None, build_dir=a.build_dir, product=None, scenario=None,
-                              bus_timing_args=[])
+                              paced=False)
     bus = bus_check.Bus("host-sim", [1], opts)
     try:
         if not bus_check.wait_ping(bus, 1):

@@ -74,6 +74,17 @@ def bad_truncated_resync(ctx):
         ctx.clean(i)
 
 
+@check("bad.paused-frame", "§7 Decision (inter-byte gap)",
+       "a ping whose bytes stop after 3 for longer than the gap, then go on: dropped; the next ping is answered")
+def bad_paused_frame(ctx):
+    i = ctx.ids[0]
+    f = fr.ping(i)
+    ctx.send(f[:3])
+    _pause(ctx)
+    ctx.silent(f[3:], "the rest of a ping after a pause: no answer")
+    _still_answers(ctx, i)
+
+
 @check("bad.length", "§2 (2 <= length <= 252)",
        "frames with length 0, 1, 253, 254, 255: no answer; the next frame is answered")
 def bad_length(ctx):

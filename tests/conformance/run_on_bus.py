@@ -6,14 +6,14 @@
                   [--slot-timing auto|realtime|plain] [--slot-floor-us N]
                   [--slow-baud N --slow NAME...] [--] SUITE-ARGS...
 
-Starts sim/bus/servo-bus on a free port (--port 0: it prints the port in its
-"ready" line), runs conformance.py --bus rfc2217:127.0.0.1:PORT@BAUD (the
-hub as a serial port whose baud the suite sets and changes) with the same
+Starts sim/bus/servo-bus on a free port (sim/bus/simbus.py), runs
+conformance.py --bus rfc2217:127.0.0.1:PORT@BAUD (the hub as a serial port
+whose baud the suite sets and changes) with the same
 --ids and SUITE-ARGS, and always stops the bus (SIGTERM, then SIGKILL),
 also when the suite fails, times out or this wrapper is interrupted.
 
 Every check SUITE-ARGS name (their --only/--exclude, as conformance.py
---list gives them; all 182 without) runs, each exactly once: the passes
+--list gives them; all 183 without) runs, each exactly once: the passes
 get the names one by one (--only =NAME). The closing lines count the
 results against those names: a named check with no result line, or with
 two, is a FAIL ("not run: ..."), as is a result for a check not named; each
@@ -57,8 +57,8 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(HERE))
 SUITE = os.path.join(HERE, "conformance.py")
+import simbus  # noqa: E402  (sim/bus on PYTHONPATH)
 import wire as W  # noqa: E402
 import conformance as S  # noqa: E402  (its check selection: S.matches)
 
@@ -213,8 +213,7 @@ def main():
     ap.add_argument("--image", help="passed to servo-bus: the servo image (default: the backend's)")
     ap.add_argument("suite", nargs=argparse.REMAINDER)
     a = ap.parse_args()
-    argv = [sys.executable, os.path.join(ROOT, "sim", "bus", "servo-bus"), "--ids", a.ids, "--port", "0",
-            "--backend", a.backend, "--timeout", "30"]
+    argv = ["--ids", a.ids, "--backend", a.backend, "--timeout", "30"]
     realtime = a.slot_timing == "realtime" or (a.slot_timing == "auto" and realtime_allowed())
     if realtime:
         # Below the hub (20) and the servos (10); the suite inherits it.
@@ -233,33 +232,20 @@ def main():
         print("# slot floor: every super-ID and 0x82 answer slot at least %d us (servo-bus "
               "--slot-floor-us)" % a.slot_floor_us, flush=True)
     t0 = time.monotonic()
-    # Same process group as this wrapper: a CTest timeout that kills the
-    # group takes the bus (and its servos) with it.
-    bus = subprocess.Popen(argv, stdout=subprocess.PIPE, text=True)
 
     def stop(*_):
         raise KeyboardInterrupt
     signal.signal(signal.SIGTERM, stop)
     try:
-        line = bus.stdout.readline().strip()
-        if not line.startswith("ready "):
-            print("servo-bus did not get ready: %r" % line, flush=True)
-            return 1
-        port = int(line.rsplit(":", 1)[1])
-        print("# bus: %s, %s servos %s, up in %.1f s" % (line, a.backend, a.ids, time.monotonic() - t0),
-              flush=True)
-        return run_suite(port, a, realtime, t0)
+        with simbus.ServoBusProcess(argv) as bus:
+            print("# bus: %s, %s servos %s, up in %.1f s" % (bus.ready_line, a.backend, a.ids,
+                                                             time.monotonic() - t0), flush=True)
+            return run_suite(bus.port, a, realtime, t0)
+    except simbus.NotReady as e:
+        print(str(e), flush=True)
+        return 1
     except KeyboardInterrupt:
         return 1
-    finally:
-        if bus.poll() is None:
-            bus.terminate()
-            try:
-                bus.wait(10)
-            except subprocess.TimeoutExpired:
-                bus.kill()
-                bus.wait()
-
 
 if __name__ == "__main__":
     sys.exit(main())
