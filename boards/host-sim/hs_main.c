@@ -2,39 +2,9 @@
 /* host-sim: the firmware as a native Linux program (software in the loop).
  *   km-servo-host-sim --listen 127.0.0.1:7001 --flash servo1.flash
  *   km-servo-host-sim --pty --flash servo1.flash [--gap-floor-us 0] [--slot-floor-us N]
- *                     [--baud N] [--report-baud]
- * The bus is a TCP socket (one client at a time) or a pseudo-terminal, paced
- * at the servo's baud rate (hs_uart.c); the user-data flash is a file with
- * NOR rules; sensors read the simulated plant.
- *
- * --gap-floor-us N: the least silence inside a frame that drops it, in µs
- * (handed to the app with km_app_set_bus_floors(); the app uses the larger
- * of this and the parser's rule of max(10 byte times, 1 ms)). Default
- * 20000. The UART (hs_uart.c) paces bytes at line rate, stamps each with
- * its wire time and holds the emulated clock at a byte that is due but not
- * yet handed over (hs_time.c), so a frame that reached the socket whole is
- * never cut by the gap rule, however late the host runs this process. What
- * it cannot undo is a pause before the bytes reach it: a frame split over
- * two TCP segments (or pty reads) with a host stall between them arrives
- * with that stall inside. A floor well above scheduler stalls covers that;
- * 0 gives the real rule, which the bus tests use. A restart re-executes
- * with the same arguments, so the option survives it.
- *
- * --slot-floor-us N: the least super-ID and 0x82 answer slot, in µs
- * (km_app_set_bus_floors(), docs/protocol-decisions.md "Answer slots on
- * emulated buses"); default 0, the slot rule alone. Survives a restart.
- *
- * --product pot|encoder: the product emulated (boards/sim-common/
- * km_sim_product.c): "KM-SIM-P135" potentiometer (default) or
- * "KM-SIM-ENCODER" multi-turn, on a plant without end stops. It survives a
- * restart (same arguments). The plant is physics, not MCU state: a restart
- * (0x02, a new process image) hands it over in the environment
- * (hs_plant_keep.c), so the shaft stays where it was. The encoder product
- * reads a single-turn absolute encoder and counts turns in RAM
- * (control/km_turn_counter.h), so after a restart its 0x46 is the angle
- * within one turn, [0, 360.0) deg, as on an encoder servo without a
- * battery-backed turn counter. A process started by hand is a power-on:
- * the shaft at rest at 0. */
+ *                     [--baud N] [--report-baud] [--product pot|encoder] [--plant realistic|ideal]
+ *                     [--scenario FILE]
+ * The options and what survives a restart: docs/architecture.md "host-sim's options". */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>

@@ -1,18 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* host-sim: the emulated clock at 1 MHz, the one-shot timer, and the
- * servicing of every simulated interrupt that km_hal_idle() does.
- *
- * The clock is CLOCK_MONOTONIC, except that it never runs past an event
- * that is due but not yet serviced: the answer timer, or a received byte's
- * wire time (hs_uart.c). A microcontroller's interrupts run the moment they
- * are due; this single-threaded program services them only when the host
- * runs it, so after a stall several are overdue at once. Holding the clock
- * at the earliest one and servicing them in time order (a few bytes per
- * idle, so the app parses between) makes the app see what a real MCU
- * would: no silence inside a frame that was whole on the wire (the parser
- * compares the clock with the last byte's stamp), and each answer timer
- * fired before the next frame ends. Without a stall the hold is never in
- * effect and the clock is the host's. */
+/* host-sim: the emulated clock at 1 MHz, held at the earliest unserviced event,
+ * the one-shot timer, and km_hal_idle()'s servicing (docs/architecture.md
+ * "host-sim's clock"). */
 #define _POSIX_C_SOURCE 200809L
 #include <stdbool.h>
 #include <stddef.h>
@@ -71,8 +60,7 @@ void km_hal_timer_at(uint32_t at, km_timer_handler_t handler, void *ctx)
 {
     const uint64_t now_ns = hs_time_now_ns();
     const uint32_t now = (uint32_t)(now_ns / 1000u);
-    /* Unsigned tick difference as the contract has it; a due time in the
-     * past fires at once (and is kept: see hs_timer_firing_due_ns()). */
+    /* Unsigned tick difference; a due time in the past fires at once. */
     const int32_t ahead = (int32_t)(at - now);
     s_at_ns = (now_ns / 1000u) * 1000u + (uint64_t)((int64_t)ahead * 1000);
     s_handler = handler;
@@ -84,25 +72,20 @@ static void prv_timer_fire_due(uint64_t now_ns);
 
 void km_hal_timer_cancel(void)
 {
-    /* On an MCU a shot whose time has come has run before the main loop
-     * gets to cancel it; here timers run only when the program services
-     * them, so a host stall could let the cancel swallow an answer that
-     * was due. Run a due shot first, as the hardware would have. */
+    /* A due shot runs before the cancel, as on an MCU. */
     prv_timer_fire_due(hs_time_now_ns());
     s_armed = false;
 }
 
 int64_t hs_timer_due_in_us(void)
 {
-    /* Wake-ups are in host time: the sleep must end when the host's clock
-     * reaches the event. */
+    /* Wake-ups are in host time. */
     const uint64_t real = hs_time_real_ns();
     int64_t due = -1;
     if (s_armed) {
         due = s_at_ns > real ? (int64_t)((s_at_ns - real + 999u) / 1000u) : 0;
     }
-    /* A byte or TX done is an interrupt too: sleeping past it would deliver
-     * it late. */
+    /* A byte or TX done is an interrupt too. */
     const int64_t uart = hs_uart_due_in_us(real);
     if (uart >= 0 && (due < 0 || uart < due)) {
         due = uart;
@@ -133,9 +116,7 @@ void hs_timer_fire_due_now(void)
 void hs_timer_service(void)
 {
     hs_uart_rx_idle_begin(); /* before the timer may put an answer on the wire */
-    /* In time order: the timer before any byte due after it. At most
-     * HS_RX_BATCH bytes, so the app parses (and arms the answer to) one
-     * frame before the next frame's end reaches it. */
+    /* In time order; at most HS_RX_BATCH bytes, one frame end per idle. */
     for (unsigned n = 0;; n++) {
         prv_timer_fire_due(hs_time_now_ns());
         if (n == HS_RX_BATCH || !hs_uart_rx_deliver_one()) {

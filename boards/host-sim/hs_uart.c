@@ -1,44 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* host-sim: the servo bus over TCP (one client at a time; a new client may
- * connect after the old one leaves) or over a pseudo-terminal, behaving like
- * a UART at the servo's baud rate (10 bits per byte, 8N1):
- *
- * RX: a socket delivers a burst of bytes at once, far faster than a wire and
- * far more than the application's 128-byte RX queue holds between two main
- * loop passes. So bytes read from the socket wait in a host-side buffer,
- * each with the time it would have left the wire (the first at the time it
- * was read, every next one a byte time later), and are handed to the RX
- * handler, stamped with that time, when the time has come, from
- * km_hal_idle() (the only place a single-threaded program can take its
- * "interrupts"; it sleeps no longer than the next byte is due), at most
- * HS_RX_BATCH per idle and in time order with the answer timer; the
- * emulated clock waits for an overdue byte (hs_time.c). When the host
- * buffer is full the socket is not read, and TCP flow control holds the
- * sender, so nothing is dropped.
- *
- * The app's RX queue: km_app calls km_hal_idle() with the queue empty,
- * except while RX is blocked behind an answer still on the wire (or a
- * restart, which discards what follows anyway). So an idle entered with TX
- * idle starts a fresh budget of KM_RX_QUEUE_SIZE bytes, and no more are
- * handed over until the next such idle: a host stall that makes hundreds
- * of bytes due at once cannot overrun the queue. While an answer is on the
- * wire the budget is what is left; the wire carries at most a byte per
- * byte time meanwhile, as a real servo would receive.
- *
- * TX: an answer is written to the socket whole, when the app starts it, but
- * km_hal_uart_tx_busy() stays true until its last stop bit would have left
- * the wire (counted from when the answer was due), so the app paces answers
- * as a half-duplex servo must. Like a real half-duplex transceiver, the
- * servo does not hear its own TX.
- *
- * Baud: the UART runs at the servo's own baud (register 0x10, at init). With
- * --baud N the wire's other end (the master) runs at N: bytes read from the
- * socket are what this UART decodes from bytes sent at N, and answers reach
- * the master as what a UART at N decodes from them (hs_wire.c), so a servo
- * at another baud hears garbage and stays silent, as on a real wire. Without
- * --baud the master follows the servo. --report-baud prints "baud N" on
- * stdout at every UART start, for sim/bus/servo-bus, which models the wire
- * itself (docs/protocol-decisions.md "Baud on the emulated bus"). */
+/* host-sim: the servo bus over TCP (one client at a time) or a pseudo-terminal,
+ * as a UART at the servo's baud (8N1): RX bytes stamped with their wire time,
+ * TX busy until the last stop bit (docs/architecture.md "host-sim's UART"). */
 #define _GNU_SOURCE /* posix_openpt, ptsname */
 #include <errno.h>
 #include <fcntl.h>
@@ -58,8 +21,7 @@
 #include "km_hal_uart.h"
 #include "km_rx_queue.h" /* KM_RX_QUEUE_SIZE: what the app can take between idles */
 
-/* Host-side RX buffer: a power of two, one frame-sized burst many times over
- * (a master's whole script may arrive in one TCP segment). */
+/* Host-side RX buffer, a power of two. */
 #define HS_RX_BUF 4096u
 #define HS_BITS_PER_BYTE 10u /* start + 8 data + stop */
 
@@ -97,9 +59,7 @@ static uint32_t prv_wire_baud(void)
     return s_wire_baud != 0u ? s_wire_baud : s_uart_baud;
 }
 
-/* A restart re-executes the program (hs_system.c); the bus must stay
- * connected across it, as a wire stays attached to a rebooting servo, so the
- * socket descriptors are handed to the new image through the environment. */
+/* A descriptor handed over a restart's exec in the environment; -1 if none. */
 static int prv_env_fd(const char *name)
 {
     const char *v = getenv(name);
@@ -213,15 +173,12 @@ void hs_uart_on_readable(void)
         }
         return;
     }
-    /* What this UART decodes from the master's bytes; more than `room` only
-     * when a slow master's bytes decode into several each: the rest is lost
-     * as an overrun would lose it. */
+    /* What this UART decodes from the master's bytes; past `room`: an overrun. */
     size_t n = hs_wire_garble(wire, (size_t)got, prv_wire_baud(), s_uart_baud, buf, sizeof buf);
     if (n > room) {
         n = room;
     }
-    /* The first byte reaches the end of the wire now, unless earlier bytes
-     * still occupy it; each next one a byte time later. */
+    /* Each byte due a byte time after the one before (or now, wire free). */
     const uint64_t now = hs_time_real_ns();
     uint64_t due = s_wire_free_ns > now ? s_wire_free_ns : now;
     for (size_t i = 0; i < n; i++) {
@@ -234,14 +191,10 @@ void hs_uart_on_readable(void)
     s_wire_free_ns = due;
 }
 
-/* The TX-done "interrupt". The busy flag changes only here, so the app and
- * hs_uart_rx_idle_begin() see the same TX state: an idle entered after the
- * app saw TX busy (RX blocked behind the answer) must not count the queue
- * as drained just because the answer finished in between. */
+/* The TX-done "interrupt": the only place the busy flag changes. */
 static void prv_tx_done_if_due(void)
 {
-    /* By the host's clock: the emulated one may be held at a byte nobody
-     * delivers while the app spins on tx_busy(). */
+    /* By the host's clock (the emulated one may be held). */
     if (s_tx_busy && hs_time_real_ns() >= s_tx_end_ns) {
         s_tx_busy = false;
     }
@@ -250,7 +203,7 @@ static void prv_tx_done_if_due(void)
 void hs_uart_rx_idle_begin(void)
 {
     if (!s_tx_busy) {
-        s_rx_budget = KM_RX_QUEUE_SIZE; /* the app drained its queue: see the top */
+        s_rx_budget = KM_RX_QUEUE_SIZE; /* the app drained its queue */
     }
     prv_tx_done_if_due();
 }
@@ -271,16 +224,14 @@ bool hs_uart_rx_deliver_one(void)
     }
     s_rx_tail++;
     s_rx_budget--;
-    /* Stamped with its wire time, not now: a late hand-over (host
-     * scheduling) must not look like a gap inside the frame. */
+    /* Stamped with its wire time, not now. */
     s_rx(s_rx_ctx, s_rx_byte[slot], (uint32_t)(s_rx_due_ns[slot] / 1000u), false);
     return true;
 }
 
 uint64_t hs_uart_hold_ns(void)
 {
-    /* A byte the budget cannot take yet holds nothing: the clock must run
-     * on to the TX end that frees the app's queue. */
+    /* A byte the budget cannot take yet does not hold the clock. */
     if (!prv_rx_deliverable()) {
         return UINT64_MAX;
     }
@@ -296,8 +247,7 @@ int64_t hs_uart_due_in_us(uint64_t real_ns)
 {
     int64_t due = -1;
     if (s_tx_busy) {
-        /* TX done is an interrupt too: the app may wait for it to hand over
-         * its next answer. */
+        /* TX done is an interrupt too. */
         due = prv_us_until(s_tx_end_ns, real_ns);
     }
     /* With the budget spent, the next byte waits for an idle after TX. */
@@ -315,8 +265,7 @@ bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx)
     if (baud == 0u) {
         return false;
     }
-    /* The line rate is the servo's own baud register (0x10), as on a real
-     * servo; rounding a byte time to the nanosecond is 2 µs over 4 KiB. */
+    /* The line rate is the servo's own baud register (0x10). */
     s_byte_ns = (HS_BITS_PER_BYTE * 1000000000ull + baud / 2u) / baud;
     s_uart_baud = baud;
     if (s_report_baud) {
@@ -337,13 +286,7 @@ bool km_hal_uart_send(const uint8_t *data, uint16_t len)
     if (s_tx_busy) {
         return false; /* the contract: one send at a time */
     }
-    /* The wire is busy from the answer's start to its last stop bit,
-     * whether or not anyone listens. Started by the answer timer, the start
-     * is the timer's due time, not when the host got round to it, nor when
-     * the app, which arms an answer only with TX idle, woke to see the last
-     * one end: counting from those late wakes would push every answer of a
-     * stream later, until the frames overtake their answers. Never before
-     * the previous answer's end: one wire. */
+    /* Busy from the answer's due time (not a late wake) to its last stop bit. */
     uint64_t start = hs_timer_firing_due_ns();
     if (start == 0u) {
         start = hs_time_now_ns();
@@ -357,9 +300,7 @@ bool km_hal_uart_send(const uint8_t *data, uint16_t len)
     if (fd < 0) {
         return true; /* nobody listening: the bytes go nowhere, as on an open wire */
     }
-    /* Written whole at once, so the client sees the answer start on time and
-     * complete; the line rate is modelled by tx_busy, not by trickling. The
-     * master hears it at its own rate. */
+    /* Written whole at once; tx_busy models the line rate. */
     uint8_t heard[512u * HS_WIRE_GROWTH];
     if (len > 512u) {
         len = 512u; /* longer than any answer of the protocol */
@@ -382,8 +323,7 @@ bool km_hal_uart_send(const uint8_t *data, uint16_t len)
 
 bool km_hal_uart_tx_busy(void)
 {
-    /* An app may spin on this; a real MCU's answer timer still fires
-     * meanwhile (and the TX-done flag falls), so they happen here too. */
+    /* The answer timer and TX done fire here too: an app may spin on this. */
     hs_timer_fire_due_now();
     prv_tx_done_if_due();
     return s_tx_busy;

@@ -1,11 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* What the qemu-microbit board offers beyond the hal contracts: the store's
- * flash instance and the simulated-plant hook-up (this board has no motor).
- *
- * A plant adapter, run from the control tick, reads the last motor command
- * with km_board_motor_command(), steps the plant, and publishes the plant's
- * readings with km_board_sensors_publish(); km_hal_sensors_read() then
- * returns them. Nothing here moves by itself: no plant, no motion. */
+ * flash and the simulated plant's hook-up (docs/architecture.md "qemu-microbit's
+ * plant hook-up"). */
 #ifndef KM_BOARD_H
 #define KM_BOARD_H
 
@@ -31,15 +27,10 @@ typedef struct {
 /* The last command given through km_hal_motor.h. */
 km_board_motor_cmd_t km_board_motor_command(void);
 
-/* The product option word at 0x20000008 (README.md "Run-time options"):
- * 0 = potentiometer product, 1 = encoder product; 0 when the options are
- * unset (magic not written). boards/sim-common/main.c passes it on. */
+/* The product option word at 0x20000008: 0 pot (also when unset), 1 encoder. */
 uint32_t km_board_option_product(void);
 
-/* The bus floors at 0x20000004 and 0x2000000C (README.md "Run-time
- * options"): what this emulated bus needs beyond the real rules, handed to
- * the app by boards/sim-common/main.c (km_app_set_bus_floors). Without the
- * option words: a 20 ms gap floor and no slot floor. */
+/* The bus floors at 0x20000004 and 0x2000000C (default: 20 ms gap floor, no slot floor). */
 uint32_t km_board_option_gap_floor_us(void);
 uint32_t km_board_option_slot_floor_us(void);
 

@@ -1,14 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* QEMU: the plant scenario (boards/sim-common/km_sim_scenario.h) as a table
- * in RAM at 0x20000040 (nrf51822.ld .km_scenario), which sim/bus/servo-bus
- * --scenario FILE writes with
- *   -device loader,file=<table>,addr=0x20000040,force-raw=on
- * before the CPU starts; QEMU re-applies it at every reset, so a restart
- * keeps it. Layout, little-endian words: magic 0x4B4D5343 ("KMSC"), count
- * (<= 64), then count events of 12 bytes (t_ms, key, value). Without the
- * magic (no loader, or a real part) there is no scenario. The table is
- * copied once out of the volatile words: it is written behind the
- * compiler's back. Servo images only. */
+/* QEMU: the plant scenario (km_sim_scenario.h) as a table in RAM at 0x20000040,
+ * written by QEMU's -device loader (docs/architecture.md "qemu-microbit's scenario table"). */
 #include <stddef.h>
 
 #include "km_sim_board.h"

@@ -1,19 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* System services (km_hal_system.h) on the nRF51: clocks, reset, watchdog,
- * interrupt lock, entropy, idle; the reset cause and the HardFault handler.
- *
- * Reset cause. The nRF51 keeps it in POWER->RESETREAS (0x40000400: RESETPIN,
- * DOG, SREQ, LOCKUP, OFF, LPCOMP, DIF; no bit at all after power-on or
- * brown-out; sticky until cleared by writing 1s). QEMU 7.2 does not model
- * it: its CLOCK/POWER block is a stub that reads 1 at every address and
- * ignores writes, so RESETREAS would always say "pin". What QEMU does keep
- * is RAM across a SYSRESETREQ (README, measured by the board test). So the
- * two resets this firmware causes itself, the 0x02 restart and the fault
- * handler's, also leave a record in .noinit RAM before SYSRESETREQ, which
- * the next boot reads first; RESETREAS is believed only if writing 1s
- * actually clears it (silicon), not if it still reads the same (QEMU). In
- * QEMU therefore: SOFTWARE and FAULT are reported, everything else (launch,
- * a watchdog QEMU does not model) reads POWER_ON. */
+ * interrupt lock, entropy, idle; the reset cause (a .noinit record, then
+ * RESETREAS) and the HardFault handler (docs/architecture.md "qemu-microbit's
+ * system services"). */
 #include <stdbool.h>
 
 #include "km_cortex_m.h"
@@ -36,9 +25,7 @@
 
 #define PRV_NOTE_MAGIC 0x5E7CA05Eu
 
-/* Written just before this firmware resets the MCU itself, read and cleared
- * at the next boot. .noinit (nrf51822.ld): neither loaded nor zeroed.
- * check = ~(magic ^ cause ^ pc): power-up garbage passes with odds 2^-64. */
+/* The cause of a reset this firmware makes itself, kept in .noinit for the next boot. */
 typedef struct {
     uint32_t magic;
     uint32_t cause; /* KM_RESET_SOFTWARE or KM_RESET_FAULT */
@@ -49,8 +36,7 @@ typedef struct {
 static volatile prv_reset_note_t s_note __attribute__((section(".noinit")));
 static km_reset_cause_t s_cause;
 
-/* The previous run's fault address, kept for a debugger (`print
- * km_board_last_fault_pc`): 0 unless the last reset was a fault. */
+/* The previous run's fault address, for a debugger; 0 unless the last reset was a fault. */
 uint32_t km_board_last_fault_pc;
 
 void km_board_reset_capture(void);
@@ -64,8 +50,7 @@ static void prv_note(uint32_t cause, uint32_t pc)
     s_note.magic = PRV_NOTE_MAGIC;
 }
 
-/* From Reset_Handler (startup.c), once, after .bss is zeroed and before
- * main(): the record first (the most specific), then RESETREAS. */
+/* Reads the reset cause once at boot: the record first, then RESETREAS. */
 void km_board_reset_capture(void)
 {
     uint32_t reas = NRF_REG(NRF_CLOCK, PRV_POWER_RESETREAS);
@@ -111,22 +96,14 @@ static _Noreturn void prv_sysresetreq(void)
     }
 }
 
-/* The fault path's C part, on the fresh stack HardFault_Handler set up.
- * There is no bridge to free on this board: the "motor" is the plant's
- * input (or plant_io.c's last command) in RAM, which the reset below, taken
- * at once, puts back to coasting when .data/.bss are set up again. So:
- * record, reset. Parking instead would hang for ever in QEMU, where the
- * watchdog is not modelled. */
+/* The fault path's C part, on a fresh stack: record the fault, reset at once. */
 _Noreturn void km_board_fault_stop(uint32_t pc)
 {
     prv_note(KM_RESET_FAULT, pc);
     prv_sysresetreq();
 }
 
-/* HardFault, and every unexpected vector (startup.c's Default_Handler
- * branches here). The stacked PC is read from whichever stack EXC_RETURN
- * bit 2 names, before SP moves to the top of RAM: the old stack may be what
- * ran out, and no C may run on it. */
+/* HardFault and every unexpected vector: the stacked PC, then a fresh stack for the C part. */
 __attribute__((naked)) void HardFault_Handler(void)
 {
     __asm__ volatile("movs r0, #4                \n"
@@ -147,22 +124,14 @@ __attribute__((naked)) void HardFault_Handler(void)
 
 void km_hal_system_init(void)
 {
-    /* The UART baud and the 1 MHz tick are only as good as HFCLK: start the
-     * 16 MHz crystal (QEMU's CLOCK stub reads 1 for every event, so this
-     * returns at once there). */
+    /* Start the 16 MHz crystal (HFCLK). */
     NRF_REG(NRF_CLOCK, CLOCK_EVENTS_HFCLKSTARTED) = 0u;
     NRF_REG(NRF_CLOCK, CLOCK_TASKS_HFCLKSTART) = 1u;
     while (NRF_REG(NRF_CLOCK, CLOCK_EVENTS_HFCLKSTARTED) == 0u) {
     }
-    /* SysTick runs at 1 kHz: QEMU only re-polls the UART
-     * socket promptly while a guest timer is active (QEMU 7.2, seen here). TIMER0's
-     * pending compare already keeps one active (echo round trip measured
-     * 1.2 ms median without SysTick, 0.95 ms with), so this is a cheap
-     * belt-and-braces. A real nRF51 has no SysTick: the writes are ignored. */
+    /* SysTick at 1 kHz: QEMU's prompt UART polling, and km_hal_idle()'s wake-up. */
     NRF_REG(SCS_SYST_RVR, 0) = PRV_SYSTICK_RELOAD;
     NRF_REG(SCS_SYST_CVR, 0) = 0u;
-    /* Its interrupt is the 1 kHz wake-up km_hal_idle() promises (hal
-     * contract), so WFI never sleeps through a control tick. */
     NRF_REG(SCS_SYST_CSR, 0) = (1u << 2) | (1u << 1) | (1u << 0); /* CPU clock, TICKINT, enable */
 }
 
@@ -171,20 +140,14 @@ void SysTick_Handler(void)
 {
 }
 
-/* The note makes the next boot report SOFTWARE where RESETREAS is not
- * modelled (QEMU); on silicon SREQ would say the same. */
+/* Leaves the SOFTWARE record, then resets the MCU. */
 _Noreturn void km_hal_system_reset(void)
 {
     prv_note(KM_RESET_SOFTWARE, 0u);
     prv_sysresetreq();
 }
 
-/* Not modelled by QEMU 7.2 (the WDT range is an "unimplemented device": writes
- * are ignored), so in QEMU this never bites; the code is for the real part.
- * CONFIG, CRV and RREN cannot change once the WDT runs (nRF51 RM §25), and
- * neither a soft reset nor a jump stops it: started by the bootloader
- * (docs/update.md §3a, with this application's 500 ms and RR0) or by an
- * earlier run of this image, it is left as it is and kicked. */
+/* Starts the watchdog unless it already runs (then it is only kicked); not modelled by QEMU. */
 void km_hal_watchdog_start(uint32_t timeout_ms)
 {
     if ((NRF_REG(NRF_WDT, WDT_RUNSTATUS) & 1u) != 0u) {
@@ -219,11 +182,7 @@ void km_hal_irq_restore(uint32_t state)
     km_cortex_irq_restore(state);
 }
 
-/* Four RNG bytes mixed with FICR DEVICEID. QEMU's FICR holds the same
- * DEVICEID for every instance (0x12345678 0x9ABCDEF1), so on QEMU the RNG is
- * what makes servos differ. The wait is bounded in time, not in loop turns:
- * QEMU runs a loop turn far faster than 16 MHz silicon while its RNG still
- * takes 660 us of virtual time per byte. */
+/* Four RNG bytes mixed with FICR DEVICEID, each wait bounded in time. */
 uint32_t km_hal_entropy(void)
 {
     uint32_t value = NRF_REG(NRF_FICR, FICR_DEVICEID0) ^ NRF_REG(NRF_FICR, FICR_DEVICEID1);
@@ -246,8 +205,6 @@ uint32_t km_hal_entropy(void)
 
 void km_hal_idle(void)
 {
-    /* WFI wakes on any pending enabled interrupt even under the irq lock
-     * (PRIMASK set), so callers may check-then-sleep inside a lock without
-     * losing a wake-up; the handler then runs after their restore. */
+    /* WFI wakes on a pending interrupt even under the irq lock (PRIMASK). */
     km_cortex_wait_for_interrupt();
 }

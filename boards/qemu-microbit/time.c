@@ -1,11 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Time (km_hal_time.h) on nRF51 TIMER0: 32-bit, 1 MHz, free running.
- *
- * Why TIMER0 and not SysTick: the nRF51's Cortex-M0 has no SysTick on real
- * silicon (QEMU models one anyway), and TIMER0 is the only nRF51 timer with a
- * 32-bit mode, so it gives a 1 µs tick that wraps after 71 minutes with no
- * software overflow handling. CC[0] is the read-out channel (CAPTURE[0] then
- * read CC[0]); CC[1] is the one-shot compare. */
+/* Time (km_hal_time.h) on nRF51 TIMER0: 32-bit, 1 MHz, free running; CC[0]
+ * reads the count, CC[1] is the one-shot (docs/architecture.md "qemu-microbit's time"). */
 #include <stdbool.h>
 #include <stddef.h>
 
@@ -59,10 +54,7 @@ void km_hal_timer_at(uint32_t at, km_timer_handler_t handler, void *ctx)
     s_shot_forced = false;
     NRF_REG(NRF_TIMER0, TIMER_CC(PRV_CC_SHOT)) = at;
     NRF_REG(NRF_TIMER0, TIMER_INTENSET) = TIMER_INT_COMPARE(PRV_CC_SHOT);
-    /* A compare only fires when the counter reaches CC, so a target already
-     * reached (or reached while we wrote it) would wait a whole 2^32 µs
-     * wrap: pend the interrupt by hand instead. The ISR disarms on the first
-     * of the two, so a race between them cannot fire twice. */
+    /* A target already reached is pended by hand; the ISR fires once. */
     if ((int32_t)(at - km_hal_time_now()) <= 0) {
         s_shot_forced = true;
         nrf_irq_pend(NRF_IRQ_TIMER0);

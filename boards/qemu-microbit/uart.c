@@ -1,13 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* UART0 as the servo bus (km_hal_uart.h) on the nRF51.
- *
- * RX: one interrupt per byte (RXDRDY), stamped with the tick in the ISR so the
- * frame end is known to the microsecond. TX: interrupt-driven, one TXDRDY
- * per byte, so the main loop (control tick) keeps running during an answer
- * (a 20-byte answer is 1.7 ms at 115200). The nRF51 UART has separate RXD and
- * TXD pins and no loopback, so its own TX bytes never show up as RX; a real
- * single-wire bus on this chip would need an external buffer whose direction
- * pin the TX path drives, and RX would be stopped while it transmits. */
+/* UART0 as the servo bus (km_hal_uart.h) on the nRF51: RX and TX one interrupt
+ * per byte, RX stamped in the ISR (docs/architecture.md "qemu-microbit's UART"). */
 #include <stddef.h>
 
 #include "km_board.h"
@@ -23,15 +16,8 @@
 #define PRV_BAUD_MIN 1200u
 #define PRV_BAUD_MAX 1000000u
 
-/* Run-time options (README.md, "Run-time options"). The guest has no command
- * line, so sim/bus/servo-bus writes these words before the CPU starts with
- *   -device loader,addr=0x20000000,data=0x4B4D4746,data-len=4
- *   -device loader,addr=0x20000004,data=<floor us>,data-len=4
- *   -device loader,addr=0x20000008,data=<product: 0 pot, 1 encoder>,data-len=4
- * QEMU re-applies loader data at every system reset, so the values hold
- * across a 0x02 restart too. On a real part, or with no loader, the magic
- * does not match (RAM is zero in QEMU, garbage on silicon) and the default
- * holds. Volatile: written behind the compiler's back. */
+/* Run-time option words at 0x20000000, written by QEMU's -device loader
+ * (boards/qemu-microbit/README.md "Run-time options"); volatile. */
 #define PRV_CONFIG_MAGIC 0x4B4D4746u /* "KMGF" */
 /* and -device loader,addr=0x2000000C,data=<slot floor us>,data-len=4 */
 #define PRV_GAP_FLOOR_DEFAULT_US 20000u

@@ -1,11 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Template: the vector table and the reset handler of a Cortex-M. The
- * reset handler lays out RAM for C (.data copied from flash, .bss zeroed)
- * and calls main(). Add your MCU's device interrupts after the 16 core
- * entries (its reference manual's vector table), each a weak alias of the
- * default handler that a driver overrides by defining it, and make the
- * default handler take your fault path (free the bridge, record, reset:
- * boards/stm32g031/fault.c). */
+/* Template: the vector table and the reset handler of a Cortex-M; add the MCU's
+ * device interrupts after the 16 core entries (docs/architecture.md "Filling in
+ * the template"). */
 #include <stdint.h>
 
 /* Linker script symbols (board.ld): addresses only, never read as objects. */
@@ -53,10 +49,8 @@ __attribute__((section(".isr_vector"), used)) const km_vector_t km_vectors[16] =
 /* Copy .data, zero .bss, run main(). */
 void Reset_Handler(void)
 {
-    /* Word loops on purpose: the linker script aligns both sections to 4.
-     * Each pair of symbols bounds one object the linker made, which C cannot
-     * say: hence cppcheck's comparePointers, suppressed here (a board made
-     * from this file keeps the reason with the code). */
+    /* Word loops: the linker script aligns both sections to 4. Each pair of
+     * symbols bounds one object the linker made: cppcheck's comparePointers. */
     const uint32_t *src = __data_load;
     // cppcheck-suppress comparePointers
     for (uint32_t *dst = __data_start; dst < __data_end; dst++) {

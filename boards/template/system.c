@@ -14,20 +14,8 @@ _Noreturn void km_hal_system_reset(void)
     }
 }
 
-/* Why the MCU last came out of reset. Read the MCU's reset-status register
- * once, early at boot (before main() is best: from the reset handler), then
- * clear its flags so the next reset reads fresh (on most parts they are
- * sticky until cleared: STM32 RCC_CSR with RMVF, nRF POWER->RESETREAS by
- * writing 1s, Microchip RCAUSE...), keep the result in a static and return
- * it here. Pick the most specific flag: many parts also set the pin flag on
- * every internal reset, and a brown-out may share the power-on flag. The
- * hardware cannot tell a fault reset from a restart (both are
- * SYSRESETREQ), so the HardFault handler should free the motor, leave a
- * record in RAM the start-up code does not clear (.noinit) and reset at
- * once; see boards/stm32g031/fault.c and reset_cause.c for a complete one.
- *
- * This template has read nothing yet, so it answers POWER_ON, which the
- * contract also uses for "no flag the board can read". */
+/* Why the MCU last came out of reset, read once at boot (docs/architecture.md
+ * "Filling in the template"); POWER_ON until the board reads one. */
 km_reset_cause_t km_hal_reset_cause(void)
 {
     return KM_RESET_POWER_ON;

@@ -8,8 +8,7 @@ uint32_t km_hal_time_tick_hz(void)
     return 1000000u;
 }
 
-/* Start a free-running timer at tick_hz (ideally 32 bits wide, else extend
- * it in software) and enable the interrupt of one compare channel. */
+/* Starts a free-running timer at tick_hz (32 bits, or extended in software). */
 void km_hal_time_init(void)
 {
 }
@@ -20,9 +19,7 @@ uint32_t km_hal_time_now(void)
     return 0u;
 }
 
-/* Program the compare channel for `at` and remember handler/ctx; if `at` is
- * not in the future ((int32_t)(at - now) <= 0), pend the interrupt at once.
- * The ISR disarms first, then calls handler(ctx); re-arming replaces. */
+/* Arms the one-shot for `at` (pended at once when not in the future); the ISR disarms, then calls. */
 void km_hal_timer_at(uint32_t at, km_timer_handler_t handler, void *ctx)
 {
     (void)at;

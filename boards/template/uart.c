@@ -2,10 +2,7 @@
 /* Template: the half-duplex bus UART (km_hal_uart.h). */
 #include "km_hal_uart.h"
 
-/* Set 8N1 at `baud`; return false if the clock cannot make it within 2 %.
- * Remember the handler; enable the RX interrupt, whose ISR reads each byte,
- * takes km_hal_time_now() and calls handler(ctx, byte, tick, lost), with
- * lost = an overrun/framing error was flagged before this byte. */
+/* 8N1 at `baud` (false: not within 2 %); the RX ISR calls handler(ctx, byte, tick, lost). */
 bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx)
 {
     (void)baud;
@@ -14,10 +11,7 @@ bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx)
     return false;
 }
 
-/* Refuse (false) while a send is under way. Else turn the bus to TX (drive
- * enable / single-wire direction), start an interrupt or DMA transfer of
- * `len` bytes from `data` (valid until tx_busy() is false) and return true.
- * Callable from the main loop and from the response-delay timer ISR. */
+/* Starts sending `len` bytes (interrupt or DMA) with the bus turned to TX; false while busy. */
 bool km_hal_uart_send(const uint8_t *data, uint16_t len)
 {
     (void)data;
@@ -25,8 +19,7 @@ bool km_hal_uart_send(const uint8_t *data, uint16_t len)
     return false;
 }
 
-/* True until the last stop bit has left the wire (TC, not TXE) and the bus
- * is back in RX; the servo must not hear its own answer. */
+/* True until the last stop bit has left the wire (TC, not TXE) and the bus is back in RX. */
 bool km_hal_uart_tx_busy(void)
 {
     return false;

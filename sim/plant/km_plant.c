@@ -1,8 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Simulated servo plant: fixed-point integration of the motor, gearbox, load,
- * supply and heat described in km_plant.h. No float, no heap, no recursion,
- * and no 64-bit division in km_plant_step (only 64-bit multiplies and shifts,
- * which are cheap on a Cortex-M0). 64-bit divisions happen once, at init. */
+/* Simulated servo plant: fixed-point integration of the ideal model
+ * (docs/plant.md "The ideal model's integration"). */
 #include "km_plant.h"
 
 #include <stddef.h>
@@ -51,8 +49,7 @@ static bool prv_config_ok(const km_plant_config_t *cfg)
 /* Sub-step length, acceleration and thermal constants for damping b_q16. */
 static void prv_init_substep(km_plant_t *p, const km_plant_config_t *cfg, int64_t b_q16, int64_t j_total)
 {
-    /* Explicit Euler is stable (and not oscillating) while the damping
-     * removes less than half the speed per sub-step: halve until it does. */
+    /* Halve the sub-step until the damping removes < 1/2 the speed per sub-step. */
     uint32_t sub = cfg->substep_us;
     int64_t acc_q24;
     for (;;) {

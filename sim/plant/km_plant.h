@@ -1,56 +1,19 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Simulated servo plant: H-bridge, DC motor, gearbox, output load, potentiometer,
- * supply with internal resistance, and winding heat. Integer/fixed-point only so
- * the same code runs in the Cortex-M0 QEMU image, the host-sim board and the
- * unit tests. Deterministic: the same inputs give the same readings, bit for bit.
- *
- * Model (all quantities referred to the OUTPUT shaft unless said otherwise):
- *   - electrical: quasi-static (inductance neglected, L/R ~ 0.1 ms < sub-step):
- *       drive:  V_app = d * V_bus,  I = (V_app - E) / R       (d = pwm / 1000)
- *       brake:  V_app = 0 (terminals shorted), I = -E / R
- *       coast:  terminals open, I = 0 (body-diode regeneration neglected)
- *     "drive" is sign-magnitude PWM with slow decay, so its off-phase also
- *     shorts the motor and the average above holds; pwm 0 in drive = brake.
- *   - supply: V_bus = V_supply - R_int * I_supply, I_supply = d * I, solved
- *     exactly each sub-step (no lag, stable for any R_int <= 4 R).
- *   - mechanics: J dw/dt = Kt_out I - b w - Tc sgn(w) + T_ext, with stiction
- *     (a shaft at rest stays at rest while |drive torque| <= Tc), hard
- *     inelastic end-stops, and an overspeed guard (KM_PLANT_SPEED_MAX_MDPS).
- *   - heat: C dT/dt = I^2 R - (T - T_amb) / R_th (one node: the winding).
- * Integration: explicit Euler at a fixed sub-step (config.substep_us, halved at
- * init until the electrical+viscous damping per sub-step is < 1/2, so stable).
- * A step's time that is not a whole number of sub-steps is carried to the next
- * call, so step(1000) once and step(250) four times give the same state.
- *
- * Two named configurations (km_plant_default.c): "ideal" is the model above
- * with exact sensors (km_plant_default_config, what the boards and tests run
- * today); "realistic" adds, in km_plant_real.c, sensor noise and the
- * board's sensor chain, gear friction (Stribeck, load- and direction-
- * dependent), backlash and compliance, a supply shared by several servos,
- * bridge dead time and minimum pulse, hot copper and gravity
- * (docs/plant.md).
- *
- * Use from a simulated board, once per control tick:
- *     static km_plant_t plant;
- *     km_plant_init(&plant, &km_plant_default_config);
- *     km_plant_input_t in = {KM_PLANT_DRIVE, pwm, 0};   // from the motor hal
- *     km_plant_step(&plant, &in, 1000);                // 1 ms tick
- *     adc = km_plant_pot_adc(&plant); ma = km_plant_current_ma(&plant); ...
- */
+/* Simulated servo plant: H-bridge, DC motor, gearbox, output load, position
+ * sensor, supply and winding heat, integer-only and deterministic. The model,
+ * its two configurations and how to run it: docs/plant.md. */
 #ifndef KM_PLANT_H
 #define KM_PLANT_H
 
 #include <stdbool.h>
 #include <stdint.h>
 
-/* Overspeed guard, output shaft, milli-degrees per second (2000 °/s, ~5x the
- * default no-load speed): keeps every per-sub-step product inside int32. */
+/* Overspeed guard, output shaft, m°/s (docs/plant.md "Notes on the code"). */
 #define KM_PLANT_SPEED_MAX_MDPS 2000000
 
 /* Potentiometer ADC full scale (12-bit, as on servo MCUs). */
 #define KM_PLANT_POT_ADC_MAX 4095u
-/* Counts per turn of the encoder product's single-turn absolute encoder
- * (12-bit, as common magnetic angle sensors). */
+/* Counts per turn of the encoder product's single-turn absolute encoder. */
 #define KM_PLANT_ENCODER_COUNTS 4096u
 
 typedef enum {
@@ -67,11 +30,7 @@ enum {
 };
 #define KM_PLANT_TEMP_OPEN_DC (-400) /* 0.1 °C: what an open NTC reads (-40.0 °C) */
 
-/* What the realistic configuration adds to the ideal model (docs/plant.md
- * gives every field's typical value and where it comes from). A config
- * whose .real is NULL is the ideal plant, bit for bit as before; with it,
- * km_plant_step runs the model described in km_plant_real.c and the sensor
- * readings go through the board's sensor chain with deterministic noise. */
+/* What the realistic configuration adds to the ideal model (docs/plant.md). */
 typedef struct {
     /* potentiometer through the board's 12-bit ADC */
     uint16_t pot_noise_mlsb;     /* noise of one ADC sample (wiper + ADC), sigma, 1/1000 LSB */
@@ -116,9 +75,7 @@ typedef struct {
     uint32_t load_j_gmm2;         /* horn + load inertia at the output, g·mm² */
     uint32_t viscous_unm_per_dps; /* viscous friction at the output, µN·m per °/s */
     uint32_t coulomb_unm;         /* Coulomb (and static) friction at the output, µN·m */
-    int16_t pot_travel_ddeg;      /* potentiometer's electrical range ±this, 0.1°: its ADC spans it and it
-                                   * reads no further; wider than endstop_ddeg on a sound design, so a
-                                   * shaft on a stop never reads a rail; 0 = no pot (encoder product) */
+    int16_t pot_travel_ddeg;      /* pot's electrical range ±this, 0.1° (> endstop); 0 = no pot */
     int16_t endstop_ddeg;         /* hard mechanical stops at ±this, 0.1°; 0 = free multi-turn */
     uint32_t thermal_r_mc_per_w;  /* winding-to-ambient thermal resistance, m°C per W */
     uint32_t thermal_c_mj_per_c;  /* winding + case heat capacity, mJ per °C */
@@ -127,11 +84,7 @@ typedef struct {
     const km_plant_real_t *real;  /* NULL: the ideal plant; else the realistic model */
 } km_plant_config_t;
 
-/* 20 kg·cm-class hobby serial servo at 7.4 V; numbers documented in
- * km_plant_default.c. "ideal": the model above with exact sensors;
- * "realistic": the same servo with sensor noise and quantisation, gear
- * friction, backlash and compliance, a shared supply, bridge dead time and
- * hot copper (docs/plant.md). */
+/* The named configurations of one servo (docs/plant.md). */
 extern const km_plant_config_t km_plant_ideal_config;
 extern const km_plant_config_t km_plant_realistic_config;
 extern const km_plant_real_t km_plant_realistic_params; /* its .real, to copy and vary */
@@ -221,11 +174,7 @@ typedef struct {
     km_plant_real_state_t r; /* the realistic model (cfg->real != NULL) */
 } km_plant_t;
 
-/* What a restart of the servo's MCU leaves as it is: the shaft (position,
- * speed), the winding's heat and the environment. The current is not kept:
- * the bridge is off across a reset and the winding's electrical time
- * constant is far below a boot. The plant's clock (km_plant_time_ms) goes
- * on, so a scenario timed on it is not restarted by a restart. */
+/* What a restart of the servo's MCU leaves as it is (docs/plant.md "Notes on the code"). */
 typedef struct {
     int32_t pos_ddeg;
     int32_t pos_rem_ndeg;
@@ -238,12 +187,10 @@ typedef struct {
 } km_plant_physics_t;
 
 void km_plant_get_physics(const km_plant_t *p, km_plant_physics_t *out);
-/* Restores what km_plant_get_physics gave (values out of range are clamped
- * as the setters clamp them). */
+/* Restores what km_plant_get_physics gave, clamped as the setters clamp. */
 void km_plant_set_physics(km_plant_t *p, const km_plant_physics_t *in);
 
-/* Set up a plant at rest at position 0, ambient temperature, full supply.
- * Returns false (plant unusable) if cfg is NULL or its parameters are invalid. */
+/* Sets up a plant at rest at 0, ambient temperature, full supply; false on a bad cfg. */
 bool km_plant_init(km_plant_t *p, const km_plant_config_t *cfg);
 
 /* Advance the simulation by dt_us with the bridge input held constant. */
@@ -257,10 +204,7 @@ void km_plant_set_temp_dc(km_plant_t *p,
 void km_plant_set_position_ddeg(km_plant_t *p, int32_t ddeg); /* teleport shaft (at rest) */
 void km_plant_set_faults(km_plant_t *p, uint32_t faults);     /* KM_PLANT_FAULT_* mask */
 
-/* Readings (what the board's sensors would report). With the realistic
- * model the three sensor readings (position, pot ADC, encoder counts) are
- * sampled once at the end of each km_plant_step, with noise: reading them
- * twice gives the same value; the other readings are the model's state. */
+/* Readings: what the board's sensors would report (docs/plant.md "Selecting one"). */
 int16_t km_plant_position_ddeg(const km_plant_t *p); /* potentiometer, 0.1°, clamped to ±pot travel */
 uint16_t km_plant_pot_adc(const km_plant_t *p); /* same as 12-bit ADC counts, 0 = -travel, 4095 = +travel */
 int32_t km_plant_turns_ddeg(

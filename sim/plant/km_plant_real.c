@@ -1,36 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The realistic servo plant (docs/plant.md): the motor, supply and heat of
- * km_plant.h, plus what a real servo adds, all referred to the output
- * shaft:
- *   - two masses joined by the gear train: the motor side (rotor inertia
- *     through the ratio) and the output side (output gear, horn, load).
- *     The gear train has backlash (no torque inside the play) and a
- *     torsional stiffness with some damping; contact only pushes;
- *   - gear friction on the motor side: Coulomb + viscous + a Stribeck
- *     excess at low speed (exp(-(w/ws)^2)), stiction, and a mesh loss
- *     proportional to the torque the mesh carries: (1/eff - 1) of it when
- *     the motor drives the load, (1 - eff_back) when the load drives the
- *     motor. The motor torque itself is Kt (the efficiency is the loss);
- *   - the output shaft's own friction (bushing, pot wiper), with stiction;
- *     gravity -G sin(angle - down) and the external torque act there, and
- *     the end stops stop it;
- *   - supply: the servo's own lead plus a source shared by bus_servos
- *     servos drawing the same current at once (solved exactly, as the
- *     ideal plant does);
- *   - H-bridge: an on-pulse shorter than the minimum pulse does not switch,
- *     an off-pulse shorter than it leaves the bridge on, and the dead time
- *     is lost from every pulse;
- *   - the copper part of the resistance rises with the winding temperature;
- *   - sensors, sampled once per km_plant_step: the pot as the board reads
- *     it (2^n 12-bit ADC samples with noise, averaged and rounded like the
- *     STM32G0's oversampler, lagging by half the sampling window, then the
- *     board's conversion to 0.1°), the encoder with noise and quantised to
- *     a count. Noise: a xorshift32 generator, seeded from the config, each
- *     draw the sum of four uniform bytes (near-Gaussian, bounded at 3.5
- *     sigma), so a run is reproducible bit for bit.
- * Units inside: angles 0.1° in Q32 (int64), speeds 0.1 °/s in Q16
- * (int32), torques µN·m (int64). Integer only, no 64-bit division outside
- * km_plant_init_real (the Cortex-M0 bar of check_m0.sh). */
+/* The realistic servo plant: the ideal model plus two masses joined by the
+ * gear train, gear and output friction, a shared supply, bridge timing, hot
+ * copper and the board's sensor chain (docs/plant.md "What the realistic model
+ * adds", "Notes on the code"). */
 #include "km_plant_real.h"
 
 #include <stddef.h>
@@ -473,9 +445,7 @@ static void prv_thermal(km_plant_t *p)
 }
 
 /* km_plant_real.h: sub-steps, then R(T), the ideal getters' state and the sensors. */
-/* One sub-step of the whole model. Kept out of line (as its parts): the
- * Cortex-M0 reaches past 2 KB inside one function only with a bl, which
- * tools/check/image-check would read as a call to itself. */
+/* One sub-step of the whole model (kept out of line: docs/plant.md "Notes on the code"). */
 __attribute__((noinline)) static void prv_substep(km_plant_t *p, const km_plant_input_t *in, int32_t d)
 {
     prv_electrical(p, in->bridge, d);
