@@ -147,7 +147,7 @@ _Noreturn void km_hal_system_reset(void)
     prv_sysresetreq();
 }
 
-/* Starts the watchdog unless it already runs (then it is only kicked); not modelled by QEMU. */
+/* Starts the watchdog unless it already runs, then only kicked (nRF51 RM §25, docs/update.md §3a). */
 void km_hal_watchdog_start(uint32_t timeout_ms)
 {
     if ((NRF_REG(NRF_WDT, WDT_RUNSTATUS) & 1u) != 0u) {
