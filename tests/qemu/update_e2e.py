@@ -18,15 +18,13 @@ Prints "all checks passed" at the end; exit 1 on any failure.
 """
 import argparse
 import os
-import signal
 import subprocess
 import sys
-import tempfile
 import time
 
-REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
 from kmx.bus import Bus  # noqa: E402
 from kmx import frame as fr  # noqa: E402
+import update_rig as rig  # noqa: E402
 
 
 def main():
@@ -34,31 +32,19 @@ def main():
     ap.add_argument("--restarts", type=int, default=3)
     ap.add_argument("--resets", type=int, default=4)
     ap.add_argument("--seed", type=int, default=3)
-    ap.add_argument("--build-qemu", default=os.environ.get("KM_BUILD_QEMU", os.path.join(REPO, "build/qemu")))
-    ap.add_argument("--build-stm32", default=os.path.join(REPO, "build/stm32g031"))
+    rig.add_build_arg(ap)
+    ap.add_argument("--build-stm32", default=os.path.join(rig.REPO, "build/stm32g031"))
     a = ap.parse_args()
-    bdir = os.path.join(a.build_qemu, "boards/qemu-microbit")
-    boot = os.path.join(bdir, "km-servo-boot-qemu-microbit.elf")
-    v1 = os.path.join(bdir, "km-servo-app-qemu-microbit.kmfw")
-    v2 = os.path.join(bdir, "km-servo-app-v2-qemu-microbit.kmfw")
+    img = rig.images(a.build_qemu, [rig.BOOT, "km-servo-app-qemu-microbit.kmfw",
+                                    "km-servo-app-v2-qemu-microbit.kmfw"])
+    if img is None:
+        return 1
+    v1, v2 = img["km-servo-app-qemu-microbit.kmfw"], img["km-servo-app-v2-qemu-microbit.kmfw"]
     other = os.path.join(a.build_stm32, "boards/stm32g031/km-servo-app-stm32g031.kmfw")
-    for f in (boot, v1, v2):
-        if not os.path.isfile(f):
-            print("missing %s: cmake --preset qemu && cmake --build --preset qemu" % f)
-            return 1
-    mon = tempfile.TemporaryDirectory(prefix="update-e2e-")
-    bus_proc = subprocess.Popen([os.path.join(REPO, "sim/bus/servo-bus"), "--ids", "1,2,3", "--port", "0",
-                                 "--image", boot, "--monitor-dir", mon.name],
-                                stdout=subprocess.PIPE, text=True)
     failures = []
-    try:
-        line = bus_proc.stdout.readline().strip()
-        if not line.startswith("ready "):
-            print("servo-bus did not start: %r" % line)
-            return 1
-        spec = "tcp:" + line.split()[1]
-        print("bus:", spec, flush=True)
-        update = [os.path.join(REPO, "tools/servo-update"), "--bus", spec, "--ids", "1,2,3"]
+    with rig.BootBus((1, 2, 3), img[rig.BOOT]) as boot_bus:
+        spec = boot_bus.spec
+        update = boot_bus.update_argv()
 
         def versions():
             with Bus(spec, timeout=0.3) as bus:
@@ -92,7 +78,7 @@ def main():
             failures.append("3: v2 not on all three")
 
         r = subprocess.run(update + ["--restarts", str(a.restarts), "--seed", str(a.seed),
-                                     "--resets", str(a.resets), "--monitor-dir", mon.name, v1],
+                                     "--resets", str(a.resets), "--monitor-dir", boot_bus.monitors.name, v1],
                            capture_output=True, text=True)
         print(r.stdout.strip())
         if r.returncode != 0 or versions() != {1: 0x10100100, 2: 0x10100100, 3: 0x10100100}:
@@ -100,19 +86,7 @@ def main():
                             % (a.restarts, a.resets))
         if "%d restarts injected, %d resets injected, 0 times" % (a.restarts, a.resets) not in r.stdout:
             failures.append("4: not every restart or reset injected, or a servo unreachable after one")
-    finally:
-        bus_proc.send_signal(signal.SIGTERM)
-        try:
-            bus_proc.wait(10)
-        except subprocess.TimeoutExpired:
-            bus_proc.kill()
-        mon.cleanup()
-    for f in failures:
-        print("FAIL", f)
-    if failures:
-        return 1
-    print("all checks passed")
-    return 0
+    return rig.report(failures)
 
 
 if __name__ == "__main__":

@@ -30,19 +30,16 @@ failure.
     update_trial.py [--build-qemu DIR]
 """
 import argparse
-import os
 import re
-import signal
 import socket
 import struct
 import subprocess
 import sys
-import tempfile
 import time
 
-REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
 from kmx.bus import Bus  # noqa: E402
 from kmx import frame as fr  # noqa: E402
+import update_rig as rig  # noqa: E402
 
 IDS = (1, 2)
 BOUND_S = 30.0          # stated bound: back in update mode within this (measured: docs/update.md §11)
@@ -118,32 +115,21 @@ def wait_state(spec, want, since, bound):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--build-qemu", default=os.environ.get("KM_BUILD_QEMU", os.path.join(REPO, "build/qemu")))
+    rig.add_build_arg(ap)
     a = ap.parse_args()
-    bdir = os.path.join(a.build_qemu, "boards/qemu-microbit")
-    boot = os.path.join(bdir, "km-servo-boot-qemu-microbit.elf")
-    good = {"v1": (os.path.join(bdir, "km-servo-app-qemu-microbit.kmfw"), 0x10100100),
-            "v2": (os.path.join(bdir, "km-servo-app-v2-qemu-microbit.kmfw"), 0x10100102)}
-    bad = [("hang", os.path.join(bdir, "km-bad-hang-qemu-microbit.kmfw"), "v2"),
-           ("crash", os.path.join(bdir, "km-bad-crash-qemu-microbit.kmfw"), "v1")]
-    for f in [boot] + [g[0] for g in good.values()] + [b[1] for b in bad]:
-        if not os.path.isfile(f):
-            print("missing %s: cmake --preset qemu && cmake --build --preset qemu" % f)
-            return 1
-    mon = tempfile.TemporaryDirectory(prefix="update-trial-")
-    bus_proc = subprocess.Popen([os.path.join(REPO, "sim/bus/servo-bus"), "--ids", ",".join(map(str, IDS)),
-                                 "--port", "0", "--image", boot, "--monitor-dir", mon.name],
-                                stdout=subprocess.PIPE, text=True)
+    good_names = {"v1": ("km-servo-app-qemu-microbit.kmfw", 0x10100100),
+                  "v2": ("km-servo-app-v2-qemu-microbit.kmfw", 0x10100102)}
+    bad_names = [("hang", "km-bad-hang-qemu-microbit.kmfw", "v2"), ("crash", "km-bad-crash-qemu-microbit.kmfw", "v1")]
+    img = rig.images(a.build_qemu, [rig.BOOT] + [g[0] for g in good_names.values()] + [b[1] for b in bad_names])
+    if img is None:
+        return 1
+    good = {k: (img[n], v) for k, (n, v) in good_names.items()}
+    bad = [(name, img[n], then) for name, n, then in bad_names]
     failures = []
-    try:
-        line = bus_proc.stdout.readline().strip()
-        if not line.startswith("ready "):
-            print("servo-bus did not start: %r" % line)
-            return 1
-        spec = "tcp:" + line.split()[1]
-        print("bus:", spec, flush=True)
-        mons = {i: Monitor(os.path.join(mon.name, "servo-%d.sock" % i)) for i in IDS}
-        update = [os.path.join(REPO, "tools/servo-update"), "--bus", spec, "--ids", ",".join(map(str, IDS))]
+    with rig.BootBus(IDS, img[rig.BOOT]) as boot_bus:
+        spec = boot_bus.spec
+        mons = {i: Monitor(boot_bus.monitor_path(i)) for i in IDS}
+        update = boot_bus.update_argv()
 
         def passes(out):
             return 1 + out.count(" interrupted: ")
@@ -205,19 +191,7 @@ def main():
             if r.returncode != 0:
                 failures.append("%s: %s did not go through" % (name, then))
             running(good[then][1], name + " then " + then)
-    finally:
-        bus_proc.send_signal(signal.SIGTERM)
-        try:
-            bus_proc.wait(10)
-        except subprocess.TimeoutExpired:
-            bus_proc.kill()
-        mon.cleanup()
-    for f in failures:
-        print("FAIL", f)
-    if failures:
-        return 1
-    print("all checks passed")
-    return 0
+    return rig.report(failures)
 
 
 if __name__ == "__main__":

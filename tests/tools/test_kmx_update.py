@@ -11,37 +11,23 @@ Ctrl-C of `kmx update` and the command it prints: tests/tools/
 servo_update_qemu.py (CTest update_qemu_interrupt). About 8 s."""
 import os
 import re
-import struct
-import subprocess
 import sys
-import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_kmx import REPO, HostSim, ServoBus  # noqa: E402
-from test_servo_update import make_image  # noqa: E402
-from kmx.bus import Bus  # noqa: E402
+from test_kmx import REPO, ServoBus  # noqa: E402
+from update_tool_rig import AppServos, ImageDir, make_image, run_tool  # noqa: E402
 
 KMX = os.path.join(REPO, "tools", "kmx")
 
 
 def run_kmx(*args):
     """tools/kmx ARGS as a process; a traceback fails the test."""
-    r = subprocess.run([KMX, *args], capture_output=True, text=True, timeout=120)
-    if "Traceback" in r.stderr:
-        raise AssertionError("kmx %s printed a traceback:\n%s" % (" ".join(args), r.stderr))
-    return r
+    return run_tool(KMX, *args)
 
 
-class UpdateBadInput(unittest.TestCase):
+class UpdateBadInput(ImageDir, unittest.TestCase):
     """Refused before the bus is opened: one line `kmx: ...`, status 2."""
-
-    def setUp(self):
-        self.dir = tempfile.TemporaryDirectory()
-        self.addCleanup(self.dir.cleanup)
-        self.good = os.path.join(self.dir.name, "good.kmfw")
-        with open(self.good, "wb") as f:
-            f.write(make_image())
 
     def refused(self, message, *args):
         r = run_kmx("--bus", "tcp:127.0.0.1:9", "update", *args)
@@ -52,9 +38,7 @@ class UpdateBadInput(unittest.TestCase):
         self.refused("cannot read the image %s: No such file or directory" % missing, "--ids", "1", missing)
         image = bytearray(make_image())
         image[0x200] ^= 0x55
-        bad = os.path.join(self.dir.name, "body.kmfw")
-        with open(bad, "wb") as f:
-            f.write(bytes(image))
+        bad = self.file("body.kmfw", bytes(image))
         self.refused("%s: body CRC does not match (a damaged image)" % bad, "--ids", "1", bad)
         self.refused("give --ids (the servos to update) or --rescue (one servo alone on the bus)", self.good)
         self.refused("give --ids (the servos to update) or --rescue (one servo alone on the bus), not both",
@@ -78,31 +62,10 @@ class UpdateBadInput(unittest.TestCase):
         self.assertIn("--rescue", run_kmx("update", "--help").stdout)
 
 
-class UpdateOnHostSim(unittest.TestCase):
+class UpdateOnHostSim(AppServos, unittest.TestCase):
     """Two host-sim servos: applications without a bootloader (0x0C's
     bootloader byte 0): kmx update refuses them, and an absent ID, naming
     them, before any frame that changes a servo."""
-
-    @classmethod
-    def setUpClass(cls):
-        cls.dir = tempfile.TemporaryDirectory()
-        cls.image = os.path.join(cls.dir.name, "v2.kmfw")
-        with open(cls.image, "wb") as f:
-            f.write(make_image())
-        cls.wire = ServoBus(ids=(1, 2))
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.wire.close()
-        cls.dir.cleanup()
-
-    def untouched(self):
-        """Both servos answer with status 0 and still report their 0x0C."""
-        with Bus(self.wire.spec) as bus:
-            for i in (1, 2):
-                self.assertEqual(bus.ping(i), 0, "ID %d" % i)
-                self.assertEqual(bus.read(i, 0x0C), struct.pack("<I", 0x00100100))
-                self.assertEqual(bus.update_state(i), 0, "ID %d: 0x78 STATUS says application" % i)
 
     def test_no_bootloader_and_absent(self):
         r = run_kmx("--bus", self.wire.spec, "update", "--ids", "2,7", self.image)
@@ -111,7 +74,7 @@ class UpdateOnHostSim(unittest.TestCase):
                              "scan lists the IDs there); ID 2 has no bootloader (0x0C 0x00100100, bootloader "
                              "byte 0; docs/update.md §10): flash one with a programmer first\n"
                           % (self.wire.spec, self.wire.spec)))
-        self.untouched()
+        self.untouched(update_state=True)
 
     def test_ping_of_an_application_says_nothing_of_update_mode(self):
         r = run_kmx("--bus", self.wire.spec, "ping", "1")

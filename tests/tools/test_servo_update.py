@@ -11,53 +11,22 @@ middle of an update on QEMU bootloaders, and the command it prints that
 finishes the job: tests/tools/servo_update_qemu.py (CTest
 update_qemu_interrupt). About 5 s."""
 import os
-import struct
-import subprocess
-import sys
-import tempfile
 import unittest
-import zlib
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_kmx import REPO, ServoBus  # noqa: E402
-from kmx.bus import Bus  # noqa: E402
+from test_kmx import REPO  # noqa: E402
+from update_tool_rig import AppServos, ImageDir, make_image, run_tool  # noqa: E402
 
 UPDATE = os.path.join(REPO, "tools", "servo-update")
 
 
-def make_image(body_len=1024, model=0x4B4D0001, version=0x00100102):
-    """An update image as tools/gen/make-image writes one (docs/update.md §2):
-    the 32-byte header, FF to 0x100, then the body."""
-    length = 0x100 + body_len
-    body = bytes((7 * i) & 0xFF for i in range(body_len))
-    rest = b"\xff" * (0x100 - 32) + body  # bytes [32, length)
-    head = struct.pack("<IIIIII", 0x57464D4B, model, length, version, 0x100, 0x4000)
-    head += struct.pack("<I", zlib.crc32(rest) & 0xFFFFFFFF)
-    head += struct.pack("<I", zlib.crc32(head) & 0xFFFFFFFF)
-    return head + rest
-
-
 def run_update(*args):
-    r = subprocess.run([UPDATE, *args], capture_output=True, text=True, timeout=120)
-    if "Traceback" in r.stderr:
-        raise AssertionError("servo-update %s printed a traceback:\n%s" % (" ".join(args), r.stderr))
-    return r
+    """tools/servo-update ARGS as a process; a traceback fails the test."""
+    return run_tool(UPDATE, *args)
 
 
-class BadInput(unittest.TestCase):
+class BadInput(ImageDir, unittest.TestCase):
     """No servo is needed: each is refused before the bus is opened (the bus
     named is one where nothing listens)."""
-
-    def setUp(self):
-        self.dir = tempfile.TemporaryDirectory()
-        self.addCleanup(self.dir.cleanup)
-        self.good = self.file("good.kmfw", make_image())
-
-    def file(self, name, data):
-        path = os.path.join(self.dir.name, name)
-        with open(path, "wb") as f:
-            f.write(data)
-        return path
 
     def refused(self, message, *args):
         r = run_update(*args)
@@ -101,28 +70,8 @@ class BadInput(unittest.TestCase):
         self.assertRegex(r.stderr, r"^servo-update: tcp:127.0.0.1:9: connection refused .*\n$")
 
 
-class NothingTouched(unittest.TestCase):
+class NothingTouched(AppServos, unittest.TestCase):
     """Two host-sim servos: applications without a bootloader."""
-
-    @classmethod
-    def setUpClass(cls):
-        cls.dir = tempfile.TemporaryDirectory()
-        cls.image = os.path.join(cls.dir.name, "v2.kmfw")
-        with open(cls.image, "wb") as f:
-            f.write(make_image())
-        cls.wire = ServoBus(ids=(1, 2))
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.wire.close()
-        cls.dir.cleanup()
-
-    def untouched(self):
-        """Both servos answer with status 0 and still report their 0x0C."""
-        with Bus(self.wire.spec) as bus:
-            for i in (1, 2):
-                self.assertEqual(bus.ping(i), 0, "ID %d" % i)
-                self.assertEqual(bus.read(i, 0x0C), struct.pack("<I", 0x00100100))
 
     def test_no_bootloader(self):
         r = run_update("--bus", self.wire.spec, "--ids", "1,2", self.image)
