@@ -34,7 +34,10 @@ def bus_boards():
     cmake = shutil.which("cmake")
     if not cmake:
         raise BuildMissing("cmake is not on PATH: it finds the boards (cmake/km_boards.cmake)")
-    r = subprocess.run([cmake, "-DKM_BOARDS_QUERY=bus", "-P", KM_BOARDS], capture_output=True, text=True)
+    # A session of its own: a Ctrl-C to the caller's process group must not
+    # kill the query (servo-bus then stops cleanly on its own).
+    r = subprocess.run([cmake, "-DKM_BOARDS_QUERY=bus", "-P", KM_BOARDS], capture_output=True, text=True,
+                       start_new_session=True)
     if r.returncode != 0:
         raise BuildMissing("board discovery failed (cmake -DKM_BOARDS_QUERY=bus -P %s): %s"
                            % (KM_BOARDS, r.stderr.strip()))
