@@ -29,16 +29,14 @@ import shlex
 import signal
 import struct
 import subprocess
-import sys
 import time
 import unittest
 
-REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
-sys.path.insert(0, os.path.join(REPO, "host"))
-from kmx.bus import Bus  # noqa: E402
+from kmx.bus import Bus  # noqa: E402  (host/ and sim/bus on PYTHONPATH: tests/CMakeLists.txt)
+import simbus  # noqa: E402
 
-BUILD = os.path.join(os.environ.get("KM_BUILD_QEMU") or os.path.join(REPO, "build", "qemu"),
-                     "boards", "qemu-microbit")
+REPO = simbus.REPO
+BUILD = os.path.join(simbus.build_dir("qemu"), "boards", "qemu-microbit")
 BOOT = os.path.join(BUILD, "km-servo-boot-qemu-microbit.elf")
 V2 = os.path.join(BUILD, "km-servo-app-v2-qemu-microbit.kmfw")
 UPDATE = os.path.join(REPO, "tools", "servo-update")
@@ -57,7 +55,7 @@ class InterruptedUpdate(unittest.TestCase):
     def setUpClass(cls):
         for f in (BOOT, V2):
             if not os.path.isfile(f):
-                raise AssertionError("missing %s: cmake --preset qemu && cmake --build --preset qemu" % f)
+                raise AssertionError("missing %s: %s" % (f, simbus.build_hint("qemu")))
         cls.bus_proc = subprocess.Popen([os.path.join(REPO, "sim", "bus", "servo-bus"), "--ids", "1,2", "--port", "0",
                                          "--image", BOOT], stdout=subprocess.PIPE, text=True)
         line = read_line(cls.bus_proc, 60) or ""

@@ -23,10 +23,10 @@ import unittest
 
 from test_kmx import REPO, host_sim_image  # noqa: E402
 from kmx import frame as kmframe  # noqa: E402  (docs/architecture.md "The folders": PYTHONPATH)
+import simbus  # noqa: E402  (sim/bus: the boards' builds, found as servo-bus finds them)
 
 SERVO_BUS = os.path.join(REPO, "sim", "bus", "servo-bus")
-BOOT_IMAGE = os.path.join(os.environ.get("KM_BUILD_QEMU") or os.path.join(REPO, "build", "qemu"),
-                          "boards", "qemu-microbit", "km-servo-boot-qemu-microbit.elf")
+BOOT_IMAGE = os.path.join(simbus.build_dir("qemu"), "boards", "qemu-microbit", "km-servo-boot-qemu-microbit.elf")
 # docs/update.md §4: 0x78 ENTER and START, broadcast
 ENTER = kmframe.encode_command(kmframe.ID_BROADCAST, 0x78, 0x01, bytes([0xB1, 0xB2, 0xB3, 0xB4]))
 START = kmframe.encode_command(kmframe.ID_BROADCAST, 0x78, 0x07, bytes([0xE1, 0xE2, 0xE3, 0xE4]))

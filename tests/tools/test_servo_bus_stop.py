@@ -22,12 +22,12 @@ import time
 import unittest
 
 from test_kmx import REPO, host_sim_image  # noqa: E402
+import simbus  # noqa: E402  (sim/bus: the boards' builds, found as servo-bus finds them)
 from test_kmx_cli import kmx  # noqa: E402
 
 CHECK = os.path.join(REPO, "tests", "tools", "ctrl_c_check.py")
 SERVO_BUS = os.path.join(REPO, "sim", "bus", "servo-bus")
-QEMU_IMAGE = os.path.join(os.environ.get("KM_BUILD_QEMU") or os.path.join(REPO, "build", "qemu"),
-                          "boards", "qemu-microbit", "km-servo-qemu-microbit.elf")
+QEMU_IMAGE = simbus.default_image("qemu")[0]
 
 
 def alive(pid):
