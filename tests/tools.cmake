@@ -24,7 +24,8 @@
 # without a browser (needs python3-aiohttp), about 6 s; test_servo_bus_sched.py: SCHED_FIFO by default where allowed,
 # --no-realtime, the fallback, policies read back from the kernel, three
 # QEMU servos in the polling update bootloader put back to plain scheduling
-# and answering, a busy-looping process made plain within 0.5 s, about 8 s; test_run_on_bus.py: the conformance wrapper runs every check it
+# and answering, a busy-looping process made plain within 0.5 s, a bootloader
+# image's servos at priority 9, below the rest, about 10 s; test_run_on_bus.py: the conformance wrapper runs every check it
 # names, on a SCHED_FIFO and a plain bus, and counts a check not run as a
 # failure, about 12 s; all need the host-sim preset built). Whole py_tools
 # run: 178-245 s measured on the shared 2-core machine with other builds running

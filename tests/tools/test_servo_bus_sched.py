@@ -77,6 +77,8 @@ class Scheduling(unittest.TestCase):
         lines = [ln for ln in err.splitlines() if ln.startswith("servo-bus: scheduling: ")]
         self.assertEqual(len(lines), 1, err)
         servos = [os.sched_getscheduler(int(pid)) for pid in re.findall(r"pid (\d+) on port", err)]
+        self.servo_priorities = [os.sched_getparam(int(pid)).sched_priority
+                                 for pid in re.findall(r"pid (\d+) on port", err)]
         return (os.sched_getscheduler(p.pid), os.sched_getparam(p.pid).sched_priority, servos,
                 lines[0])
 
@@ -85,6 +87,7 @@ class Scheduling(unittest.TestCase):
     def test_default_is_sched_fifo_where_allowed(self):
         hub, prio, servos, line = self.start()
         self.assertEqual((hub, prio, servos), (os.SCHED_FIFO, 20, [os.SCHED_FIFO] * 2))
+        self.assertEqual(self.servo_priorities, [10, 10])
         self.assertEqual(line, "servo-bus: scheduling: SCHED_FIFO, servos 10, hub 20, a busy-looping "
                          "servo plain (the host allows it; --no-realtime for plain)")
 
@@ -190,6 +193,40 @@ class BusyGuest(unittest.TestCase):
             deadline = time.monotonic() + 20
             while not ping(sock, dev_id, 0.5):
                 self.assertLess(time.monotonic(), deadline, "servo %d silent after START" % dev_id)
+
+class BootPriority(unittest.TestCase):
+    """Servos of an image with the update bootloader, which polls its UART,
+    run one priority below every other servo: while two of them busy-loop at
+    the same priority as the rest, every other real-time servo on a
+    two-core host waits until the CPU guard acts (a conformance load run on
+    host-sim lost a super-ID round that way to another bus's two QEMU
+    servos entering the bootloader); one below, a servo that has to answer
+    takes the core from them at once."""
+
+    @unittest.skipUnless(fifo_allowed(), "this host refuses SCHED_FIFO: no priorities to compare")
+    @unittest.skipUnless(os.path.isfile(BOOT_IMAGE) and shutil.which("qemu-system-arm"),
+                         "no QEMU bootloader image or qemu-system-arm")
+    def test_an_image_with_the_polling_bootloader_runs_below_other_servos(self):
+        errlog = tempfile.TemporaryFile(mode="w+")
+        self.addCleanup(errlog.close)
+        p = subprocess.Popen([sys.executable, SERVO_BUS, "--ids", "1", "--port", "0", "--image",
+                              BOOT_IMAGE], stdout=subprocess.PIPE, stderr=errlog, text=True)
+
+        def stop():
+            p.terminate()
+            p.communicate(timeout=30)
+        self.addCleanup(stop)
+        ready = p.stdout.readline()
+        self.assertTrue(ready.startswith("ready 127.0.0.1:"), ready)
+        errlog.seek(0)
+        err = errlog.read()
+        pids = [int(pid) for pid in re.findall(r"servo id \d+: pid (\d+) on port", err)]
+        self.assertEqual(len(pids), 1, err)
+        self.assertEqual((os.sched_getscheduler(pids[0]), os.sched_getparam(pids[0]).sched_priority),
+                         (os.SCHED_FIFO, 9))
+        self.assertIn("servo-bus: the image holds the update bootloader (it polls its UART): servos "
+                      "at priority 9, below other servos\n", err)
+
 
 # A guest that polls: told it runs, it spins (at most SPIN_S, should the guard
 # never act) and then sleeps.
