@@ -1,10 +1,9 @@
 # SPDX-License-Identifier: Apache-2.0
-"""What every example shares: kmx importable from the checkout, and the bus
-spec from --bus, else $KMX_BUS, else the emulated bus of sim/bus/servo-bus."""
+"""What every example shares: the bus spec from --bus, else $KMX_BUS, else
+the emulated bus of sim/bus/servo-bus. kmx itself comes from an install
+(pip install ./host) or from PYTHONPATH=host (docs/python-api.md §0)."""
 import os
 import sys
-
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))  # host/: kmx uninstalled
 
 
 def bus_spec():

@@ -14,8 +14,7 @@ import subprocess
 import sys
 import unittest
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_kmx import REPO, ServoBus  # noqa: E402
+from test_kmx import REPO, ServoBus
 
 EXAMPLES = os.path.join(REPO, "host", "examples")
 EXPECT = {  # example -> regular expressions its output must match, in order

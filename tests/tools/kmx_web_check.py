@@ -23,8 +23,9 @@ import sys
 import time
 import unittest
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_kmx import REPO, ServoBus  # noqa: E402
+from test_kmx import REPO, ServoBus
+from kmx.deps import import_debian
+from kmx.errors import MissingPackage
 
 SKIP = 77
 SHOTS = os.path.join(REPO, "docs", "web")
@@ -39,10 +40,9 @@ def browser_or_skip():
     """Selenium's Chrome driver on Debian's Chromium, or exit 77 saying what is missing."""
     missing = [p for p in ("/usr/bin/chromium", "/usr/bin/chromedriver") if not os.path.exists(p)]
     try:
-        sys.path.append("/usr/lib/python3/dist-packages")
-        from selenium import webdriver
+        webdriver = import_debian("selenium.webdriver", "python3-selenium", "kmx_web")
         from selenium.webdriver.chrome.service import Service
-    except ImportError:
+    except MissingPackage:
         missing.append("python3-selenium")
     if missing:
         print("kmx_web: SKIPPED: %s missing (tools/install-deps installs chromium, chromium-driver, "

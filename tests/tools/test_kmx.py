@@ -18,17 +18,17 @@ import time
 import unittest
 from unittest import mock
 
-REPO = os.path.realpath(os.path.join(os.path.dirname(__file__), "..", ".."))
-sys.path.insert(0, os.path.join(REPO, "host"))
-from kmx import deps, faultlog  # noqa: E402
-from kmx import frame as fr  # noqa: E402
-from kmx import transport as tp  # noqa: E402
-from kmx import bus as bus_mod  # noqa: E402
-from kmx.bus import Bus  # noqa: E402
-from kmx.errors import (ConnectionRefused, KmxError, MissingPackage, NoAnswer,  # noqa: E402
+from kmx import deps, faultlog
+from kmx import frame as fr
+from kmx import transport as tp
+from kmx import bus as bus_mod
+from kmx.bus import Bus
+from kmx.errors import (ConnectionRefused, KmxError, MissingPackage, NoAnswer,
                         NoSuchDevice, NotASerialPort, PortBusy, RangeError, RegisterError,
                         SpecError, TransportError)
-from kmx.registers import RegisterMap, Registers  # noqa: E402
+from kmx.registers import RegisterMap, Registers
+
+REPO = os.path.realpath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
 
 def h(s):

@@ -10,14 +10,13 @@ import subprocess
 import sys
 import unittest
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_kmx import REPO, HostSim, ServoBus  # noqa: E402
-from test_kmx_cli import kmx  # noqa: E402
-from kmx.bus import Bus  # noqa: E402
-from kmx import frame as fr  # noqa: E402
-from kmx.errors import NoAnswer  # noqa: E402
+from test_kmx import REPO, HostSim, ServoBus
+from test_kmx_cli import kmx
+from kmx.bus import Bus
+from kmx import frame as fr
+from kmx.errors import NoAnswer
 
-import kmwire  # noqa: E402
+import kmwire
 
 PING1 = fr.ping(1)
 

@@ -18,9 +18,8 @@ import time
 import unittest
 from unittest import mock
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_kmx import REPO, HostSim, ServoBus  # noqa: E402
-from kmx import cli, deps  # noqa: E402  (host/ is on sys.path through test_kmx)
+from test_kmx import REPO, HostSim, ServoBus
+from kmx import cli, deps
 
 KMX = os.path.join(REPO, "tools", "kmx")
 SUBCOMMANDS = ("scan", "ping", "get", "set", "dump", "torque", "move", "monitor", "set-id", "set-baud", "rescue",

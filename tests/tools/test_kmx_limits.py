@@ -10,16 +10,14 @@ and compared, and a real host-sim servo refuses (status bit 6, §4) what kmx
 refuses. About 4 s."""
 import json
 import os
-import sys
 import unittest
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_kmx import REPO, HostSim  # noqa: E402
-from test_kmx_cli import kmx  # noqa: E402
-from kmx import products  # noqa: E402
-from kmx.bus import Bus  # noqa: E402
-from kmx.errors import RangeError  # noqa: E402
-from kmx.registers import Registers  # noqa: E402
+from test_kmx import REPO, HostSim
+from test_kmx_cli import kmx
+from kmx import products
+from kmx.bus import Bus
+from kmx.errors import RangeError
+from kmx.registers import Registers
 
 
 class Table(unittest.TestCase):

@@ -19,14 +19,13 @@ import sys
 import tempfile
 import unittest
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_kmx import REPO, host_sim_image  # noqa: E402
-from test_kmx_cli import KMX, kmx  # noqa: E402
-from kmx import frame as fr  # noqa: E402
-from kmx.bus import Bus  # noqa: E402
-from kmx.errors import IdTaken  # noqa: E402
-from kmx.registers import Registers  # noqa: E402
-from kmx.transport import Transport  # noqa: E402
+from test_kmx import REPO, host_sim_image
+from test_kmx_cli import KMX, kmx
+from kmx import frame as fr
+from kmx.bus import Bus
+from kmx.errors import IdTaken
+from kmx.registers import Registers
+from kmx.transport import Transport
 
 SERVO_BUS = os.path.join(REPO, "sim", "bus", "servo-bus")
 

@@ -6,17 +6,14 @@ servo-bus's busy message, each opened and used against a real host-sim
 servo (a pseudo-terminal, host-sim --pty) or the 3-servo host-sim bus of
 sim/bus/servo-bus. About 6 s."""
 import os
-import sys
 import tempfile
 import unittest
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_kmx import HostSim, ServoBus  # noqa: E402
-from test_kmx_cli import kmx  # noqa: E402
-from kmx import frame as fr  # noqa: E402
-from kmx import transport as tp  # noqa: E402
-from kmx.bus import Bus  # noqa: E402
-from kmx.errors import NoAnswer, NoSuchDevice, PortBusy, SpecError  # noqa: E402
+from test_kmx import HostSim, ServoBus
+from test_kmx_cli import kmx
+from kmx import transport as tp
+from kmx.bus import Bus
+from kmx.errors import NoAnswer, NoSuchDevice, PortBusy, SpecError
 
 
 class Specs(unittest.TestCase):

@@ -11,12 +11,10 @@ Ctrl-C of `kmx update` and the command it prints: tests/tools/
 servo_update_qemu.py (CTest update_qemu_interrupt). About 8 s."""
 import os
 import re
-import sys
 import unittest
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_kmx import REPO, ServoBus  # noqa: E402
-from update_tool_rig import AppServos, ImageDir, make_image, run_tool  # noqa: E402
+from test_kmx import REPO, ServoBus
+from update_tool_rig import AppServos, ImageDir, make_image, run_tool
 
 KMX = os.path.join(REPO, "tools", "kmx")
 

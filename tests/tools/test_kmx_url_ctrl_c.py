@@ -14,12 +14,11 @@ import sys
 import time
 import unittest
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_kmx import ServoBus  # noqa: E402
-from test_kmx_cli import KMX, kmx  # noqa: E402
-from kmx import baud as kbaud  # noqa: E402
-from kmx import transport as tp  # noqa: E402
-from kmx.errors import SpecError  # noqa: E402
+from test_kmx import ServoBus
+from test_kmx_cli import KMX, kmx
+from kmx import baud as kbaud
+from kmx import transport as tp
+from kmx.errors import SpecError
 
 # The line of tools/kmx that puts its Ctrl-C handler in place: a traceback
 # whose frames all lie before it is the interpreter starting, before kmx runs.

@@ -11,13 +11,11 @@ import json
 import os
 import signal
 import subprocess
-import sys
 import time
 import unittest
 import urllib.request
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_kmx import REPO, ServoBus  # noqa: E402
+from test_kmx import REPO, ServoBus
 
 
 class WebApi(unittest.TestCase):
