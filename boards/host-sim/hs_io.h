@@ -22,6 +22,15 @@ void hs_uart_set_report_baud(bool on);
 void hs_plant_prepare_exec(void);
 /* --scenario FILE (hs_scenario.c); false, with the reason on stderr, on a bad file. */
 bool hs_scenario_load(const char *path);
+/* One event "KEY VALUE" to apply now (hs_inject.c): false with *why for a
+ * malformed line, an unknown key or a value out of its key's range. */
+bool hs_scenario_parse_now(const char *text, uint32_t *key, int32_t *value, const char **why);
+/* --inject PATH (hs_inject.c): a Unix datagram socket at PATH taking one
+ * "KEY VALUE" scenario event per datagram, applied to the plant at once
+ * and answered "ok KEY VALUE" or "error: reason" to a bound sender. */
+bool hs_inject_open(const char *path);
+int hs_inject_poll_fd(void);
+void hs_inject_on_readable(void);
 
 /* File descriptor to poll for bus input; -1 when none or the host-side buffer is full. */
 int hs_uart_poll_fd(void);

@@ -31,6 +31,7 @@ static int prv_usage(const char *argv0)
     fprintf(stderr,
             "usage: %s (--listen HOST:PORT | --pty) --flash FILE [--baud N] [--gap-floor-us N]\n"
             "          [--product pot|encoder] [--plant realistic|ideal] [--scenario FILE]\n"
+            "          [--inject PATH]\n"
             "  --gap-floor-us N  least silence inside a frame that drops it, in us, when it\n"
             "                    exceeds the parser's max(10 byte times, 1 ms); default %u\n"
             "                    (host scheduling stalls); 0 = the real rule\n"
@@ -46,6 +47,9 @@ static int prv_usage(const char *argv0)
             "                    T_MS KEY VALUE, keys supply_mv, ambient_dc (0.1 degC),\n"
             "                    load_mnm (mN*m), faults (1 pot, 2 motor, 4 NTC open),\n"
             "                    temp_dc (winding temperature now, 0.1 degC)\n"
+            "  --inject PATH     a Unix datagram socket taking one \"KEY VALUE\" of the\n"
+            "                    scenario keys per datagram, applied at once (answered\n"
+            "                    \"ok ...\" or \"error: ...\" to a bound sender)\n"
             "  --baud N          the master's line rate on the wire, %u..%u; the servo runs at\n"
             "                    its stored 0x10 and hears garbage at another rate (default:\n"
             "                    the master follows the servo)\n"
@@ -142,6 +146,9 @@ static int prv_option(prv_args_t *a, const char *name, const char *value, const 
     }
     if (strcmp(name, "--plant") == 0) {
         return prv_plant(value, argv0);
+    }
+    if (strcmp(name, "--inject") == 0) {
+        return hs_inject_open(value) ? 0 : 2;
     }
     return -1;
 }

@@ -73,20 +73,34 @@ static int prv_parse(const char *text, unsigned long *t_ms, char *name, size_t n
     return *prv_skip_blanks(end) == '\0' ? 1 : 0;
 }
 
-/* One parsed line as an event after the ones held: false (with the
- * reason) for an unknown key, a value out of its range, a time before the
- * last one, or one event too many. */
-static bool prv_add(const char *path, unsigned line, unsigned long t_ms, const char *name, long value)
+/* The key named `name` with `value` in its range: its index in s_keys, or
+ * -1 with *why set. */
+static int prv_key(const char *name, long value, const char **why)
 {
     size_t k = 0;
     while (k < sizeof s_keys / sizeof s_keys[0] && strcmp(s_keys[k].name, name) != 0) {
         k++;
     }
     if (k == sizeof s_keys / sizeof s_keys[0]) {
-        return prv_fail(path, line, "unknown key (supply_mv, ambient_dc, load_mnm, faults, temp_dc)");
+        *why = "unknown key (supply_mv, ambient_dc, load_mnm, faults, temp_dc)";
+        return -1;
     }
     if (value < s_keys[k].lo || value > s_keys[k].hi) {
-        return prv_fail(path, line, "value out of range for its key");
+        *why = "value out of range for its key";
+        return -1;
+    }
+    return (int)k;
+}
+
+/* One parsed line as an event after the ones held: false (with the
+ * reason) for an unknown key, a value out of its range, a time before the
+ * last one, or one event too many. */
+static bool prv_add(const char *path, unsigned line, unsigned long t_ms, const char *name, long value)
+{
+    const char *why = NULL;
+    const int k = prv_key(name, value, &why);
+    if (k < 0) {
+        return prv_fail(path, line, why);
     }
     if (t_ms > UINT32_MAX || (s_count > 0 && t_ms < s_events[s_count - 1u].t_ms)) {
         return prv_fail(path, line, "times must not decrease");
@@ -139,4 +153,30 @@ const km_scn_event_t *km_sim_board_scenario(uint32_t *n)
 {
     *n = s_count;
     return s_count != 0u ? s_events : NULL;
+}
+
+/* "KEY VALUE" (a runtime injection, hs_inject.c): the scenario line's
+ * format without its time, checked as a file's line is. */
+bool hs_scenario_parse_now(const char *text, uint32_t *key, int32_t *value, const char **why)
+{
+    char line[160];
+    if (strlen(text) + 3u > sizeof line) {
+        *why = "longer than a scenario line";
+        return false;
+    }
+    snprintf(line, sizeof line, "0 %s", text);
+    char name[32];
+    unsigned long t_ms;
+    long v;
+    if (prv_parse(line, &t_ms, name, sizeof name, &v) != 1) {
+        *why = "expected: KEY VALUE";
+        return false;
+    }
+    const int k = prv_key(name, v, why);
+    if (k < 0) {
+        return false;
+    }
+    *key = (uint32_t)s_keys[k].key;
+    *value = (int32_t)v;
+    return true;
 }

@@ -118,10 +118,16 @@ void km_hal_idle(void)
     if (wait_us < 0 || wait_us > 1000) {
         wait_us = 1000;
     }
-    struct pollfd pfd = {.fd = hs_uart_poll_fd(), .events = POLLIN};
+    struct pollfd pfd[2] = {{.fd = hs_uart_poll_fd(), .events = POLLIN},
+                            {.fd = hs_inject_poll_fd(), .events = POLLIN}};
     const struct timespec timeout = {.tv_sec = 0, .tv_nsec = (long)wait_us * 1000L};
-    if (ppoll(&pfd, pfd.fd >= 0 ? 1u : 0u, &timeout, NULL) > 0) {
-        hs_uart_on_readable();
+    if (ppoll(pfd, 2u, &timeout, NULL) > 0) { /* a negative fd is ignored */
+        if (pfd[0].revents & POLLIN) {
+            hs_uart_on_readable();
+        }
+        if (pfd[1].revents & POLLIN) {
+            hs_inject_on_readable();
+        }
     }
     hs_timer_service();
 }

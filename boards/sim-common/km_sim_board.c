@@ -125,6 +125,15 @@ void km_hal_sensors_read(km_sensors_t *out)
     out->faults = 0; /* the simulated sensors are sound unless a test injects a fault */
 }
 
+/* One scenario event applied now (km_sim_board.h). */
+void km_sim_board_inject(uint32_t key, int32_t value)
+{
+    const km_scn_event_t now = {.t_ms = 0u, .key = key, .value = value};
+    km_scn_player_t one;
+    km_scn_start(&one, &now, 1u);
+    km_scn_play(&one, &s_plant, &s_input);
+}
+
 km_plant_t *km_sim_board_plant(void)
 {
     return &s_plant;

@@ -37,4 +37,9 @@ _Noreturn void km_sim_board_run(uint32_t gap_floor_us, uint32_t slot_floor_us);
  * NULL with *n = 0 when there is none. */
 const km_scn_event_t *km_sim_board_scenario(uint32_t *n);
 
+/* One scenario event (km_scn_key_t, value) applied to the plant now, as the
+ * player applies a due one: a change made by hand while the servo runs
+ * (host-sim --inject). */
+void km_sim_board_inject(uint32_t key, int32_t value);
+
 #endif

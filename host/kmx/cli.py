@@ -609,6 +609,8 @@ def build_parser():
     p.add_argument("--port", type=int, default=8765, help="TCP port on 127.0.0.1 (default 8765; 0 = any free)")
     p.add_argument("--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1)")
     p.add_argument("--any-host", action="store_true", help="allow --host other than this machine")
+    p.add_argument("--inject-dir", metavar="DIR", help="the emulated bus's bench (sim/bus/servo-bus --inject-dir "
+                   "DIR): supply sag, overheat and load from the page")
     p.set_defaults(standalone=cmd_web)
     return ap
 

@@ -22,6 +22,8 @@ JSON API (all POST bodies JSON; every answer {"ok": true, ...} or
     GET  /api/servo/ID/faults        the fault log
     POST /api/servo/ID/set-id {new}  POST /api/servo/ID/set-baud {baud}   POST /api/rescue (job)
     POST /api/update {ids, image}    job: the firmware update (kmx/update.py), per-servo progress
+    POST /api/servo/ID/bench {preset} or {key, value}   the emulated bench (kmx/bench.py, --inject-dir)
+    GET  /api/servo/ID/protection    status and 0x36 in words, temperature, voltage: a trip and its release
 """
 
 import argparse
@@ -36,6 +38,7 @@ import sys
 import time
 
 from . import baud as kbaud
+from . import bench as kbench
 from . import cli
 from . import faultlog
 from . import frame as fr
@@ -114,7 +117,8 @@ class WebUpdater(kupdate.Updater):
 class Wizard:
     """The bus and what the page asks of it; every method runs in the bus thread."""
 
-    def __init__(self, spec=None):
+    def __init__(self, spec=None, inject_dir=None):
+        self.bench = kbench.Bench(inject_dir) if inject_dir else None
         self.bus = self.regs = None
         self.map = RegisterMap.load()
         self.job = None
@@ -140,7 +144,50 @@ class Wizard:
         """What the page shows first: the bus, or why there is none."""
         return {"bus": self.bus.transport.spec if self.bus else None, "spec": self.spec, "note": self.note,
                 "baud": self.bus.baud if self.bus else None,
-                "can_set_baud": bool(self.bus and getattr(self.bus.transport, "can_set_baud", False))}
+                "can_set_baud": bool(self.bus and getattr(self.bus.transport, "can_set_baud", False)),
+                "bench": self.bench_state()}
+
+    def bench_state(self):
+        """The bench section: its servos and presets, or why there is none."""
+        kind = getattr(self.bus.transport, "kind", None) if self.bus else None
+        if kind in ("serial", "hwgrep"):
+            return {"servos": [], "why": "a real bus: the supply, heat and load are your bench's own "
+                                         "(scenarios exist on the emulated bus only)"}
+        if self.bench is None:
+            return {"servos": [], "why": "no bench: start the emulated bus with sim/bus/servo-bus "
+                                         "--inject-dir DIR and kmx web with --inject-dir DIR"}
+        ids = self.bench.servos()
+        if not ids:
+            return {"servos": [], "why": "no bench: no servo sockets in %s (servo-bus --inject-dir %s, "
+                                         "host-sim backend)" % (self.bench.dir, self.bench.dir)}
+        return {"servos": ids, "why": None, "keys": {k: list(v) for k, v in kbench.KEYS.items()},
+                "presets": {k: v[0] for k, v in kbench.PRESETS.items()}}
+
+    def bench_inject(self, dev_id, body):
+        """A preset or one KEY VALUE on dev_id's emulated bench: what was applied."""
+        why = self.bench_state()["why"]
+        if why:
+            raise KmxError(why)
+        if "preset" in body:
+            if body["preset"] not in kbench.PRESETS:
+                raise KmxError("bench: no preset %r (%s)" % (body["preset"], ", ".join(kbench.PRESETS)))
+            events = kbench.PRESETS[body["preset"]][1]
+        else:
+            events = [(str(body["key"]), int(body["value"]))]
+        done = [self.bench.inject(dev_id, key, value)[3:] for key, value in events]
+        return {"applied": done}
+
+    def protection(self, dev_id):
+        """What the page shows while a protection trips and releases: the
+        status byte and 0x36 in words, temperature and voltage."""
+        self.need_bus()
+        status = self.bus.ping(dev_id)
+        flags = self.regs.get(dev_id, "prot_flags").value
+        names = [w for bit, w in ((8, "stall"), (4, "temperature"), (2, "current"), (1, "voltage")) if flags & bit]
+        return {"status": ", ".join(fr.status_words(status)), "status_byte": status, "prot_flags": flags,
+                "protecting": ", ".join(names) or "none",
+                "temperature": str(self.regs.get(dev_id, "temperature")),
+                "voltage": str(self.regs.get(dev_id, "voltage"))}
 
     def need_bus(self):
         if self.bus is None:
@@ -350,6 +397,7 @@ class Server:
         r.add_post("/api/update", self.h_update)
         r.add_get("/api/servo/{id}/registers", self.h_servo_get)
         r.add_get("/api/servo/{id}/faults", self.h_servo_get)
+        r.add_get("/api/servo/{id}/protection", self.h_servo_get)
         r.add_post("/api/servo/{id}/{what}", self.h_servo_post)
         return app
 
@@ -432,7 +480,8 @@ class Server:
 
     async def h_servo_get(self, request):
         what = request.path.rsplit("/", 1)[1]
-        fn = {"registers": self.wizard.registers, "faults": self.wizard.faults}[what]
+        fn = {"registers": self.wizard.registers, "faults": self.wizard.faults,
+              "protection": self.wizard.protection}[what]
         try:
             dev_id = self.servo_id(request)
         except ValueError as e:
@@ -442,7 +491,7 @@ class Server:
     async def h_servo_post(self, request):
         w = self.wizard
         fn = {"set": w.set, "torque": w.torque, "move": w.move, "jog": w.jog, "set-id": w.set_id,
-              "set-baud": w.set_baud}.get(request.match_info["what"])
+              "set-baud": w.set_baud, "bench": w.bench_inject}.get(request.match_info["what"])
         if fn is None:
             return self.web.json_response({"ok": False, "error": "no such action"}, status=404)
         try:
@@ -474,10 +523,10 @@ class Server:
         return self.start_job("update", self.wizard.update, body)
 
 
-def serve(spec, host, port, ready=None):
+def serve(spec, host, port, ready=None, inject_dir=None):
     """Runs the page on host:port until Ctrl-C; ready(url) once it listens."""
     import tempfile
-    server = Server(Wizard(spec))
+    server = Server(Wizard(spec, inject_dir))
     web = server.web
     with tempfile.TemporaryDirectory() as tmp:
         server.tmpdir = tmp
@@ -512,7 +561,7 @@ def cmd_web(args):
     def ready(url):
         print("kmx web: open %s in a browser (Ctrl-C stops it)" % url, flush=True)
     try:
-        serve(spec, args.host, args.port, ready)
+        serve(spec, args.host, args.port, ready, getattr(args, "inject_dir", None))
     except KeyboardInterrupt:  # the way to stop it
         print("kmx web: stopped", flush=True)
         return 0

@@ -6,29 +6,53 @@ place of "product" and coded values in words, a write refused naming its
 limit and one read back, set-id refused when the new ID is taken (the
 collision check), live samples by 0x82 on a 50 ms schedule, the page and
 Debian's Chart.js served locally, a request for a bad ID answered in
-words. Needs python3-aiohttp (Debian's python3 runs tools/kmx). About 6 s."""
+words; the bench of an emulated bus (servo-bus --inject-dir, kmx web
+--inject-dir): a supply sag trips the voltage protection and "back to
+normal" releases it, every bad bench request refused in words, and without
+--inject-dir the bench says why it is off. Needs python3-aiohttp (Debian's
+python3 runs tools/kmx). About 20 s."""
 import json
 import os
 import signal
 import subprocess
+import tempfile
 import time
 import unittest
 import urllib.request
 
 from test_kmx import REPO, ServoBus
+from kmx.bench import Bench
+from kmx.errors import KmxError
+
+
+def start_web(spec, *extra):
+    """`tools/kmx --bus SPEC web --port 0 EXTRA`: the process and its URL."""
+    proc = subprocess.Popen([os.path.join(REPO, "tools", "kmx"), "--bus", spec, "web", "--port", "0", *extra],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    line = proc.stdout.readline()
+    if "open http" not in line:
+        proc.kill()
+        raise AssertionError("kmx web did not start: %r %s" % (line, proc.communicate()[1]))
+    return proc, line.split("open ")[1].split()[0].rstrip("/")
+
+
+def call(url, path, body=None):
+    """One API request: the JSON answer."""
+    data = None if body is None else json.dumps(body).encode()
+    req = urllib.request.Request(url + path, data=data, headers={"Content-Type": "application/json"})
+    with urllib.request.urlopen(req, timeout=30) as r:
+        return json.load(r)
 
 
 class WebApi(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.wire = ServoBus()
-        cls.proc = subprocess.Popen([os.path.join(REPO, "tools", "kmx"), "--bus", cls.wire.spec, "web", "--port", "0"],
-                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        line = cls.proc.stdout.readline()
-        if "open http" not in line:
-            cls.tearDownClass()
-            raise AssertionError("kmx web did not start: %r" % line)
-        cls.url = line.split("open ")[1].split()[0].rstrip("/")
+        try:
+            cls.proc, cls.url = start_web(cls.wire.spec)
+        except AssertionError:
+            cls.wire.close()
+            raise
 
     @classmethod
     def tearDownClass(cls):
@@ -38,10 +62,7 @@ class WebApi(unittest.TestCase):
         assert "Traceback" not in err, err
 
     def call(self, path, body=None):
-        data = None if body is None else json.dumps(body).encode()
-        req = urllib.request.Request(self.url + path, data=data, headers={"Content-Type": "application/json"})
-        with urllib.request.urlopen(req, timeout=30) as r:
-            return json.load(r)
+        return call(self.url, path, body)
 
     def job(self):
         for _ in range(300):
@@ -105,6 +126,82 @@ class WebApi(unittest.TestCase):
         self.assertEqual(self.call("/api/servo/300/registers"), {"ok": False, "error": "servo ID 300 is outside 0..250"})
         self.assertEqual(self.call("/api/servo/1/set", {"name": "voltgae", "value": "1"}),
                          {"ok": False, "error": "no register named 'voltgae'; did you mean voltage?"})
+
+    def test_bench_off_says_why(self):
+        why = ("no bench: start the emulated bus with sim/bus/servo-bus --inject-dir DIR and kmx web with "
+               "--inject-dir DIR")
+        self.assertEqual(self.call("/api/state")["bench"], {"servos": [], "why": why})
+        self.assertEqual(self.call("/api/servo/1/bench", {"preset": "sag"}), {"ok": False, "error": why})
+
+
+class WebBench(unittest.TestCase):
+    """The emulated bus's bench from the API (docs/web.md "Bench"; the
+    thresholds of docs/protocol.md §5.2: 0x3C low 6 V, detection 3 s)."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.TemporaryDirectory(prefix="kmx-bench-")
+        cls.wire = ServoBus(extra=("--inject-dir", cls.tmp.name))
+        try:
+            cls.proc, cls.url = start_web(cls.wire.spec, "--inject-dir", cls.tmp.name)
+        except AssertionError:
+            cls.wire.close()
+            raise
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.proc.send_signal(signal.SIGINT)
+        out, err = cls.proc.communicate(timeout=20)
+        cls.wire.close()
+        cls.tmp.cleanup()
+        assert "Traceback" not in err, err
+
+    def protection_until(self, what, check, seconds=30):
+        """Polls /api/servo/2/protection until check(answer) holds: the answer."""
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            r = call(self.url, "/api/servo/2/protection")
+            self.assertTrue(r["ok"], r)
+            if check(r):
+                return r
+            time.sleep(0.2)
+        self.fail("%s: not within %d s (last: %s)" % (what, seconds, r))
+
+    def test_supply_sag_trips_and_normal_releases(self):
+        """§5.2: the sag trips the voltage protection (status bit 0, 0x36 bit 0), back to 7.4 V releases it."""
+        state = call(self.url, "/api/state")["bench"]
+        self.assertEqual((state["servos"], state["why"]), ([1, 2, 3], None))
+        self.assertEqual(call(self.url, "/api/servo/2/bench", {"preset": "sag"}),
+                         {"ok": True, "applied": ["supply_mv 5000"]})
+        r = self.protection_until("the voltage protection trips", lambda r: r["status_byte"] & 0x01)
+        self.assertEqual((r["status"], r["protecting"], r["voltage"]), ("voltage protection", "voltage", "5.000 V"))
+        self.assertEqual(call(self.url, "/api/servo/2/bench", {"preset": "normal"})["applied"],
+                         ["supply_mv 7400", "ambient_dc 250", "temp_dc 250", "load_mnm 0"])
+        r = self.protection_until("the voltage protection releases", lambda r: r["status_byte"] == 0)
+        self.assertEqual((r["status"], r["protecting"], r["voltage"]), ("ok", "none", "7.400 V"))
+
+    def test_bad_bench_requests_in_words(self):
+        self.assertEqual(call(self.url, "/api/servo/1/bench", {"preset": "flood"}),
+                         {"ok": False, "error": "bench: no preset 'flood' (sag, overheat, normal)"})
+        self.assertEqual(call(self.url, "/api/servo/1/bench", {"key": "temp_dc", "value": 99999}),
+                         {"ok": False, "error": "bench: temp_dc (the winding's temperature now) takes "
+                                                "-400..2000 0.1 °C, not 99999"})
+        self.assertEqual(call(self.url, "/api/servo/1/bench", {"key": "humidity", "value": 1})["error"],
+                         "bench: no key 'humidity' (supply_mv, ambient_dc, load_mnm, faults, temp_dc)")
+        self.assertIn("bench: ID 7 has no inject socket", call(self.url, "/api/servo/7/bench",
+                                                              {"preset": "sag"})["error"])
+
+    def test_host_sim_refuses_what_kmx_would_not_send(self):
+        """host-sim --inject checks each datagram itself (hs_scenario.c) and answers in words."""
+        bench = Bench(self.tmp.name)
+        for line, answer in ((b"humidity 1", "error: unknown key (supply_mv, ambient_dc, load_mnm, faults, temp_dc)"),
+                             (b"supply_mv 70000", "error: value out of range for its key"),
+                             (b"supply_mv", "error: expected: KEY VALUE"),
+                             (b"x" * 200, "error: longer than a scenario line")):
+            with self.assertRaises(KmxError) as e:
+                bench._send(bench.path(3), line, 10)
+            self.assertTrue(str(e.exception).endswith(": " + answer), e.exception)
+        self.assertEqual(bench.inject(3, "ambient_dc", 250), "ok ambient_dc 250")
 
 
 if __name__ == "__main__":

@@ -34,6 +34,38 @@ function currentId() { return parseInt($("servo-id").value, 10); }
 function showState(st) {
   $("busline").textContent = st.bus ? "bus " + st.bus : "not connected" + (st.note ? ": " + st.note : "");
   if (st.spec && !$("bus").value) $("bus").value = st.spec;
+  if (st.bench) showBench(st.bench);
+}
+
+// The bench section: enabled on an emulated bus with --inject-dir, else the reason.
+function showBench(bench) {
+  kmx.bench = bench;
+  const off = !!bench.why;
+  document.querySelectorAll("#bench button, #bench input").forEach((el) => { el.disabled = off; });
+  $("bench-why").textContent = off ? bench.why : "emulated servos with a bench: ID " + bench.servos.join(", ");
+  $("bench-why").className = "msg " + (off ? "error" : "ok");
+}
+
+// One bench change on the chosen servo, then the protection watched.
+async function benchPost(body) {
+  const r = await api("/api/servo/" + currentId() + "/bench", body);
+  if (r.ok) say("bench-msg", "ID " + currentId() + ": " + r.applied.join(", "), true);
+  else say("bench-msg", r.error, false);
+  if (r.ok && !kmx.benchWatch) { kmx.benchWatch = true; watchProtection(); }
+}
+
+// While the bench is in use: the chosen servo's status and protection, twice a second.
+async function watchProtection() {
+  while (kmx.benchWatch) {
+    const r = await api("/api/servo/" + currentId() + "/protection");
+    if (r.ok) {
+      $("bench-status").textContent = r.status + " (0x" + r.status_byte.toString(16).padStart(2, "0") + ")";
+      $("bench-protecting").textContent = r.protecting;
+      $("bench-temperature").textContent = r.temperature;
+      $("bench-voltage").textContent = r.voltage;
+    } else $("bench-status").textContent = r.error;
+    await new Promise((res) => setTimeout(res, 500));
+  }
 }
 
 async function connect(ev) {
@@ -282,6 +314,10 @@ function wire() {
   $("set-baud-btn").addEventListener("click", () => setup("set-baud", { baud: $("new-baud").value }));
   $("rescue-btn").addEventListener("click", rescue);
   $("update-form").addEventListener("submit", update);
+  document.querySelectorAll("[data-bench]").forEach((b) =>
+    b.addEventListener("click", () => benchPost({ preset: b.dataset.bench })));
+  $("bench-load-btn").addEventListener("click", () =>
+    benchPost({ key: "load_mnm", value: Math.round(+$("bench-load").value * 1000) }));
   api("/api/state").then((st) => { if (st.ok) showState(st); });
 }
 
