@@ -52,6 +52,9 @@ from .registers import RegisterMap, Registers
 HERE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "web")
 CHART_JS = "/usr/share/javascript/chart.js"
 LIVE_KEEP = 2000  # samples kept for the page (100 s at 20 Hz)
+RESCUE_BOOT_S = 20.0  # the rescued servo's new image answers a super-ID ping within this (a starved
+# emulator works through a backlog of broadcast frames for seconds after the last one was sent)
+RESCUE_PASSES = 2  # blind rescue passes before the page says no servo came back
 UPDATE_PASSES = 6  # a pass that loses a servo's STATUS starts again from ENTER
 LIVE = ("position", "speed", "current", "pwm", "temperature", "voltage", "status")
 ENUM = re.compile(r"^(\d+) (?:= )?([a-z][^,;]*)$")
@@ -325,17 +328,64 @@ class Wizard:
             for i, v in kupdate.preflight(up, ids, self.bus.transport.spec).items():
                 job.lines.append("ID %d: 0x0C = 0x%08X" % (i, v))
                 job.servos[i]["state"] = "checked: 0x%08X" % v
-        a = argparse.Namespace(rescue=bool(body.get("rescue")), rounds=4, one_by_one=False, prog="kmx web",
-                               resets=0, restarts=0)
+        new = struct.unpack_from("<I", image, 12)[0]
+        if body.get("rescue"):
+            return self.rescue_update(up, job, new)
+        a = argparse.Namespace(rescue=False, rounds=4, one_by_one=False, prog="kmx web", resets=0, restarts=0)
         done = kupdate.run_groups(up, a, ids, [], UPDATE_PASSES, job.lines.append)
         if done is None:
             raise KmxError("the update gave up after %d passes: the servos wait in their bootloaders; "
                            "run it again" % UPDATE_PASSES)
-        new = struct.unpack_from("<I", image, 12)[0]
         ok = kupdate.check_result(up, a, done, new, job.lines.append)
         for i in done:
             job.servos[i]["state"] = "updated" if ok else "NOT updated"
         return {"updated": done, "ok": ok}
+
+    def rescue_update(self, up, job, new):
+        """Blind rescue passes (everything broadcast, the servo alone on the
+        bus) until a servo answers a super-ID ping, RESCUE_PASSES at most: a
+        pass spoiled on a loaded machine (a frame lost, a starved emulator
+        behind the pass's fixed waits) costs a pass, not the rescue. The end
+        state is the 0x0C of the servo that answers, not what was sent."""
+        row = job.servos[kupdate.BCAST]
+        found = []
+        for n in range(RESCUE_PASSES):
+            job.lines.append("rescue pass %d: every frame broadcast" % (n + 1))
+            row["state"] = "pass %d" % (n + 1)
+            up.rescue_pass(2)
+            found = self.rescued_ids(up)
+            if found:
+                break
+        if len(found) != 1:
+            row["state"] = "NOT found: %s a super-ID ping after %d passes (the servo rescued is alone on " \
+                           "the bus)" % ("IDs %s answer" % ", ".join(map(str, found)) if found else "no servo answers",
+                                         RESCUE_PASSES)
+            job.lines.append(row["state"])
+            return {"updated": [], "ok": False}
+        dev_id = found[0]
+        v = up.version(dev_id)
+        good = v is not None and (v & 0xFFFFFF) == (new & 0xFFFFFF)
+        row["state"] = "%s: ID %d runs 0x0C = %s" % ("updated" if good else "NOT updated", dev_id,
+                                                     "0x%08X" % v if v is not None else "(no answer)")
+        job.lines.append("rescued servo: " + row["state"])
+        return {"updated": [dev_id] if good else [], "ok": good}
+
+    def rescued_ids(self, up):
+        """The IDs answering a super-ID ping within RESCUE_BOOT_S of a rescue
+        pass, the pass's last frames sent again between tries."""
+        found = []
+        end = time.monotonic() + RESCUE_BOOT_S
+        while time.monotonic() < end:
+            # a second of listening: a starved emulator answers after its slot
+            found = sorted({i for i, _ in self.bus.scan(timeout=max(1.0, self.bus.scan_window()))})
+            if found:
+                break
+            # the last frames again (an application answers them "not supported"): a
+            # bootloader still busy with a COMMIT or an erase when they came now takes them
+            for sub, params in ((kupdate.VERIFY, b""), (kupdate.COMMIT, b""), (kupdate.START, kupdate.START_MAGIC)):
+                up.send(kupdate.frame(kupdate.BCAST, sub, params))
+                time.sleep(0.5)
+        return found
 
 
 class Server:
