@@ -70,6 +70,7 @@ async function watchProtection() {
 
 async function connect(ev) {
   ev.preventDefault();
+  kmx.benchWatch = false; // the servo watched was on the bus before
   const r = await api("/api/connect", { bus: $("bus").value.trim() });
   if (r.ok) showState(r); else $("busline").textContent = "not connected: " + r.error;
 }
