@@ -708,6 +708,7 @@ def main(argv=None):
         ctrl_c.say()
         return 130
     finally:
+        ctrl_c.closing = True  # a Ctrl-C while the handler goes: one line and 130, never a traceback
         ctrl_c.uninstall()
 
 
