@@ -366,7 +366,7 @@ static void prv_drive_servo(km_control_t *c, const km_control_params_t *p, int32
             .pwm_max = limit,
             /* a protection's hold holds where it tripped: the integrator
              * stops there (pushing harder would feed the excursion) */
-            .integrate = sm.holding && c->action == KM_PROT_ACT_NONE,
+            .integrate = sm.holding && c->action == KM_PROT_ACT_NONE && c->ilim.cap >= KM_CURRENT_LIMIT_OPEN,
             .still = c->hold.on && c->action == KM_PROT_ACT_NONE,
         };
         pwm = prv_speed_governor(p, km_position_loop_step(&c->loop, &p->gains, &li, dt_us), speed_ddps);

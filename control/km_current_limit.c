@@ -2,7 +2,7 @@
 /* Current limit: an integral PWM cap (contract in km_current_limit.h). */
 #include "km_current_limit.h"
 
-#define PRV_PWM_MAX 1000
+#define PRV_PWM_MAX KM_CURRENT_LIMIT_OPEN
 
 void km_current_limit_init(km_current_limit_t *l)
 {

@@ -14,6 +14,7 @@
 #include <stdint.h>
 
 #define KM_CURRENT_LIMIT_DIV 8
+#define KM_CURRENT_LIMIT_OPEN 1000 /* the cap when the limit is not acting */
 
 typedef struct {
     int32_t cap; /* PWM the output may use now, 0..1000 */

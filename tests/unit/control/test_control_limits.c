@@ -251,6 +251,40 @@ static void test_c5_speed_limit_bounds_the_shaft(void **state)
     assert_true(iabs(shaft_ddeg() - 600) <= 5);
 }
 
+/* Criterion 5, 0x5C while holding: a settled hold at +60 deg after a move
+ * in time (0x5B 700,
+ * 0x5C 1000 mA, 0x5D 180) pushed by half the stall torque (0.875 N.m: it
+ * takes ~1.15 A to hold, more than 0x5C allows) for 1.5 s, then let go
+ * for 0.5 s. The current stays within 0x5C + 10 % but for at most 5 ms
+ * at a time (today's main: 23 ms at up to 1.2 A: the hold's push
+ * integrator kept raising the PWM while the current was over 0x5C, and
+ * the current limiter's cap, wound up at 1000 during the quiet hold, took
+ * that long to close; docs/tuning.md "Current limit"). */
+static void test_c5_current_limit_holds_against_a_push(void **state)
+{
+    (void)state;
+    rig_pot_at(0);
+    r.params.speed_limit_dps = 180;
+    r.params.torque_limit = 700;
+    r.params.current_limit_ma = 1000;
+    assert_true(kr_torque(&r, 2));
+    kr_run(&r, 300);
+    assert_true(kr_move(&r, KM_MOVE_TIME, 600, 300));
+    kr_run(&r, 900); /* the move, then the hold settles */
+    int32_t over_run = 0, over_max = 0, peak = 0;
+    for (uint32_t i = 0; i < 2000u; i++) {
+        r.in.ext_torque_unm = i < 1500u ? -875000 : 0;
+        kr_tick(&r);
+        const int32_t ma = km_plant_step_peak_ma(&r.plant);
+        peak = ma > peak ? ma : peak;
+        over_run = ma > 1100 ? over_run + 1 : 0;
+        over_max = over_run > over_max ? over_run : over_max;
+    }
+    print_message("C5 0x5C 1000 mA against 0.875 N.m: above 1100 mA for %d ms at most, peak %d mA\n",
+                  (int)over_max, (int)peak);
+    assert_true(over_max <= 5);
+}
+
 /* Criterion 6: for criterion 3's six moves on the realistic plant, the
  * shaft is inside the arrive band (0.5 deg) at the tick bit 7 clears
  * (today's main: 0.546 deg on one of them). */
@@ -421,6 +455,7 @@ int main(void)
         cmocka_unit_test(test_d6_direction_while_holding_rebases),
         cmocka_unit_test(test_d6_offset_mid_move_no_step),
         cmocka_unit_test(test_c5_speed_limit_bounds_the_shaft),
+        cmocka_unit_test(test_c5_current_limit_holds_against_a_push),
         cmocka_unit_test(test_c6_bit7_clears_inside_the_band),
         cmocka_unit_test(test_d9_counted_runs_stop_on_the_count),
         cmocka_unit_test(test_d11_pot_motor_stops_at_travel),

@@ -702,9 +702,15 @@ static const row_t k_rows[] = {
     {.name = "current_load_700ms_above_500ms_trips_brake",
      /* The loop's rise to 1.5 A against the load: with the settled hold's
       * dead band and its push integrator (docs/tuning.md) the current
-      * touches 1.5 A at ~21 ms, dips under it and stays over from 26 ms:
+      * touches 1.5 A at ~21 ms, dips under it and stays over from 27 ms:
       * the timer runs from the first touch (km_protect.h counts a dip
-      * that short on), so no [T, T + 1] bound from d (chatter).
+      * that short on), so no [T, T + 1] bound from d (chatter). The first
+      * touch overshoots 0x5C (2 A here) to ~2.4 A for ~6 ms; the hold's
+      * integrator does not grow while the current limiter holds the
+      * output back (docs/tuning.md "Current limit"), so the dip after it
+      * is one tick longer than when the integrator took ~16 PWM from that
+      * overshoot: the up/down timer trips 2 ticks later (523, was 521),
+      * in every row with this rise.
       * Braked, the load back-drives the shorted motor: the current stays
       * over 1.5 A until the load goes (a brake is a load on the motor
       * too); then it decays within 5 ms and the timer counts 500 ms */
@@ -714,8 +720,8 @@ static const row_t k_rows[] = {
      .stim = {PUSH(LOAD, 0, 700), NONE},
      .run_ms = 3000,
      .clear = NOCLEAR,
-     .trip_lo = 520,
-     .trip_hi = 522,
+     .trip_lo = 522,
+     .trip_hi = 524,
      .chatter = true,
      .bits = KM_PROT_CURRENT,
      .act = ACT_BRAKE,
@@ -733,8 +739,8 @@ static const row_t k_rows[] = {
      .stim = {PUSH(LOAD, 0, 3000), NONE},
      .run_ms = 6000,
      .clear = NOCLEAR,
-     .trip_lo = 2020,
-     .trip_hi = 2022,
+     .trip_lo = 2022,
+     .trip_hi = 2024,
      .chatter = true,
      .bits = KM_PROT_CURRENT,
      .act = ACT_FREE,
@@ -750,8 +756,8 @@ static const row_t k_rows[] = {
      .stim = {PUSH(LOAD, 0, 2000), NONE},
      .run_ms = 4000,
      .clear = NOCLEAR,
-     .trip_lo = 520, /* the rise of the row above, touching 1.5 A at ~21 ms */
-     .trip_hi = 522,
+     .trip_lo = 522, /* the rise of the row above, touching 1.5 A at ~21 ms */
+     .trip_hi = 524,
      .chatter = true,
      .bits = KM_PROT_CURRENT,
      .act = ACT_HOLD,
@@ -768,8 +774,8 @@ static const row_t k_rows[] = {
      .stim = {PUSH(LOAD, 0, 2000), NONE},
      .run_ms = 4000,
      .clear = {{1500, KM_PROT_CURRENT, false}, {2500, KM_PROT_CURRENT, true}},
-     .trip_lo = 520, /* the rise of the row above, touching 1.5 A at ~21 ms */
-     .trip_hi = 522,
+     .trip_lo = 522, /* the rise of the row above, touching 1.5 A at ~21 ms */
+     .trip_hi = 524,
      .chatter = true,
      .bits = KM_PROT_CURRENT,
      .act = ACT_HOLD,
@@ -788,15 +794,15 @@ static const row_t k_rows[] = {
      .clear = NOCLEAR,
      .ts_at = 1000,
      .ts_val = 0,
-     .trip_lo = 520, /* the rise of the row above, touching 1.5 A at ~21 ms */
-     .trip_hi = 522,
+     .trip_lo = 522, /* the rise of the row above, touching 1.5 A at ~21 ms */
+     .trip_hi = 524,
      .chatter = true,
      .bits = KM_PROT_CURRENT,
      .act = ACT_HOLD,
      .rel = REL_AUTO,
      .rel_from_trip = true,
-     .rel_lo = 979, /* from the trip, ~4 ms later than a clean rise (above) */
-     .rel_hi = 981,
+     .rel_lo = 977, /* from the trip: the current ends at 1000, +500: 1501 - trip */
+     .rel_hi = 979,
      .ts_after = 0},
     {.name = "current_motor_mode_end_stop_hold_acts_as_brake",
      /* 0x6E PWM 1000 from 0 deg into the +150 deg stop: the current limit
@@ -859,19 +865,24 @@ static const row_t k_rows[] = {
      .trip_lo = NO_TRIP,
      .act = ACT_NONE},
     {.name = "stall_load_above_500ms_trips_brake",
-     /* d = 794 ms: the loop's integral pulls the loaded shaft back (it
+     /* d = 882 ms: the loop's integral pulls the loaded shaft back (it
       * moves more than 0.1 deg, which restarts the timing) until it
-      * settles, 794 ms after the load comes (the settled hold's push
+      * settles, 882 ms after the load comes (the settled hold's push
       * integrator waits while the shaft returns: docs/tuning.md); trip at
-      * d + 500 (+1) */
+      * d + 500 (+1). Holding this load takes ~1.9 A, 95 % of 0x5C (2 A
+      * here): on the way back the current goes over 0x5C again and
+      * again, and the integrator does not push harder while the current
+      * limiter holds the output back (docs/tuning.md "Current limit"),
+      * so the return takes ~90 ms longer than the 794 ms it took while
+      * it did */
      .cmd = CMD_HOLD,
      .pre_ms = 300,
      SET(0x0D, 0x00, 0x54, 1500, 20, 600, 5),
      .stim = {PUSH(LOAD, 0, 1500), NONE},
      .run_ms = 3000,
      .clear = NOCLEAR,
-     .trip_lo = 1294,
-     .trip_hi = 1295,
+     .trip_lo = 1382,
+     .trip_hi = 1383,
      .bits = KM_PROT_STALL,
      .act = ACT_BRAKE,
      .rel = REL_AUTO,
@@ -886,8 +897,8 @@ static const row_t k_rows[] = {
      .stim = {PUSH(LOAD, 0, 3000), NONE},
      .run_ms = 6000,
      .clear = NOCLEAR,
-     .trip_lo = 2794, /* d = 794 ms as above, T = 2 s */
-     .trip_hi = 2795,
+     .trip_lo = 2882, /* d = 882 ms as above, T = 2 s */
+     .trip_hi = 2883,
      .bits = KM_PROT_STALL,
      .act = ACT_FREE,
      .rel = REL_AUTO,
@@ -902,8 +913,8 @@ static const row_t k_rows[] = {
      .stim = {PUSH(LOAD, 0, 2000), NONE},
      .run_ms = 4000,
      .clear = NOCLEAR,
-     .trip_lo = 1294,
-     .trip_hi = 1295,
+     .trip_lo = 1382,
+     .trip_hi = 1383,
      .bits = KM_PROT_STALL,
      .act = ACT_HOLD,
      .rel = REL_AUTO,
@@ -917,8 +928,8 @@ static const row_t k_rows[] = {
      .stim = {PUSH(LOAD, 0, 2000), NONE},
      .run_ms = 4000,
      .clear = {{1500, KM_PROT_STALL, false}, {2500, KM_PROT_STALL, true}},
-     .trip_lo = 1294,
-     .trip_hi = 1295,
+     .trip_lo = 1382,
+     .trip_hi = 1383,
      .bits = KM_PROT_STALL,
      .act = ACT_HOLD,
      .rel = REL_CMD,
