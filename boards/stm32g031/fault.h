@@ -22,7 +22,9 @@ void g0_stack_paint(void);
 void g0_reset_capture(void);
 
 /* False once anything wrote into the guard band at the bottom of the stack:
- * the stack came within KM_STACK_GUARD bytes of the end of SRAM. */
+ * the stack came within KM_STACK_GUARD bytes (a multiple of 32, at least
+ * 32) of the end of SRAM. Each call checks the next quarter of a 128-byte
+ * band, so four calls cover it. */
 bool g0_stack_guard_intact(void);
 
 /* Bridge free, record {kind, pc, lr} in .noinit, SYSRESETREQ. Moves SP to

@@ -10,8 +10,9 @@
 #include "board_pins.h"
 #include "km_board.h"
 #include "g0_gpio.h"
+#include "motor_duty.h"
 
-#define PWM_PERIOD 3200u /* timer counts per PWM period at 64 MHz */
+#define PWM_PERIOD KM_MOTOR_PWM_PERIOD
 
 static volatile int8_t s_direction;
 
@@ -48,7 +49,7 @@ void km_hal_motor_drive(int16_t pwm)
         p = -KM_MOTOR_PWM_MAX;
     }
     uint32_t mag = (uint32_t)(p < 0 ? -p : p);
-    uint32_t duty = mag * PWM_PERIOD / (uint32_t)KM_MOTOR_PWM_MAX;
+    uint32_t duty = km_motor_duty(mag);
     s_direction = (int8_t)(p > 0 ? 1 : (p < 0 ? -1 : 0));
     if (p >= 0) {
         prv_set(duty, 0u);

@@ -57,8 +57,8 @@ void km_hal_system_init(void)
  * branch may stay in flash: it resets the MCU anyway). */
 G0_RAMFUNC(SysTick_Handler) void SysTick_Handler(void)
 {
-    /* Waking the CPU from WFI is the main job. It also looks at the stack
-     * guard band once per millisecond (32 words, ~2 us at 64 MHz): a stack
+    /* Waking the CPU from WFI is the main job. It also looks at a quarter
+     * of the stack guard band each millisecond (8 of 32 words): a stack
      * that has reached it is within KM_STACK_GUARD bytes of running off
      * SRAM, where the overflow fault would come with no room left to stack
      * the HardFault frame (a lockup, ended only by the IWDG with the bridge

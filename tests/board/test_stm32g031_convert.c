@@ -113,6 +113,31 @@ static void test_prepared_conversions_match(void **state)
     check_fast_against_exact(&other);
 }
 
+/* The NTC search starts at the previous reading's segment (conv.ntc_at):
+ * readings in any order, near and far jumps, convert exactly as a fresh
+ * search from the first segment does, and within 1 of the exact function. */
+static void test_ntc_search_any_order(void **state)
+{
+    (void)state;
+    km_conv_t conv;
+    km_conv_prepare(cfg, &conv);
+    assert_int_equal(conv.ntc_at, 1u);
+    uint32_t raw = 0u;
+    for (uint32_t k = 0; k < 3u * (KM_ADC_FULL_SCALE + 1u); k++) {
+        /* a stride prime to 4096 visits every count, in jumps; every
+         * fourth reading a step of one count, as a slow drift does */
+        raw =
+            (k % 4u == 3u) ? (raw + 1u) % (KM_ADC_FULL_SCALE + 1u) : (raw + 2731u) % (KM_ADC_FULL_SCALE + 1u);
+        km_conv_t fresh;
+        km_conv_prepare(cfg, &fresh);
+        const int32_t got = km_conv_fast_temperature_c10(cfg, &conv, (uint16_t)raw);
+        assert_int_equal(got, km_conv_fast_temperature_c10(cfg, &fresh, (uint16_t)raw));
+        const int32_t d = got - km_conv_temperature_c10(cfg, (uint16_t)raw);
+        assert_true(d >= -1 && d <= 1);
+        assert_true(conv.ntc_at >= 1u && conv.ntc_at < KM_NTC_POINTS);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -122,6 +147,7 @@ int main(void)
         cmocka_unit_test(test_ntc_table_and_interpolation),
         cmocka_unit_test(test_rails),
         cmocka_unit_test(test_prepared_conversions_match),
+        cmocka_unit_test(test_ntc_search_any_order),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

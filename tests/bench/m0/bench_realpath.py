@@ -58,14 +58,15 @@ IRQ_ENTRY, IRQ_EXIT = 15, 13
 OWN_ID = 0            # a fresh servo (docs/protocol.md §1)
 TARGET_BYTE, TARGET_LAST, TARGET_TICK = 60, 1500, 2000
 # Landmarks that survive LTO's inlining: a control tick calls km_control_step,
-# or, inlined, prv_params once; a main-loop pass asks prv_restart_ready; a
+# or, inlined, runs prv_control_tick (kept a function for this) once; a
+# main-loop pass asks prv_restart_ready; a
 # frame handed to the dispatcher goes through km_servo_handle_view or
 # prv_on_events.
-TICK = ("km_control_step", "prv_params")
-# What tells a tick sharing a byte's or a frame's wake-up (prv_params alone
-# would not: a control request calls it too): the tick itself, or the 1 kHz
-# wake-up that makes it due.
-SHARED = ("km_control_step", "SysTick_Handler")
+TICK = ("km_control_step", "prv_control_tick")
+# What tells a tick sharing a byte's or a frame's wake-up: the tick itself
+# (a byte's wake-up that finds the tick due runs it without SysTick), or
+# the 1 kHz wake-up.
+SHARED = ("km_control_step", "prv_control_tick", "SysTick_Handler")
 PASS = ("km_parser_feed_bytes", "prv_restart_ready")
 DISPATCH = ("km_servo_handle_view", "prv_on_events")
 
@@ -259,7 +260,7 @@ def per_byte(b, rows, figs):
                 if nrx != 1 or len(irq) != 1 or b.first(SHARED, lo, hi) is not None:
                     continue  # no byte, or a byte sharing its wake-up with the tick
                 if index != len(f) - 1 and b.first(TICK, lo, hi) is not None:
-                    continue  # a byte inside a frame dispatches nothing: prv_params is a tick
+                    continue  # a byte's wake-up that ran the tick
                 if index == len(f) - 1:
                     armed = b.armed(lo, hi)
                     lasts.append(b.cost(lo, armed if armed is not None else hi) + (f[4], f[1], armed is not None))
