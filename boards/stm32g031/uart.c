@@ -16,15 +16,20 @@
 #include "board_pins.h"
 #include "g0_core.h"
 #include "g0_gpio.h"
+#include "g0_regs.h"
 #include "km_cortex_m.h"
 #include "g0_vectors.h"
 #include "km_hal_system.h"
 #include "km_hal_time.h"
 #include "usart_brr.h"
 
-static km_uart_rx_handler_t s_rx_handler;
-static void *s_rx_ctx;
-static bool s_rx_lost;
+/* The receive side, in one place: the interrupt reaches every field from
+ * one base address. */
+static struct {
+    km_uart_rx_handler_t handler;
+    void *ctx;
+    bool lost; /* an error flag was seen: the next byte follows a loss */
+} s_rx;
 
 static const uint8_t *s_tx_data;
 static uint16_t s_tx_len;
@@ -51,9 +56,9 @@ bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx)
         return false;
     }
     g0_nvic_disable(G0_IRQ_USART1);
-    s_rx_handler = handler;
-    s_rx_ctx = ctx;
-    s_rx_lost = false;
+    s_rx.handler = handler;
+    s_rx.ctx = ctx;
+    s_rx.lost = false;
     s_tx_busy = false;
 
     RCC_APBENR2 |= RCC_APBENR2_USART1;
@@ -104,19 +109,22 @@ bool km_hal_uart_tx_busy(void)
     return s_tx_busy;
 }
 
-static void prv_rx(uint32_t isr, uint32_t cr1)
+/* A received byte (RXNE), or an error flag, while receiving. The byte's
+ * time stamp is TIM2's count read here (km_hal_time_now's, without the
+ * call: this runs for every byte on the bus). */
+static inline __attribute__((always_inline)) void prv_rx(uint32_t isr)
 {
     if ((isr & (USART_ISR_ORE | USART_ISR_FE | USART_ISR_NE | USART_ISR_PE)) != 0u) {
         USART1_ICR = USART_ICR_ORECF | USART_ICR_FECF | USART_ICR_NECF | USART_ICR_PECF;
-        s_rx_lost = true;
+        s_rx.lost = true;
     }
-    if ((cr1 & USART_CR1_RXNEIE) != 0u && (isr & USART_ISR_RXNE) != 0u) {
-        uint32_t tick = km_hal_time_now();
-        uint8_t byte = (uint8_t)USART1_RDR; /* reading clears RXNE */
-        bool lost = s_rx_lost;
-        s_rx_lost = false;
-        if (s_rx_handler != 0) {
-            s_rx_handler(s_rx_ctx, byte, tick, lost);
+    if ((isr & USART_ISR_RXNE) != 0u) {
+        const uint32_t tick = TIM_CNT(TIM2_BASE_R);
+        const uint8_t byte = (uint8_t)USART1_RDR; /* reading clears RXNE */
+        const bool lost = s_rx.lost;
+        s_rx.lost = false;
+        if (s_rx.handler != 0) {
+            s_rx.handler(s_rx.ctx, byte, tick, lost);
         }
     }
 }
@@ -142,11 +150,20 @@ static void prv_tx(uint32_t isr, uint32_t cr1)
     }
 }
 
+/* Receiving (RXNEIE) and sending (TXEIE, then TCIE) never overlap: a send
+ * turns RXNEIE off and TC turns it on again. */
 G0_RAMFUNC(USART1_IRQHandler) void USART1_IRQHandler(void)
 {
-    uint32_t isr = USART1_ISR;
-    uint32_t cr1 = USART1_CR1;
-    /* Error flags interrupt through EIE even while RX is off: always clear. */
-    prv_rx(isr, cr1);
+    const uint32_t isr = USART1_ISR;
+    const uint32_t cr1 = USART1_CR1;
+    if ((cr1 & USART_CR1_RXNEIE) != 0u) {
+        prv_rx(isr);
+        return;
+    }
+    /* Error flags interrupt through EIE even while RX is off: clear them. */
+    if ((isr & (USART_ISR_ORE | USART_ISR_FE | USART_ISR_NE | USART_ISR_PE)) != 0u) {
+        USART1_ICR = USART_ICR_ORECF | USART_ICR_FECF | USART_ICR_NECF | USART_ICR_PECF;
+        s_rx.lost = true;
+    }
     prv_tx(isr, cr1);
 }

@@ -2,6 +2,8 @@
 /* SPSC receive queue: see km_rx_queue.h for why it exists and its ordering. */
 #include "km_rx_queue.h"
 
+#include <string.h>
+
 void km_rx_queue_init(km_rx_queue_t *q)
 {
     atomic_init(&q->head, 0u);
@@ -11,12 +13,14 @@ void km_rx_queue_init(km_rx_queue_t *q)
     q->run_lost = false;
     q->dropped = 0;
     q->pending_loss = false;
+    memset(q->flags, 0, sizeof q->flags);
 }
 
 void km_rx_queue_push_marked(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost)
 {
     const unsigned head = atomic_load_explicit(&q->head, memory_order_relaxed);
-    const unsigned tail = atomic_load_explicit(&q->tail, memory_order_acquire);
+    const unsigned tail = atomic_load_explicit(&q->tail, memory_order_relaxed);
+    atomic_signal_fence(memory_order_acquire);
     if (head - tail >= KM_RX_QUEUE_SIZE) {
         q->dropped++;
         q->pending_loss = true;
@@ -25,24 +29,24 @@ void km_rx_queue_push_marked(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool
     const unsigned slot = head & (KM_RX_QUEUE_SIZE - 1u);
     q->byte[slot] = byte;
     q->tick[slot] = tick;
-    uint8_t flag = 0u;
     if (lost || q->pending_loss) {
-        flag = KM_RX_LOST;
+        q->flags[slot] = KM_RX_LOST; /* the consumer clears it when it takes the byte */
         q->pending_loss = false;
         /* One writer: a plain load and store (ARMv6-M has no atomic add);
          * the release of head below publishes it with the byte. */
         atomic_store_explicit(&q->marks, atomic_load_explicit(&q->marks, memory_order_relaxed) + 1u,
                               memory_order_relaxed);
     }
-    q->flags[slot] = flag;
     /* Release: the entry is complete before the consumer can see it. */
-    atomic_store_explicit(&q->head, head + 1u, memory_order_release);
+    atomic_signal_fence(memory_order_release);
+    atomic_store_explicit(&q->head, head + 1u, memory_order_relaxed);
 }
 
 bool km_rx_queue_pop(km_rx_queue_t *q, uint8_t *byte, uint32_t *tick, uint8_t *flags)
 {
     const unsigned tail = atomic_load_explicit(&q->tail, memory_order_relaxed);
-    const unsigned head = atomic_load_explicit(&q->head, memory_order_acquire);
+    const unsigned head = atomic_load_explicit(&q->head, memory_order_relaxed);
+    atomic_signal_fence(memory_order_acquire); /* the entry is read after head */
     if (head == tail) {
         return false;
     }
@@ -52,22 +56,25 @@ bool km_rx_queue_pop(km_rx_queue_t *q, uint8_t *byte, uint32_t *tick, uint8_t *f
     *flags = q->flags[slot];
     if (*flags & KM_RX_LOST) {
         q->marks_taken++;
+        q->flags[slot] = 0u; /* taken: the slot's next byte is unmarked unless marked again */
     }
     /* Release: the slot is read before the producer may reuse it. */
-    atomic_store_explicit(&q->tail, tail + 1u, memory_order_release);
+    atomic_signal_fence(memory_order_release);
+    atomic_store_explicit(&q->tail, tail + 1u, memory_order_relaxed);
     return true;
 }
 
 bool km_rx_queue_empty(km_rx_queue_t *q)
 {
-    return atomic_load_explicit(&q->head, memory_order_acquire) ==
+    return atomic_load_explicit(&q->head, memory_order_relaxed) ==
            atomic_load_explicit(&q->tail, memory_order_relaxed);
 }
 
 bool km_rx_queue_peek(km_rx_queue_t *q, km_rx_run_t *run)
 {
     const unsigned tail = atomic_load_explicit(&q->tail, memory_order_relaxed);
-    const unsigned head = atomic_load_explicit(&q->head, memory_order_acquire);
+    const unsigned head = atomic_load_explicit(&q->head, memory_order_relaxed);
+    atomic_signal_fence(memory_order_acquire); /* the entries are read after head */
     if (head == tail) {
         return false;
     }
@@ -100,11 +107,13 @@ void km_rx_queue_release(km_rx_queue_t *q, uint32_t n)
     if (n == 0u) {
         return;
     }
+    const unsigned tail = atomic_load_explicit(&q->tail, memory_order_relaxed);
     if (q->run_lost) {
         q->marks_taken++;
         q->run_lost = false;
+        q->flags[tail & (KM_RX_QUEUE_SIZE - 1u)] = 0u; /* the run's first byte, the only marked one */
     }
-    const unsigned tail = atomic_load_explicit(&q->tail, memory_order_relaxed);
     /* Release: the bytes are read before the producer may reuse them. */
-    atomic_store_explicit(&q->tail, tail + n, memory_order_release);
+    atomic_signal_fence(memory_order_release);
+    atomic_store_explicit(&q->tail, tail + n, memory_order_relaxed);
 }

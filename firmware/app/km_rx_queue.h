@@ -11,8 +11,16 @@
  * interrupt, not by when the main loop got to it.
  *
  * Lock-free: the producer writes only `head`, the consumer only `tail`; both
- * are 32-bit words, read and written whole on Cortex-M0, ordered with C11
- * acquire/release (a DMB on ARMv6-M). */
+ * are 32-bit words, read and written whole on Cortex-M0. Producer and
+ * consumer run on one core (an interrupt and the main loop; host-sim's
+ * receive runs inside km_hal_idle on its one thread), so they are ordered
+ * like a signal handler and its thread: relaxed accesses and C11 signal
+ * fences, which keep the compiler's order and cost no DMB.
+ *
+ * The LOST marks: a slot's flag is non-zero only while it holds a marked
+ * byte not yet taken. The producer writes a flag only with a marked byte
+ * (km_rx_queue_push_marked); the consumer clears it when it takes that
+ * byte, so the push of every other byte stores no flag. */
 #ifndef KM_RX_QUEUE_H
 #define KM_RX_QUEUE_H
 
@@ -38,12 +46,12 @@ typedef struct {
      * without looking at one flag. */
     atomic_uint marks;
     uint32_t marks_taken;
-    uint32_t dropped;  /* producer side: bytes lost because the queue was full */
-    bool pending_loss; /* producer side: mark the next stored byte as LOST */
-    bool run_lost;     /* consumer side: the run peeked starts with a LOST byte */
+    uint32_t dropped;               /* producer side: bytes lost because the queue was full */
+    bool pending_loss;              /* producer side: mark the next stored byte as LOST */
+    bool run_lost;                  /* consumer side: the run peeked starts with a LOST byte */
+    uint8_t byte[KM_RX_QUEUE_SIZE]; /* right after the scalars: its base is one add away */
     uint32_t tick[KM_RX_QUEUE_SIZE];
-    uint8_t byte[KM_RX_QUEUE_SIZE];
-    uint8_t flags[KM_RX_QUEUE_SIZE];
+    uint8_t flags[KM_RX_QUEUE_SIZE]; /* KM_RX_LOST on a marked byte not yet taken, else 0 */
 } km_rx_queue_t;
 
 /* The oldest waiting bytes as one run, where they lie in the queue. */
@@ -66,7 +74,8 @@ void km_rx_queue_push_marked(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool
 static inline void km_rx_queue_push(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost)
 {
     const unsigned head = atomic_load_explicit(&q->head, memory_order_relaxed);
-    const unsigned tail = atomic_load_explicit(&q->tail, memory_order_acquire);
+    const unsigned tail = atomic_load_explicit(&q->tail, memory_order_relaxed);
+    atomic_signal_fence(memory_order_acquire); /* the slot was read before the consumer freed it */
     if (head - tail >= KM_RX_QUEUE_SIZE || lost || q->pending_loss) {
         km_rx_queue_push_marked(q, byte, tick, lost);
         return;
@@ -74,9 +83,9 @@ static inline void km_rx_queue_push(km_rx_queue_t *q, uint8_t byte, uint32_t tic
     const unsigned slot = head & (KM_RX_QUEUE_SIZE - 1u);
     q->byte[slot] = byte;
     q->tick[slot] = tick;
-    q->flags[slot] = 0u;
     /* Release: the entry is complete before the consumer can see it. */
-    atomic_store_explicit(&q->head, head + 1u, memory_order_release);
+    atomic_signal_fence(memory_order_release);
+    atomic_store_explicit(&q->head, head + 1u, memory_order_relaxed);
 }
 
 /* Main loop: true when nothing is waiting. */

@@ -128,6 +128,39 @@ static void test_peek_runs_stop_at_end_and_at_loss(void **state)
     assert_true(km_rx_queue_empty(&s_q));
 }
 
+/* A slot that held a byte after a loss holds an unmarked byte when it
+ * comes round again, whether the marked byte was taken by pop or by a run
+ * (the push of an unmarked byte stores no flag: the consumer clears it). */
+static void test_marked_slot_reused_unmarked(void **state)
+{
+    (void)state;
+    km_rx_queue_init(&s_q);
+    for (unsigned by_run = 0; by_run < 2u; by_run++) {
+        km_rx_queue_push(&s_q, 0x55, 1, true);
+        uint8_t b, f;
+        uint32_t t;
+        km_rx_run_t run;
+        if (by_run) {
+            assert_true(km_rx_queue_peek(&s_q, &run));
+            assert_true(run.lost);
+            km_rx_queue_release(&s_q, 1);
+        } else {
+            assert_true(km_rx_queue_pop(&s_q, &b, &t, &f));
+            assert_int_equal(f, KM_RX_LOST);
+        }
+        /* a whole lap: the last byte lands in the marked byte's slot */
+        for (unsigned i = 0; i < KM_RX_QUEUE_SIZE; i++) {
+            km_rx_queue_push(&s_q, (uint8_t)i, i, false);
+        }
+        for (unsigned i = 0; i < KM_RX_QUEUE_SIZE; i++) {
+            assert_true(km_rx_queue_pop(&s_q, &b, &t, &f));
+            assert_int_equal(b, (uint8_t)i);
+            assert_int_equal(f, 0);
+        }
+        assert_true(km_rx_queue_empty(&s_q));
+    }
+}
+
 /* Seeded: pushes (some lost, some dropped on a full queue) interleaved with
  * peeks and partial releases hand out the very bytes, ticks and losses that
  * pop would, in order. */
@@ -181,6 +214,7 @@ int main(void)
         cmocka_unit_test(test_full_queue_marks_loss),
         cmocka_unit_test(test_index_wrap_many_laps),
         cmocka_unit_test(test_peek_runs_stop_at_end_and_at_loss),
+        cmocka_unit_test(test_marked_slot_reused_unmarked),
         cmocka_unit_test(test_peek_release_equals_pop),
     };
     return cmocka_run_group_tests_name("rx_queue", tests, NULL, NULL);
