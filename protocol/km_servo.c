@@ -55,9 +55,29 @@ static const prv_command_t s_commands[16] = {
 /* "Super-ID answer slots": servo i starts response_delay + i * slot after the frame. */
 static uint32_t prv_slot_us(const km_servo_t *s, uint16_t answer_bytes)
 {
-    const uint32_t bits = (uint32_t)(answer_bytes + 2u) * 10u;
-    const uint32_t slot = (bits * 1000000u + s->active_baud - 1u) / s->active_baud;
+    /* ceil(n x 1e7 / baud), n = answer_bytes + 2, without a division (a
+     * library call on the M0; 0x82 pays it per answer): n x q + ceil(n x r
+     * / baud). t estimates n x r / baud from below (byte_us_f is floored)
+     * and rises to the ceiling in a step or two. */
+    const uint32_t n = (uint32_t)answer_bytes + 2u;
+    const uint32_t nr = n * s->byte_us_r;
+    uint32_t t = (n * s->byte_us_f) >> 12;
+    while (t * s->active_baud < nr) {
+        t++;
+    }
+    const uint32_t slot = n * s->byte_us_q + t;
     return slot < s->slot_floor_us ? s->slot_floor_us : slot;
+}
+
+/* The baud in force and the slot's divisions by it, done here once. The
+ * fraction is taken from below: r / 16 over baud / 16 + 1 (r << 12 would
+ * overflow above 2^20 bit/s). */
+static void prv_set_baud(km_servo_t *s, uint32_t baud)
+{
+    s->active_baud = baud;
+    s->byte_us_q = baud ? 10000000u / baud : 0u;
+    s->byte_us_r = baud ? 10000000u % baud : 0u;
+    s->byte_us_f = ((s->byte_us_r >> 4) << 12) / ((baud >> 4) + 1u);
 }
 
 /* The answer's start after the frame: 0x12 alone, or the start of slot
@@ -88,7 +108,7 @@ void km_servo_init(km_servo_t *s, const km_product_t *product, const uint32_t *p
     memset(s, 0, sizeof *s);
     km_regfile_init(&s->reg, product, persisted, seed);
     s->ops = ops;
-    s->active_baud = km_regfile_get(&s->reg, KM_REG_BAUD) * 100u;
+    prv_set_baud(s, km_regfile_get(&s->reg, KM_REG_BAUD) * 100u);
 }
 
 uint32_t km_servo_active_baud(const km_servo_t *s)
@@ -136,7 +156,7 @@ void km_servo_set_reset_cause(km_servo_t *s, uint8_t cause)
 
 void km_servo_set_active_baud(km_servo_t *s, uint32_t baud)
 {
-    s->active_baud = baud;
+    prv_set_baud(s, baud);
 }
 
 void km_servo_set_slot_floor_us(km_servo_t *s, uint32_t us)

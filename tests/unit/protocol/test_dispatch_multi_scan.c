@@ -12,6 +12,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include "km_dispatch.h"
 #include "km_test_support.h"
 
 static kt_fx_t fx;
@@ -165,12 +166,38 @@ static void test_mwrite_whole_entries_every_length(void **state)
     }
 }
 
+/* The answer slot (docs/protocol-decisions.md "Multi-ID read 0x82"; the
+ * super ID's slots too) is the answer's bits plus two bytes' at the baud,
+ * rounded up: computed without a division, it is the exact ceiling at
+ * every answer length and every baud a servo may run at. */
+static void test_slot_length_every_answer_and_baud(void **state)
+{
+    (void)state;
+    static const uint32_t bauds[] = {300u,     1200u,    9600u,    19200u,   38400u,    57600u,
+                                     76800u,   100000u,  115200u,  128000u,  230400u,   250000u,
+                                     460800u,  500000u,  921600u,  1000000u, 1048577u,  1500000u,
+                                     2000000u, 3000000u, 4000000u, 6553500u, 12345679u, 99999u};
+    kt_init(&fx, kt_product_pot(), 1u);
+    for (unsigned i = 0; i < sizeof bauds / sizeof bauds[0]; i++) {
+        km_servo_set_active_baud(&fx.s, bauds[i]);
+        for (uint16_t bytes = 0; bytes <= KM_FRAME_MAX; bytes++) {
+            const uint64_t bits = ((uint64_t)bytes + 2u) * 10u;
+            const uint64_t want = (bits * 1000000u + bauds[i] - 1u) / bauds[i];
+            /* the super ID's answer: slot = own ID (1) slots after the delay */
+            const uint32_t slot =
+                km_dispatch_delay_us(&fx.s, KM_ID_SUPER, bytes) - km_dispatch_delay_us(&fx.s, 0u, bytes);
+            assert_int_equal(slot, want);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_mread_scan_every_length_and_alignment),
         cmocka_unit_test(test_mwrite_scan_every_length_and_alignment),
         cmocka_unit_test(test_mwrite_whole_entries_every_length),
+        cmocka_unit_test(test_slot_length_every_answer_and_baud),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
