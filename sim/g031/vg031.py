@@ -367,8 +367,11 @@ class Machine:
         """Right after PRIMASK may have been cleared: a pending interrupt is
         taken before the next instruction (ARMv6-M B1.5.3), so the slice ends
         here and the next one starts in the handler (a lock right after an
-        unlock would otherwise hide it until the next slice boundary)."""
-        if not uc.reg_read(A.UC_ARM_REG_PRIMASK) & 1 and (self.scs.pending & self.scs.enabled or self.scs.pend_sys):
+        unlock would otherwise hide it until the next slice boundary). Only
+        one that may preempt: a handler that unlocks with a lower-priority
+        interrupt pending (SysTick inside TIM2's handler) would otherwise
+        stop here for ever without executing the next instruction."""
+        if self._pending_exception() is not None:
             uc.emu_stop()
 
     # ---- reset and exceptions -------------------------------------------------
