@@ -4,6 +4,7 @@
  * read 0x82"). Which registers 0x83 may write, with which parameter sizes,
  * is km_registers.def's `multi` column. The list scans are what a long list
  * costs every servo on the bus, listed or not (docs/benchmarks.md "Lists"). */
+#include <stddef.h>
 #include <string.h>
 
 #include "km_dispatch.h"
@@ -18,9 +19,9 @@ static const uint16_t s_recip_2048[9] = {0u, 2048u, 1024u, 683u, 512u, 410u, 342
  * ID first in each) up to end, or end. Four entries a pass with the stride
  * a constant where the caller inlines it: a load and a compare each. */
 static inline __attribute__((always_inline)) const uint8_t *
-prv_find_entry(const uint8_t *p, const uint8_t *end, uint8_t own, uint32_t stride)
+prv_find_entry(const uint8_t *p, const uint8_t *end, uint8_t own, size_t stride)
 {
-    while ((uint32_t)(end - p) >= 4u * stride) {
+    while ((size_t)(end - p) >= 4u * stride) {
         if (p[0] == own) {
             return p;
         }
@@ -44,7 +45,7 @@ prv_find_entry(const uint8_t *p, const uint8_t *end, uint8_t own, uint32_t strid
 /* prv_find_entry() for the strides 0x83's registers take (KM_K(1), KM_K(2),
  * KM_K(4): 2, 3, 5 bytes an entry), each with its stride a constant. */
 static __attribute__((noinline)) const uint8_t *prv_find_multi(const uint8_t *p, const uint8_t *end,
-                                                               uint8_t own, uint32_t stride)
+                                                               uint8_t own, size_t stride)
 {
     switch (stride) {
     case 2u: /* 0x64's entries, the longest lists (124): eight a pass */
