@@ -361,7 +361,7 @@ static void prv_drive_servo(km_control_t *c, const km_control_params_t *p, int32
         const km_position_loop_in_t li = {
             .setpoint_u = sm.setpoint_u,
             .setpoint_ddps = sm.setpoint_ddps,
-            .position = pos,
+            .position = km_pos_diff(pos, c->servo.profile.origin), /* from the set-point's origin */
             .speed_ddps = speed_ddps,
             .pwm_max = limit,
             /* a protection's hold holds where it tripped: the integrator

@@ -102,7 +102,7 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
                               const km_position_loop_in_t *in, uint32_t dt_us)
 {
     /* error in 0.001 x 0.1 deg, bounded to +-200 deg: far past saturation */
-    /* both within +-1e9 u (KM_PROFILE_DDEG_MAX), so the difference fits */
+    /* both within +-1e9 u (from the profile's origin: km_profile.h), so the difference fits */
     const int32_t pos_u = prv_clamp(in->position, -1000000, 1000000) * 1000;
     const int32_t sp_u = prv_clamp(in->setpoint_u, -1000000000, 1000000000);
     int32_t e_u = prv_clamp(sp_u - pos_u, -2000000, 2000000);

@@ -37,9 +37,9 @@ typedef struct {
 } km_position_loop_t;
 
 typedef struct {
-    int32_t setpoint_u;    /* profile set-point, 0.001 x 0.1 deg */
+    int32_t setpoint_u;    /* profile set-point, 0.001 x 0.1 deg from its origin (km_profile.h) */
     int32_t setpoint_ddps; /* profile speed, 0.1 deg/s */
-    int32_t position;      /* measured, 0.1 deg */
+    int32_t position;      /* measured, 0.1 deg from the same origin */
     int32_t speed_ddps;    /* measured, 0.1 deg/s */
     int32_t pwm_max;       /* output bound, 0..1000 */
     bool integrate;        /* the integrator runs (holding: the set-point is at rest) */

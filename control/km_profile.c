@@ -8,6 +8,7 @@
 
 #include <string.h>
 
+#include "km_axis.h"
 #include "km_fixdiv.h"
 
 /* Longer ticks are integrated in pieces. 2 ms, not 1: the app measures
@@ -24,16 +25,47 @@ static int32_t prv_abs(int32_t v)
     return v < 0 ? -v : v;
 }
 
-/* Positions are kept within +-KM_PROFILE_DDEG_MAX so u and differences of
- * two of them fit 32 bits. */
-static int32_t prv_ddeg_to_u(int32_t ddeg)
+/* The origin for a set-point at `ddeg`: the nearest multiple of
+ * KM_PROFILE_ORIGIN_DDEG, modular (0 within +-3,276.8 deg). */
+static int32_t prv_origin_for(int32_t ddeg)
 {
-    if (ddeg > KM_PROFILE_DDEG_MAX) {
-        ddeg = KM_PROFILE_DDEG_MAX;
-    } else if (ddeg < -KM_PROFILE_DDEG_MAX) {
-        ddeg = -KM_PROFILE_DDEG_MAX;
+    const uint32_t q = (uint32_t)KM_PROFILE_ORIGIN_DDEG;
+    return km_s32(((uint32_t)ddeg + q / 2u) & ~(q - 1u));
+}
+
+/* A command's start: the origin moves to the one nearest the set-point,
+ * pos and target by the same whole origins (nothing else changes), so
+ * the set-point is within half an origin of it. */
+static void prv_rebase(km_profile_t *p)
+{
+    const int32_t now = prv_origin_for(km_profile_pos_ddeg(p));
+    const int32_t shift = km_pos_diff(p->origin, now); /* a whole number of origins */
+    if (shift != 0) {
+        const uint32_t shift_u = (uint32_t)shift * (uint32_t)KM_PROFILE_U_PER_DDEG;
+        p->origin = now;
+        p->pos = km_s32((uint32_t)p->pos + shift_u);
+        p->target = km_s32((uint32_t)p->target + shift_u);
     }
-    return ddeg * KM_PROFILE_U_PER_DDEG;
+}
+
+/* A target (0.1 deg, modular) as u from the origin, within the span of
+ * the set-point (km_profile_reach); after prv_rebase. */
+static int32_t prv_target_u(const km_profile_t *p, int32_t ddeg)
+{
+    return km_pos_diff(km_profile_reach(p, ddeg), p->origin) * KM_PROFILE_U_PER_DDEG;
+}
+
+int32_t km_profile_reach(const km_profile_t *p, int32_t target_ddeg)
+{
+    const int32_t at = km_profile_pos_ddeg(p);
+    const int32_t d = km_pos_diff(target_ddeg, at);
+    if (d > KM_PROFILE_SPAN_DDEG) {
+        return km_pos_add(at, KM_PROFILE_SPAN_DDEG);
+    }
+    if (d < -KM_PROFILE_SPAN_DDEG) {
+        return km_pos_add(at, -KM_PROFILE_SPAN_DDEG);
+    }
+    return target_ddeg;
 }
 
 /* d (u) over ms as u/s, at most `vmax` (no 32-bit overflow for any d). */
@@ -127,7 +159,8 @@ static uint32_t prv_isqrt64(uint64_t x)
 void km_profile_reset(km_profile_t *p, int32_t pos_ddeg)
 {
     memset(p, 0, sizeof *p);
-    p->pos = prv_ddeg_to_u(pos_ddeg);
+    p->origin = prv_origin_for(pos_ddeg);
+    p->pos = km_pos_diff(pos_ddeg, p->origin) * KM_PROFILE_U_PER_DDEG;
     p->target = p->pos;
     p->vmax = 1;
     p->vsq_lo = 1u;
@@ -137,7 +170,8 @@ void km_profile_reset(km_profile_t *p, int32_t pos_ddeg)
 
 void km_profile_move(km_profile_t *p, int32_t target_ddeg, int32_t vmax_ups, int32_t accel)
 {
-    p->target = prv_ddeg_to_u(target_ddeg);
+    prv_rebase(p);
+    p->target = prv_target_u(p, target_ddeg);
     p->vmax = vmax_ups > 0 ? (vmax_ups < VMAX_MAX ? vmax_ups : VMAX_MAX) : 1;
     p->vsq_hi = km_umulhi((uint32_t)p->vmax, (uint32_t)p->vmax);
     p->vsq_lo = (uint32_t)p->vmax * (uint32_t)p->vmax;
@@ -149,7 +183,8 @@ void km_profile_move(km_profile_t *p, int32_t target_ddeg, int32_t vmax_ups, int
 
 void km_profile_move_time(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, int32_t vlimit_ups)
 {
-    const int32_t d = prv_abs(prv_ddeg_to_u(target_ddeg) - p->pos);
+    prv_rebase(p);
+    const int32_t d = prv_abs(prv_target_u(p, target_ddeg) - p->pos);
     if (time_ms > 65535u) {
         time_ms = 65535u;
     }
@@ -209,7 +244,8 @@ static int32_t prv_brake_accel(int32_t v0, int32_t dabs, int32_t acc)
 void km_profile_retime(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, int32_t vlimit_ups,
                        int32_t accel)
 {
-    const int32_t tgt = prv_ddeg_to_u(target_ddeg);
+    prv_rebase(p);
+    const int32_t tgt = prv_target_u(p, target_ddeg);
     const int32_t d = tgt - p->pos;
     const int32_t dabs = prv_abs(d);
     const int32_t a = km_sdiv1000(accel > 0 ? (accel < ACCEL_MAX ? accel : ACCEL_MAX) : 1);
@@ -255,7 +291,8 @@ static int32_t prv_stream_periods(const km_profile_t *p, int32_t d)
 void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_us, int32_t vlimit_ups,
                        int32_t accel)
 {
-    const int32_t tgt = prv_ddeg_to_u(target_ddeg);
+    prv_rebase(p);
+    const int32_t tgt = prv_target_u(p, target_ddeg);
     const int32_t iv = interval_us > 1000000u ? 1000000 : (interval_us < 1000u ? 1000 : (int32_t)interval_us);
     int32_t n = 1;
     if (p->s_period <= 0) {
@@ -432,7 +469,9 @@ bool km_profile_step(km_profile_t *p, uint32_t dt_us)
 int32_t km_profile_pos_ddeg(const km_profile_t *p)
 {
     const int32_t h = KM_PROFILE_U_PER_DDEG / 2;
-    return p->pos >= 0 ? (p->pos + h) / KM_PROFILE_U_PER_DDEG : -((-p->pos + h) / KM_PROFILE_U_PER_DDEG);
+    const int32_t from =
+        p->pos >= 0 ? (p->pos + h) / KM_PROFILE_U_PER_DDEG : -((-p->pos + h) / KM_PROFILE_U_PER_DDEG);
+    return km_pos_add(p->origin, from);
 }
 
 int32_t km_profile_vel_ddps(const km_profile_t *p)

@@ -41,12 +41,24 @@
 
 #define KM_PROFILE_U_PER_DDEG 1000
 #define KM_PROFILE_UPS_PER_DPS 10000
-#define KM_PROFILE_DDEG_MAX 1000000 /* +-100,000 deg: positions are clamped to it */
+/* Positions are modular int32 0.1 deg (km_axis.h); the profile keeps u
+ * from an origin, a multiple of KM_PROFILE_ORIGIN_DDEG nearest the
+ * set-point, chosen again at each command (0 for every set-point within
+ * +-3,276.8 deg). One move spans at most KM_PROFILE_SPAN_DDEG: a target
+ * farther from the set-point is brought to that distance (the short way
+ * round). So u from the origin stays within +-(span + origin/2) =
+ * +-93,277 deg (the position loop takes +-100,000 deg) and differences
+ * of two u values within int32 (docs/protocol-decisions.md "Multi-turn
+ * position and its wrap"). */
+#define KM_PROFILE_ORIGIN_DDEG 65536
+#define KM_PROFILE_SPAN_DDEG 900000 /* +-90,000 deg, 250 turns */
 
 typedef struct {
-    int32_t pos;      /* set-point, u */
-    int32_t vel;      /* set-point speed, u/s */
-    int32_t target;   /* u */
+    int32_t
+        origin;  /* 0.1 deg (modular, a multiple of KM_PROFILE_ORIGIN_DDEG): pos and target are u from it */
+    int32_t pos; /* set-point, u from origin */
+    int32_t vel; /* set-point speed, u/s */
+    int32_t target;   /* u from origin */
     int32_t vmax;     /* u/s, > 0 */
     int32_t accel;    /* u/s per ms, > 0 */
     int32_t pos_rem;  /* position remainder, u/1e6 */
@@ -89,7 +101,11 @@ void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_u
 /* Advance by dt_us. Returns true once at the target and at rest. */
 bool km_profile_step(km_profile_t *p, uint32_t dt_us);
 
-/* Set-point in 0.1 deg (rounded) and speed in 0.1 deg/s. */
+/* A target as a move takes it: within KM_PROFILE_SPAN_DDEG of the
+ * set-point (modular), 0.1 deg. */
+int32_t km_profile_reach(const km_profile_t *p, int32_t target_ddeg);
+
+/* Set-point in 0.1 deg (rounded, modular) and speed in 0.1 deg/s. */
 int32_t km_profile_pos_ddeg(const km_profile_t *p);
 int32_t km_profile_vel_ddps(const km_profile_t *p);
 

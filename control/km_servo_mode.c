@@ -18,8 +18,10 @@ void km_servo_mode_init(km_servo_mode_t *m, const km_control_params_t *p)
 
 int32_t km_servo_mode_clamp(const km_control_params_t *p, int32_t t)
 {
-    int32_t lo, hi;
-    km_axis_travel(p, &lo, &hi); /* the travel moves with the zero offsets */
+    int32_t lo = INT32_MIN, hi = INT32_MAX; /* multi-turn: no edge, any turn count */
+    if (p->variant != KM_VARIANT_ENCODER) {
+        km_axis_travel(p, &lo, &hi); /* the travel moves with the zero offsets */
+    }
     if (p->angle_min != 0 && p->angle_min > lo) {
         lo = p->angle_min;
     }
@@ -139,8 +141,8 @@ bool km_servo_mode_move(km_servo_mode_t *m, const km_move_t *mv, const km_contro
         prv_on_at(m, position); /* armed: on at the next move */
     }
     /* relative: from the target in force (or the position if just on) */
-    const int32_t target =
-        km_servo_mode_clamp(p, mv->relative ? km_pos_add(m->target, mv->target) : mv->target);
+    const int32_t target = km_profile_reach(
+        &m->profile, km_servo_mode_clamp(p, mv->relative ? km_pos_add(m->target, mv->target) : mv->target));
     prv_plan(m, mv, p, target, was_on);
     m->pwm_cap = mv->pwm_cap > 1000u ? 1000 : (int32_t)mv->pwm_cap;
     m->streaming = mv->kind == KM_MOVE_STREAM;

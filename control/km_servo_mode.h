@@ -13,8 +13,10 @@
  *            protection supervisor (a later issue): motion stops, free.
  *
  * Targets (0.1 deg, the master's frame) are clamped to the product travel
- * (in the sensor's frame, moved into the master's: km_axis.h)
- * and to the angle limits 0x19/0x1A when they are set (0 = no limit). A
+ * (in the sensor's frame, moved into the master's: km_axis.h; none on the
+ * multi-turn encoder product), to the angle limits 0x19/0x1A when they are
+ * set (0 = no limit), and to one move's span from the set-point
+ * (km_profile_reach: 90,000 deg, reached only after a long motor run). A
  * relative move (km_move_t.relative, 0x67) adds to the target in force (the
  * last one commanded, or the held position), or to the measured position
  * when the torque was off, and the sum is clamped the same way: relative
@@ -71,7 +73,7 @@ typedef struct {
 
 typedef struct {
     km_bridge_mode_t bridge; /* PWM = the position loop drives */
-    int32_t setpoint_u;      /* profile set-point, 0.001 x 0.1 deg */
+    int32_t setpoint_u;      /* profile set-point, 0.001 x 0.1 deg from profile.origin */
     int32_t setpoint_ddps;   /* profile speed, 0.1 deg/s */
     int32_t pwm_cap;         /* the move's own PWM bound */
     bool reset_loop;         /* clear the loop's integrator first */
@@ -115,7 +117,7 @@ void km_servo_mode_protect(km_servo_mode_t *m);
 /* Deviation (0x4C): position - target while on, else 0. */
 int32_t km_servo_mode_deviation(const km_servo_mode_t *m, int32_t position);
 
-/* Clamps a target to the travel and the angle limits (0 = none). */
+/* Clamps a target to the travel (the pot product's) and the angle limits (0 = none). */
 int32_t km_servo_mode_clamp(const km_control_params_t *p, int32_t target);
 
 #endif

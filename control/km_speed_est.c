@@ -113,7 +113,7 @@ int32_t km_hold_filter_step(km_hold_filter_t *h, int32_t position)
     }
     if (h->frac > 12 || h->frac < -12) { /* 3/4 count: the hysteresis */
         const int32_t n = (h->frac + (h->frac > 0 ? 8 : -8)) / 16;
-        h->out += n;
+        h->out = km_pos_add(h->out, n); /* modular: a hold at the wrap */
         h->frac -= n * 16;
     }
     return h->out;

@@ -281,16 +281,17 @@ void km_plant_set_faults(km_plant_t *p, uint32_t faults)
     p->faults = faults;
 }
 
-/* Whole 0.1° position, remainder rounded to nearest. */
+/* Whole 0.1° position, remainder rounded to nearest (modulo 2^32, as the
+ * multi-turn position wraps). */
 static int32_t prv_pos_rounded(const km_plant_t *p)
 {
-    int32_t pos = p->pos_ddeg;
+    uint32_t pos = (uint32_t)p->pos_ddeg;
     if (p->pos_rem_ndeg >= NDEG_PER_DDEG / 2) {
         pos++;
     } else if (p->pos_rem_ndeg <= -NDEG_PER_DDEG / 2) {
         pos--;
     }
-    return pos;
+    return (int32_t)pos;
 }
 
 int16_t km_plant_position_ddeg(const km_plant_t *p)

@@ -53,14 +53,15 @@ static void rig_pot_at(int32_t pos)
     kr_run(&r, 20);
 }
 
-/* The encoder product on the realistic plant without pot or stops. */
-static void rig_encoder(void)
+/* The encoder product on the realistic plant without pot or stops, the
+ * shaft at `pos` (0.1 deg, any turn count). */
+static void rig_encoder_at(int32_t pos)
 {
     static km_plant_config_t cfg; /* the plant keeps a pointer to it */
     cfg = km_plant_realistic_config;
     cfg.pot_travel_ddeg = 0;
     cfg.endstop_ddeg = 0;
-    kr_init_at(&r, &cfg, 0);
+    kr_init_at(&r, &cfg, pos);
     r.encoder = true;
     r.params.variant = KM_VARIANT_ENCODER;
     r.params.travel_min = INT16_MIN;
@@ -68,6 +69,12 @@ static void rig_encoder(void)
     r.params.angle_min = 0;
     r.params.angle_max = 0;
     kr_run(&r, 20);
+}
+
+/* The encoder product at 0 deg. */
+static void rig_encoder(void)
+{
+    rig_encoder_at(0);
 }
 
 /* Runs `ms` ticks; the lowest and highest shaft angle and the largest
@@ -386,6 +393,109 @@ static void test_d11_encoder_runs_on(void **state)
     assert_true(shaft_ddeg() > 3000);
 }
 
+/* D7: the encoder product switched on holding at `at` (0.1 deg, any turn
+ * count), settled 0.5 s, then `load_unm` on the output for 3 s. *defl is
+ * the largest deflection, *rest where the shaft ends, both from where it
+ * held before the load (modular: the short way round, 0.1 deg). */
+static void hold_at_turns(int32_t at, int32_t load_unm, int32_t *defl, int32_t *rest)
+{
+    rig_encoder_at(at);
+    assert_true(kr_torque(&r, 2));
+    kr_run(&r, 500);
+    const int32_t held = shaft_ddeg();
+    assert_true(iabs(km_pos_diff(held, at)) <= 2);
+    r.in.ext_torque_unm = load_unm;
+    *defl = 0;
+    for (int i = 0; i < 3000; i++) {
+        kr_tick(&r);
+        const int32_t d = iabs(km_pos_diff(shaft_ddeg(), held));
+        *defl = d > *defl ? d : *defl;
+    }
+    *rest = km_pos_diff(shaft_ddeg(), held);
+}
+
+/* D7 and criterion 7 ("the same holding at any turn count"): under 0.3 N.m
+ * the encoder product holds at 150,000 deg, at -150,000 deg and either
+ * side of the int32 wrap (the load pushing the shaft through it) as it
+ * holds at 0 under the same load: it rests off by at most one count (the
+ * encoder's 0.1 deg) more and deflects at most 0.2 deg more than there
+ * (at 0: 0.5 deg, resting 0.3 deg off after 3 s). Today the position loop and
+ * the profile clamp at +-100,000 deg: the error reads 0 beyond and the
+ * shaft creeps away under the load. */
+static void test_d7_hold_at_any_turn_count(void **state)
+{
+    (void)state;
+    static const struct {
+        int32_t at, load_unm;
+    } cases[] = {
+        {1500000, -300000},      {1500000, 300000},        {-1500000, 300000},
+        {INT32_MAX - 2, 300000}, {INT32_MIN + 2, -300000}, {999990, 300000},
+    };
+    int32_t ref_defl[2], ref_rest[2]; /* at 0: the load negative, positive */
+    hold_at_turns(0, -300000, &ref_defl[0], &ref_rest[0]);
+    hold_at_turns(0, 300000, &ref_defl[1], &ref_rest[1]);
+    print_message("D7 hold at 0 under -/+0.3 N.m: deflection %d/%d, rest %d/%d (0.1 deg)\n", (int)ref_defl[0],
+                  (int)ref_defl[1], (int)ref_rest[0], (int)ref_rest[1]);
+    for (unsigned k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        int32_t defl, rest;
+        hold_at_turns(cases[k].at, cases[k].load_unm, &defl, &rest);
+        const unsigned ref = cases[k].load_unm > 0 ? 1u : 0u;
+        print_message("D7 hold at %ld under %+ld uN.m: deflection %d, rest %d (0.1 deg)\n", (long)cases[k].at,
+                      (long)cases[k].load_unm, (int)defl, (int)rest);
+        assert_true(iabs(km_pos_diff(kr_pos(&r), shaft_ddeg())) <= 2); /* 0x46 reads the shaft */
+        assert_true(iabs(rest) <= iabs(ref_rest[ref]) + 1);
+        assert_true(defl <= ref_defl[ref] + 2);
+    }
+}
+
+/* D7: relative moves (0x67) of +90 deg and back across +-100,000 deg and
+ * through the int32 wrap end on their targets (within 0.5 deg, bit 7
+ * clear, 0x46 reading the shaft), as the same move does at 0. */
+static void test_d7_move_across_turn_counts(void **state)
+{
+    (void)state;
+    static const int32_t from[] = {0, 999550, -1000450, INT32_MAX - 450};
+    for (unsigned k = 0; k < sizeof from / sizeof from[0]; k++) {
+        rig_encoder_at(from[k]);
+        assert_true(kr_torque(&r, 2));
+        kr_run(&r, 300);
+        const int32_t there = km_pos_add(from[k], 900);
+        assert_true(kr_move_rel(&r, KM_MOVE_TIME, 900, 500));
+        kr_run(&r, 1500);
+        print_message("D7 +90 deg from %ld: shaft %ld, 0x46 %ld, bit 7 %d\n", (long)from[k],
+                      (long)shaft_ddeg(), (long)kr_pos(&r), (int)r.live.running);
+        assert_true(iabs(km_pos_diff(shaft_ddeg(), there)) <= 5);
+        assert_true(iabs(km_pos_diff(kr_pos(&r), there)) <= 5);
+        assert_false(r.live.running);
+        assert_true(kr_move_rel(&r, KM_MOVE_TIME, -900, 500));
+        kr_run(&r, 1500);
+        assert_true(iabs(km_pos_diff(shaft_ddeg(), from[k])) <= 5);
+        assert_false(r.live.running);
+    }
+}
+
+/* D7 in the profile alone: a set-point at any turn count stays where it
+ * is put, and a move from 150,000 deg or through the wrap arrives on its
+ * target (docs/protocol-decisions.md "Multi-turn position and its wrap"). */
+static void test_d7_profile_at_any_turn_count(void **state)
+{
+    (void)state;
+    static const int32_t from[] = {1500000, -1500000, INT32_MAX, INT32_MIN, INT32_MAX - 450};
+    for (unsigned k = 0; k < sizeof from / sizeof from[0]; k++) {
+        km_profile_t p;
+        km_profile_reset(&p, from[k]);
+        assert_int_equal(km_profile_pos_ddeg(&p), from[k]);
+        const int32_t to = km_pos_add(from[k], 900);
+        km_profile_move(&p, to, 360 * KM_PROFILE_UPS_PER_DPS, 20000);
+        int ms = 0;
+        while (!km_profile_step(&p, 1000u) && ms < 5000) {
+            ms++;
+        }
+        assert_true(p.done);
+        assert_int_equal(km_profile_pos_ddeg(&p), to);
+    }
+}
+
 /* A synthetic encoder reading 4 counts per tick through +2^31 x 0.1 deg
  * (wrapping, as km_turn_counter's int32 does) under a 0x6F run with the
  * stall protection armed and a zero offset: 0x46 wraps, the speeds stay
@@ -461,6 +571,9 @@ int main(void)
         cmocka_unit_test(test_d11_pot_motor_stops_at_travel),
         cmocka_unit_test(test_d11_encoder_runs_on),
         cmocka_unit_test(test_wrap_tick_is_defined),
+        cmocka_unit_test(test_d7_profile_at_any_turn_count),
+        cmocka_unit_test(test_d7_hold_at_any_turn_count),
+        cmocka_unit_test(test_d7_move_across_turn_counts),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
