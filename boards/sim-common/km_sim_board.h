@@ -13,7 +13,7 @@ km_plant_t *km_sim_board_plant(void);
 
 /* The plant the board builds at its next power-on or restart: the
  * `realistic` configuration unless told otherwise (docs/plant.md; host-sim
- * --plant ideal, a QEMU image built with KM_SIM_PLANT_IDEAL). The encoder
+ * --plant ideal, a QEMU image built with -DKM_QEMU_PLANT=ideal). The encoder
  * product takes it without pot and end stops. */
 void km_sim_board_select_plant(const km_plant_config_t *cfg);
 

@@ -78,6 +78,15 @@ class Bus:
         pace = "@%d" % BAUD if getattr(opts, "paced", True) else ""
         self.wire = W.Wire("tcp:%s%s" % (self.proc.address, pace))
         self.ctx = C.Ctx(self.wire, ids, MASTER_OPTS)
+        self.answered = []  # monotonic times answers came back: the servo's signs of life
+        collect = self.wire.collect
+
+        def collect_noting(*args, **kwargs):
+            got = collect(*args, **kwargs)
+            if got:
+                self.answered.append(time.monotonic())
+            return got
+        self.wire.collect = collect_noting
 
     def close(self):
         self.wire.close()
@@ -431,6 +440,19 @@ def show_entry(e):
                e["ma"], e["c10"] / 10, e["pos"] / 10))
 
 
+def longest_silence(bus, t0, t1):
+    """The longest time (s) within [t0, t1] (monotonic) in which no answer
+    came back while the test kept asking (it polls every ~10 ms there): how
+    long the host did not run the servo. The emulated servo's clock is real
+    time, so a servo not run for S seconds meets its next control tick S
+    late: a protection timer counts that whole tick, and the plant plays
+    the scenario over it in steps of up to 100 ms (boards/sim-common/
+    km_sim_board.c), so a trip or release it logs is off the scenario's
+    time by up to S (docs/plant.md "The QEMU servo and the host's load")."""
+    marks = [t0] + [t for t in bus.answered if t0 < t < t1] + [t1]
+    return max(b - a for a, b in zip(marks, marks[1:]))
+
+
 def wait_status(bus, dev_id, bits, want_set, seconds):
     """Pings until (status & bits) is set (want_set) or clear; the wall-clock
     time it was seen and every status byte seen on the way, or (None, seen)."""
@@ -461,7 +483,10 @@ def protect(backend, opts):
     firmware's ms since boot; the scenario runs on the plant's clock since
     power-on; the two differ by the boot only (seen: 0 to 1 ms on host-sim,
     -9 to +43 ms on QEMU), so the trip and release times the log records
-    are checked against the scenario's +- 100 ms."""
+    are checked against the scenario's +- 100 ms, plus the longest time the
+    host left the servo unrun between cause and effect (longest_silence:
+    a starved emulator meets its next tick that much late), which also
+    lowers the wall-clock lower bounds by as much."""
     opts.scenario = PROTECT_SCENARIO
     sup = scenario_times(PROTECT_SCENARIO, "supply_mv")  # short sag, back, long sag, back
     heat = scenario_times(PROTECT_SCENARIO, "temp_dc")   # heated, cooled
@@ -503,18 +528,21 @@ def protect(backend, opts):
               "status bytes seen during it and 1 s after: %s"
               % (None if t_up is None else round((t_up - t_low) * 1000), ["0x%02x" % s for s in sorted(seen)]))
 
+        w_vtrip = time.monotonic()  # before the sag: the trip's window opens
         t_low, mv = poll(bus, lambda: (lambda v: v if v is not None and v < 6000 else None)(
             read_int(bus, d, 0x4B)), 6.0)
         check(t_low is not None, "§5.2 the supply sags again, 0x4B %s mV" % mv)
         t_trip, seen = wait_status(bus, d, ST_VOLTAGE, True, 8.0)
+        s_vtrip = longest_silence(bus, w_vtrip, t_trip or time.monotonic())
         dt = None if t_trip is None else t_trip - t_low
-        check(dt is not None and 2.5 <= dt <= 6.0,
+        check(dt is not None and 2.5 - s_vtrip <= dt <= 6.0,
               "§4 status bit 0 (voltage) %s ms after the sag was seen (wall clock; the fixed 3 s; "
-              "bounds 2.5-6 s); status seen %s" % (None if dt is None else round(dt * 1000),
-                                                   ["0x%02x" % s for s in seen]))
+              "bounds %.2f-6 s: 2.5 less the servo's longest silence); status seen %s"
+              % (None if dt is None else round(dt * 1000), 2.5 - s_vtrip, ["0x%02x" % s for s in seen]))
         st01 = read_show(bus, d, 0x01, signed=False)
         check(st01 is not None and st01 & 0xFF & ST_VOLTAGE,
-              "§5.1 0x01 ([status][random]) reads status 0x%02x: bit 0 too" % (st01 & 0xFF))
+              "§5.1 0x01 ([status][random]) reads status %s: bit 0 too"
+              % (None if st01 is None else "0x%02x" % (st01 & 0xFF)))
         check(read_show(bus, d, 0x36) == 0x01, "§5.2 0x36 reads 0x01 (voltage)")
         check(read_show(bus, d, 0x64) == 5, "§5.4 0x64 reads 5 while protecting")
         p0 = read_show(bus, d, 0x46)
@@ -533,38 +561,44 @@ def protect(backend, opts):
         p1 = read_show(bus, d, 0x46)
         check(p0 is not None and p1 is not None and abs(p1 - p0) <= 5,
               "§6 ... and nothing moves: 0x46 %s then %s" % (p0, p1))
+        w_vrel = time.monotonic()
         t_up, mv = poll(bus, lambda: (lambda v: v if v is not None and v > 6000 else None)(
             read_int(bus, d, 0x4B)), 6.0)
         check(t_up is not None, "§5.2 the supply is back: 0x4B %s mV" % mv)
         t_rel, seen = wait_status(bus, d, ST_VOLTAGE, False, 8.0)
+        s_vrel = longest_silence(bus, w_vrel, t_rel or time.monotonic())
         dt = None if t_rel is None else t_rel - t_up
-        check(dt is not None and 2.5 <= dt <= 6.0,
+        check(dt is not None and 2.5 - s_vrel <= dt <= 6.0,
               "§5.2 0x33 bit 0 = 0 (automatic): bit 0 clears %s ms after the supply came back "
-              "(wall clock; 3 s absent; bounds 2.5-6 s)" % (None if dt is None else round(dt * 1000)))
+              "(wall clock; 3 s absent; bounds %.2f-6 s)" % (None if dt is None else round(dt * 1000), 2.5 - s_vrel))
         check(read_show(bus, d, 0x64) == 3 and read_show(bus, d, 0x36) == 0,
               "§5.4 after the release 0x64 reads 3 (armed: the torque was on, the output was let go) "
               "and 0x36 reads 0")
 
         # -- 3. temperature with automatic release --
+        w_ttrip = time.monotonic()
         t_hot, c = poll(bus, lambda: (lambda v: v if v is not None and v >= 60 else None)(
             read_int(bus, d, 0x4A)), 8.0)
         check(t_hot is not None, "§5.2 0x3D: the case is heated, 0x4A reads %s degC" % c)
         t_trip, seen = wait_status(bus, d, ST_TEMPERATURE, True, 8.0)
+        s_ttrip = longest_silence(bus, w_ttrip, t_trip or time.monotonic())
         dt = None if t_trip is None else t_trip - t_hot
-        check(dt is not None and 2.5 <= dt <= 6.0,
+        check(dt is not None and 2.5 - s_ttrip <= dt <= 6.0,
               "§4 status bit 2 (temperature) %s ms after 60 degC was seen (wall clock; 3 s; "
-              "bounds 2.5-6 s); status seen %s" % (None if dt is None else round(dt * 1000),
-                                                   ["0x%02x" % s for s in seen]))
+              "bounds %.2f-6 s); status seen %s"
+              % (None if dt is None else round(dt * 1000), 2.5 - s_ttrip, ["0x%02x" % s for s in seen]))
         check(read_show(bus, d, 0x36) == 0x04 and read_show(bus, d, 0x64) == 5,
               "§5.2 0x36 reads 0x04 and 0x64 reads 5")
+        w_trel = time.monotonic()
         t_cool, c = poll(bus, lambda: (lambda v: v if v is not None and v < 55 else None)(
             read_int(bus, d, 0x4A)), 8.0)
         check(t_cool is not None, "§5.2 cooled below 60 - 5 degC: 0x4A reads %s degC" % c)
         t_rel, seen = wait_status(bus, d, ST_TEMPERATURE, False, 8.0)
+        s_trel = longest_silence(bus, w_trel, t_rel or time.monotonic())
         dt = None if t_rel is None else t_rel - t_cool
-        check(dt is not None and 2.5 <= dt <= 6.0,
+        check(dt is not None and 2.5 - s_trel <= dt <= 6.0,
               "§5.2 automatic release: bit 2 clears %s ms later (wall clock; 3 s below the "
-              "hysteresis; bounds 2.5-6 s)" % (None if dt is None else round(dt * 1000)))
+              "hysteresis; bounds %.2f-6 s)" % (None if dt is None else round(dt * 1000), 2.5 - s_trel))
         check(read_show(bus, d, 0x64) == 3, "§5.4 0x64 reads 3 (armed) after the release")
 
         # -- 2. stall --
@@ -705,18 +739,23 @@ def protect(backend, opts):
         check(new["boots_ago"] == 0 and new["zero"] == 0 and 7000 <= new["mv"] <= 7500
               and abs(new["pos"]) <= 150 and 200 <= new["c10"] <= 600 and new["t_ms"] > entries[1]["t_ms"],
               "fault log 0x7F 0x11 (newest): the clear, live values plausible: %s" % show_entry(new))
+        # +-100 ms: the boot offset and jitter; plus the longest time the
+        # host left the servo unrun between the cause and the effect
+        # (longest_silence: tens of ms on a quiet host, seconds when starved)
+        b_vt, b_vr, b_tt, b_tr = (100 + round(1000 * x) for x in (s_vtrip, s_vrel, s_ttrip, s_trel))
         vt, vr = entries[7], entries[6]
-        check(4500 <= vt["mv"] <= 5050 and abs(vt["t_ms"] - (sup[2] + 3000)) <= 100
-              and abs(vr["t_ms"] - (sup[3] + 3000)) <= 100,
+        check(4500 <= vt["mv"] <= 5050 and abs(vt["t_ms"] - (sup[2] + 3000)) <= b_vt
+              and abs(vr["t_ms"] - (sup[3] + 3000)) <= b_vr,
               "fault log: the voltage trip at %d ms with %d mV (sag at %d ms, + 3 s), released at "
-              "%d ms (supply back at %d, + 3 s); bounds +-100 ms"
-              % (vt["t_ms"], vt["mv"], sup[2], vr["t_ms"], sup[3]))
+              "%d ms (supply back at %d, + 3 s); bounds +-%d and +-%d ms (100 + the servo's longest "
+              "silence)" % (vt["t_ms"], vt["mv"], sup[2], vr["t_ms"], sup[3], b_vt, b_vr))
         tt, tr = entries[5], entries[4]
-        check(tt["c10"] == 650 and abs(tt["t_ms"] - (heat[0] + 3000)) <= 100 and tr["c10"] < 550
-              and abs(tr["t_ms"] - (heat[1] + 3000)) <= 100,
+        check(tt["c10"] == 650 and abs(tt["t_ms"] - (heat[0] + 3000)) <= b_tt and tr["c10"] < 550
+              and abs(tr["t_ms"] - (heat[1] + 3000)) <= b_tr,
               "fault log: the temperature trip at %d ms at %.1f degC (heated at %d, + 3 s), released "
-              "at %d ms at %.1f degC (cooled at %d, + 3 s); bounds +-100 ms"
-              % (tt["t_ms"], tt["c10"] / 10, heat[0], tr["t_ms"], tr["c10"] / 10, heat[1]))
+              "at %d ms at %.1f degC (cooled at %d, + 3 s); bounds +-%d and +-%d ms (100 + the "
+              "servo's longest silence)"
+              % (tt["t_ms"], tt["c10"] / 10, heat[0], tr["t_ms"], tr["c10"] / 10, heat[1], b_tt, b_tr))
         st = entries[3]
         check(st["pos"] <= -1300 and st["mv"] < 7400,
               "fault log: the first stall trip against the end stop, 0x46 %.1f deg, %d mV %d mA"
