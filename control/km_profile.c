@@ -33,11 +33,17 @@ static int32_t prv_origin_for(int32_t ddeg)
     return km_s32(((uint32_t)ddeg + q / 2u) & ~(q - 1u));
 }
 
+/* |pos| below this (u): the set-point is within half an origin of it. */
+#define PRV_NEAR_U (KM_PROFILE_ORIGIN_DDEG / 2 * KM_PROFILE_U_PER_DDEG)
+
 /* A command's start: the origin moves to the one nearest the set-point,
  * pos and target by the same whole origins (nothing else changes), so
- * the set-point is within half an origin of it. */
+ * the set-point is within half an origin of it (already so: no divide). */
 static void prv_rebase(km_profile_t *p)
 {
+    if (p->pos < PRV_NEAR_U && p->pos >= -PRV_NEAR_U) {
+        return;
+    }
     const int32_t now = prv_origin_for(km_profile_pos_ddeg(p));
     const int32_t shift = km_pos_diff(p->origin, now); /* a whole number of origins */
     if (shift != 0) {
@@ -57,6 +63,13 @@ static int32_t prv_target_u(const km_profile_t *p, int32_t ddeg)
 
 int32_t km_profile_reach(const km_profile_t *p, int32_t target_ddeg)
 {
+    /* a set-point within half an origin of it and a target within the span
+     * less an origin of it: the target is within the span, no divide */
+    const int32_t rel = km_pos_diff(target_ddeg, p->origin);
+    const int32_t easy = KM_PROFILE_SPAN_DDEG - KM_PROFILE_ORIGIN_DDEG;
+    if (p->pos < PRV_NEAR_U && p->pos >= -PRV_NEAR_U && rel <= easy && rel >= -easy) {
+        return target_ddeg;
+    }
     const int32_t at = km_profile_pos_ddeg(p);
     const int32_t d = km_pos_diff(target_ddeg, at);
     if (d > KM_PROFILE_SPAN_DDEG) {
@@ -168,10 +181,18 @@ void km_profile_reset(km_profile_t *p, int32_t pos_ddeg)
     p->done = true;
 }
 
-void km_profile_move(km_profile_t *p, int32_t target_ddeg, int32_t vmax_ups, int32_t accel)
+/* A command's target (0.1 deg) as u from the origin, the origin moved
+ * first (prv_rebase): once per command. */
+static int32_t prv_begin(km_profile_t *p, int32_t target_ddeg)
 {
     prv_rebase(p);
-    p->target = prv_target_u(p, target_ddeg);
+    return prv_target_u(p, target_ddeg);
+}
+
+/* km_profile_move to `tgt` (u from the origin, prv_begin's). */
+static void prv_move_u(km_profile_t *p, int32_t tgt, int32_t vmax_ups, int32_t accel)
+{
+    p->target = tgt;
     p->vmax = vmax_ups > 0 ? (vmax_ups < VMAX_MAX ? vmax_ups : VMAX_MAX) : 1;
     p->vsq_hi = km_umulhi((uint32_t)p->vmax, (uint32_t)p->vmax);
     p->vsq_lo = (uint32_t)p->vmax * (uint32_t)p->vmax;
@@ -181,10 +202,15 @@ void km_profile_move(km_profile_t *p, int32_t target_ddeg, int32_t vmax_ups, int
     p->done = false;
 }
 
-void km_profile_move_time(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, int32_t vlimit_ups)
+void km_profile_move(km_profile_t *p, int32_t target_ddeg, int32_t vmax_ups, int32_t accel)
 {
-    prv_rebase(p);
-    const int32_t d = prv_abs(prv_target_u(p, target_ddeg) - p->pos);
+    prv_move_u(p, prv_begin(p, target_ddeg), vmax_ups, accel);
+}
+
+/* km_profile_move_time to `tgt` (u from the origin, prv_begin's). */
+static void prv_move_time_u(km_profile_t *p, int32_t tgt, uint32_t time_ms, int32_t vlimit_ups)
+{
+    const int32_t d = prv_abs(tgt - p->pos);
     if (time_ms > 65535u) {
         time_ms = 65535u;
     }
@@ -197,7 +223,12 @@ void km_profile_move_time(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms
         v = 1;
     }
     const int32_t a = v / ta > 0 ? v / ta : 1;
-    km_profile_move(p, target_ddeg, v, a);
+    prv_move_u(p, tgt, v, a);
+}
+
+void km_profile_move_time(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, int32_t vlimit_ups)
+{
+    prv_move_time_u(p, prv_begin(p, target_ddeg), time_ms, vlimit_ups);
 }
 
 /* The cruise speed (0.1 deg/s) of a move in time `t` ms over `dm`
@@ -244,13 +275,12 @@ static int32_t prv_brake_accel(int32_t v0, int32_t dabs, int32_t acc)
 void km_profile_retime(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, int32_t vlimit_ups,
                        int32_t accel)
 {
-    prv_rebase(p);
-    const int32_t tgt = prv_target_u(p, target_ddeg);
+    const int32_t tgt = prv_begin(p, target_ddeg);
     const int32_t d = tgt - p->pos;
     const int32_t dabs = prv_abs(d);
     const int32_t a = km_sdiv1000(accel > 0 ? (accel < ACCEL_MAX ? accel : ACCEL_MAX) : 1);
     if (p->done || p->stream || p->vel == 0 || dabs > 1000000 || time_ms == 0u || a < 1) {
-        km_profile_move_time(p, target_ddeg, time_ms, vlimit_ups);
+        prv_move_time_u(p, tgt, time_ms, vlimit_ups);
         return;
     }
     const int32_t v0 = km_sdiv1000(d >= 0 ? p->vel : -p->vel); /* 0.1 deg/s toward the target */
@@ -258,7 +288,7 @@ void km_profile_retime(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, i
     int32_t vc = prv_retime_cruise(v0, dabs, t, a);
     const int32_t vlim = km_sdiv1000(vlimit_ups);
     vc = vc < 1 ? 1 : (vc > vlim ? vlim : vc);
-    km_profile_move(p, target_ddeg, vc * 1000, prv_brake_accel(v0, dabs, a * 1000));
+    prv_move_u(p, tgt, vc * 1000, prv_brake_accel(v0, dabs, a * 1000));
 }
 
 /* d (u) over `us` (>= 100) as u/s, at most `vmax` in size; 32-bit. */
@@ -291,8 +321,7 @@ static int32_t prv_stream_periods(const km_profile_t *p, int32_t d)
 void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_us, int32_t vlimit_ups,
                        int32_t accel)
 {
-    prv_rebase(p);
-    const int32_t tgt = prv_target_u(p, target_ddeg);
+    const int32_t tgt = prv_begin(p, target_ddeg);
     const int32_t iv = interval_us > 1000000u ? 1000000 : (interval_us < 1000u ? 1000 : (int32_t)interval_us);
     int32_t n = 1;
     if (p->s_period <= 0) {
@@ -470,7 +499,7 @@ int32_t km_profile_pos_ddeg(const km_profile_t *p)
 {
     const int32_t h = KM_PROFILE_U_PER_DDEG / 2;
     const int32_t from =
-        p->pos >= 0 ? (p->pos + h) / KM_PROFILE_U_PER_DDEG : -((-p->pos + h) / KM_PROFILE_U_PER_DDEG);
+        p->pos >= 0 ? km_sdiv1000(p->pos + h) : -km_sdiv1000(-p->pos + h); /* u per 0.1 deg */
     return km_pos_add(p->origin, from);
 }
 

@@ -42,9 +42,10 @@
 #define KM_PROFILE_U_PER_DDEG 1000
 #define KM_PROFILE_UPS_PER_DPS 10000
 /* Positions are modular int32 0.1 deg (km_axis.h); the profile keeps u
- * from an origin, a multiple of KM_PROFILE_ORIGIN_DDEG nearest the
- * set-point, chosen again at each command (0 for every set-point within
- * +-3,276.8 deg). One move spans at most KM_PROFILE_SPAN_DDEG: a target
+ * from an origin, a multiple of KM_PROFILE_ORIGIN_DDEG, moved at a command
+ * to the one nearest the set-point when the set-point is more than half an
+ * origin from it (0 for every set-point within +-3,276.8 deg). One move
+ * spans at most KM_PROFILE_SPAN_DDEG: a target
  * farther from the set-point is brought to that distance (the short way
  * round). So u from the origin stays within +-(span + origin/2) =
  * +-93,277 deg (the position loop takes +-100,000 deg) and differences
