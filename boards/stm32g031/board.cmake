@@ -44,6 +44,18 @@ elseif(KM_G031_FLASH_KB EQUAL 64)
 else()
   message(FATAL_ERROR "KM_G031_FLASH_KB must be 64 or 32, not ${KM_G031_FLASH_KB}")
 endif()
+# Features a 32 KiB build leaves out (docs/footprint.md "What gives way"):
+# ON in the 64 KiB build, OFF in the 32 KiB one unless set on the command line.
+if(KM_G031_FLASH_KB EQUAL 32)
+  set(KM_G031_FEATURE_DEFAULT OFF)
+else()
+  set(KM_G031_FEATURE_DEFAULT ON)
+endif()
+# The bootloader reads the store for the servo's ID and baud; without it,
+# update mode answers where the application left it, else ID 1 at 115200
+# (docs/update.md §3).
+option(KM_G031_BOOT_STORE_READER "stm32g031 bootloader: update mode at the stored ID and baud"
+       ${KM_G031_FEATURE_DEFAULT})
 list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_G031_FLASH_KB=${KM_G031_FLASH_KB}u -DKM_G031_BOOT_KB=${KM_G031_BOOT_KB}u)
 list(APPEND KM_BOARD_LINK_OPTIONS -Wl,--defsym=KM_FLASH_SIZE=${KM_G031_FLASH_KB}K
      -Wl,--defsym=KM_BOOT_SIZE=${KM_G031_BOOT_KB}K)

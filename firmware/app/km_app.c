@@ -370,7 +370,7 @@ static bool prv_ops_update(void *ctx, const uint8_t *body, uint8_t n, uint8_t *a
     if (a.action == KM_UPD_ACT_ENTER) {
         /* Weak default false; a board with a bootloader links its own. */
         // cppcheck-suppress knownConditionTrueFalse
-        if (!km_board_boot_request()) {
+        if (!km_board_boot_request(km_servo_id(&s_servo), km_servo_active_baud(&s_servo))) {
             return false;
         }
         prv_ops_restart(ctx);
@@ -411,8 +411,10 @@ _Static_assert(KM_FAULT_ENTRY_SIZE <= KM_EXT_VALUE_MAX && KM_FAULT_SUMMARY_SIZE 
 _Static_assert(KM_EXT_FAULT_ENTRIES == KM_FAULT_LOG_LEN, "one extension register per fault-log entry");
 
 /* No bootloader unless the board says so (a board with one defines it). */
-__attribute__((weak)) bool km_board_boot_request(void)
+__attribute__((weak)) bool km_board_boot_request(uint8_t id, uint32_t baud)
 {
+    (void)id;
+    (void)baud;
     return false;
 }
 

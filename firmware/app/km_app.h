@@ -23,10 +23,11 @@ void km_app_answer_started(uint32_t frame_end, uint32_t started, uint32_t delay_
 _Noreturn void km_app_run(void);
 
 /* A board with a bootloader (docs/update.md) defines this: leave the
- * "stay in update mode" request for it and return true; the app then
- * restarts. The app's weak default returns false (no bootloader: 0x78
- * ENTER is refused with bit 5). */
-bool km_board_boot_request(void);
+ * "stay in update mode" request for it, with the ID and baud the servo
+ * answers on (update mode answers there, §3), and return true; the app
+ * then restarts. The app's weak default returns false (no bootloader:
+ * 0x78 ENTER is refused with bit 5). */
+bool km_board_boot_request(uint8_t id, uint32_t baud);
 
 /* A board with a bootloader defines this (docs/update.md §3a): the app
  * calls it once per boot, after its main loop has served the bus for 1 s,

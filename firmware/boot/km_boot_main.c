@@ -3,8 +3,9 @@
  * the application on trial (§3a: the start counted, the watchdog armed) if
  * the boot and entry checks pass, no update was asked for and the image
  * has not failed its trial KM_BOOT_TRIAL_MAX times in a row; otherwise
- * stays in update mode and answers on the bus at the stored ID and baud
- * (user data readable) or ID 0 at 115200, through the frame decoder
+ * stays in update mode and answers on the bus (km_boot_address.h: where
+ * the application left it, or the stored ID and baud, or a fixed pair),
+ * through the frame decoder
  * (km_boot_rx.c: the parser's frames in less code) and the update state
  * machine. Portable: the board is behind km_boot_board.h and its
  * boot_layout.h. */
@@ -13,14 +14,13 @@
 
 #include "km_app_userdata.h"
 #include "boot_layout.h"
+#include "km_boot_address.h"
 #include "km_boot_board.h"
 #include "km_boot_check.h"
 #include "km_boot_rx.h"
 #include "km_boot_serve.h"
 #include "km_parser.h"
-#include "km_store_peek.h"
 
-#define PRV_FALLBACK_BAUD 115200u
 #define PRV_ANSWER_DELAY_US 200u /* the 0x12 default: the master turns its line around */
 #define PRV_KICK_US 50000u       /* watchdog reloads: 10 per 500 ms timeout */
 
@@ -37,19 +37,12 @@ static km_boot_rx_t s_rx;
 static km_boot_reply_t s_reply;
 static uint32_t s_kicked_us; /* when the watchdog was last reloaded */
 
-/* ID and baud from the user data (what a mount of a schema of 0x0F and
- * 0x10 would load: km_store_peek), or the fallback (docs/update.md §3). */
-static void prv_address(uint8_t *id, uint32_t *baud)
-{
-    static const uint8_t k_keys[2] = {0x0Fu, 0x10u};
-    uint32_t v[2] = {0u, PRV_FALLBACK_BAUD / 100u};
-    *id = 0u;
-    *baud = PRV_FALLBACK_BAUD;
-    if (km_store_peek(km_bootb_store(), KM_USERDATA_SCHEMA_VERSION, k_keys, 2u, v)) {
-        *id = v[0] <= KM_ID_MAX ? (uint8_t)v[0] : 0u;
-        *baud = v[1] * 100u;
-    }
-}
+/* The bootloader reads the store for its ID and baud (KM_BOOT_STORE_READER
+ * 1, the default) or, where flash is short (the STM32G031F6's 4 KiB), does
+ * without it (km_boot_address.h, docs/update.md §3). */
+#ifndef KM_BOOT_STORE_READER
+#define KM_BOOT_STORE_READER 1
+#endif
 
 static void prv_wait_us(uint32_t from, uint32_t us)
 {
@@ -81,8 +74,9 @@ static void prv_handle(const km_frame_view_t *v)
 }
 
 /* The boot and entry checks (§3); starts the image if the trial decision
- * (§3a) says so, else returns whether the region holds a valid image. */
-static bool prv_boot(const km_image_target_t *t, km_image_header_t *h)
+ * (§3a) says so, else returns whether the region holds a valid image and
+ * (*asked) whether the application asked for update mode. */
+static bool prv_boot(const km_image_target_t *t, km_image_header_t *h, bool *asked)
 {
     volatile km_boot_shared_t *sh = km_bootb_shared();
     km_boot_entry_t e = {0u, 0u};
@@ -91,6 +85,7 @@ static bool prv_boot(const km_image_target_t *t, km_image_header_t *h)
     const km_boot_decision_t d = km_boot_decide(sh, ok);
     sh->boot_version = KM_BOOT_VERSION;
     sh->check = ~(uint32_t)KM_BOOT_VERSION;
+    *asked = d == KM_BOOT_STAY_ASKED;
     if (d == KM_BOOT_RUN) {
         km_bootb_start(t->base + h->vectors, e.sp, e.pc);
     }
@@ -103,14 +98,17 @@ int main(void)
     km_bootb_factory();
     const km_image_target_t *t = km_bootb_target();
     km_image_header_t h;
-    const bool valid = prv_boot(t, &h);
+    bool asked = false;
+    const bool valid = prv_boot(t, &h, &asked);
 
     /* Update mode. */
-    uint8_t id;
-    uint32_t baud;
-    prv_address(&id, &baud);
+    km_boot_address_t at;
+    km_boot_address(km_bootb_shared(), asked, KM_BOOT_STORE_READER ? km_bootb_store() : 0,
+                    KM_USERDATA_SCHEMA_VERSION, &at);
+    uint8_t id = at.id;
+    uint32_t baud = at.baud;
     if (!km_bootb_uart_init(baud)) {
-        baud = PRV_FALLBACK_BAUD;
+        baud = KM_BOOT_FALLBACK_BAUD;
         (void)km_bootb_uart_init(baud);
     }
     km_update_init(&s_serve.upd, km_bootb_region(), t);

@@ -2,6 +2,8 @@
 /* The trial of a new image (km_boot_trial.h, docs/update.md §3a). */
 #include "km_boot_trial.h"
 
+#include "km_frame.h"
+
 uint32_t km_boot_attempts(const volatile km_boot_shared_t *sh)
 {
     const uint32_t n = sh->attempts;
@@ -53,4 +55,18 @@ bool km_boot_started_by_loader(const volatile km_boot_shared_t *sh)
 void km_boot_confirm(volatile km_boot_shared_t *sh)
 {
     sh->confirmed = KM_BOOT_CONFIRMED_MAGIC;
+}
+
+void km_boot_handoff_set(volatile km_boot_shared_t *sh, uint8_t id, uint32_t baud)
+{
+    sh->address = ((baud / 100u) << 16) | ((uint32_t)(uint8_t)~id << 8) | id;
+}
+
+bool km_boot_handoff_get(const volatile km_boot_shared_t *sh, uint8_t *id, uint32_t *baud)
+{
+    const uint32_t w = sh->address;
+    const uint32_t lo = w & 0xFFu;
+    *id = (uint8_t)lo;
+    *baud = (w >> 16) * 100u;
+    return ((w >> 8) & 0xFFu) == (lo ^ 0xFFu) && lo <= KM_ID_MAX && *baud - 9600u <= 1000000u - 9600u;
 }

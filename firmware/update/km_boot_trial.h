@@ -31,7 +31,7 @@ typedef struct {
     uint32_t attempts;       /* starts of the image since it last confirmed */
     uint32_t attempts_check; /* attempts ^ KM_BOOT_TRIAL_KEY, else attempts read 0 */
     uint32_t confirmed;      /* KM_BOOT_CONFIRMED_MAGIC: this start served the bus */
-    uint32_t spare;
+    uint32_t address;        /* ENTER's ID and baud (km_boot_handoff_set), read only when asked */
 } km_boot_shared_t;
 
 typedef enum {
@@ -59,5 +59,16 @@ bool km_boot_started_by_loader(const volatile km_boot_shared_t *sh);
 
 /* The application, once it serves the bus: this start was good. */
 void km_boot_confirm(volatile km_boot_shared_t *sh);
+
+/* The application at 0x78 ENTER (docs/update.md §3): the ID and baud it
+ * answers on, for the bootloader's update mode. Packed in one word with a
+ * check byte: baud / 100 in bits 16-31, ~id in bits 8-15, id in bits 0-7. */
+void km_boot_handoff_set(volatile km_boot_shared_t *sh, uint8_t id, uint32_t baud);
+
+/* The bootloader, after a KM_BOOT_STAY_ASKED decision: the ID and baud the
+ * application left, if the word holds a sound pair (the check byte
+ * matches, the ID 0..250, the baud 9600..1000000); false otherwise (a
+ * power cut's garbage, an application that left none). */
+bool km_boot_handoff_get(const volatile km_boot_shared_t *sh, uint8_t *id, uint32_t *baud);
 
 #endif

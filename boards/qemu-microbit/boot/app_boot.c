@@ -18,12 +18,13 @@ static volatile km_boot_shared_t *prv_shared(void)
     return (volatile km_boot_shared_t *)(uintptr_t)BOOT_SHARED_ADDR;
 }
 
-/* 0x78 ENTER: leave the request for the bootloader (km_app.h). */
-bool km_board_boot_request(void)
+/* 0x78 ENTER: leave the request, ID and baud for the bootloader (km_app.h). */
+bool km_board_boot_request(uint8_t id, uint32_t baud)
 {
     if (!km_boot_started_by_loader(prv_shared())) {
         return false; /* not started by a bootloader */
     }
+    km_boot_handoff_set(prv_shared(), id, baud);
     prv_shared()->request = KM_BOOT_REQUEST_MAGIC;
     return true;
 }

@@ -31,12 +31,17 @@ void km_board_boot_confirm(void)
     s_confirm_boot = kf_world.boots;
 }
 
-bool km_board_boot_request(void)
+static uint8_t s_request_id; /* what the last request handed over */
+static uint32_t s_request_baud;
+
+bool km_board_boot_request(uint8_t id, uint32_t baud)
 {
     if (!s_has_bootloader) {
         return false;
     }
     s_requests++;
+    s_request_id = id;
+    s_request_baud = baud;
     return true;
 }
 
@@ -109,6 +114,24 @@ static void test_enter_with_bootloader_restarts(void **state)
     prv_answered("F9 F5 00 02 00 FD");
 }
 
+/* ENTER hands the bootloader the ID and baud the servo answers on
+ * (docs/update.md §3: update mode answers there): ID 5 after a write of
+ * 0x0F, the baud the bus was opened at. */
+static void test_enter_hands_over_id_and_baud(void **state)
+{
+    (void)state;
+    s_has_bootloader = true;
+    prv_send("F9 FF 00 04 03 0F 05 E4"); /* ID 0 -> 5 */
+    uint8_t drop[64];
+    while (kf_take_tx(drop, sizeof drop) > 0u) {
+    }
+    prv_send("F9 FF 05 07 78 01 B1 B2 B3 B4 B0");
+    assert_int_equal(s_requests, 1);
+    assert_int_equal(s_request_id, 5);
+    assert_int_equal(s_request_baud, kf_world.baud);
+    assert_int_equal(kf_world.baud, 115200);
+}
+
 /* Bad magic, the bootloader's sub-commands, an unknown one, none: bit 5. */
 static void test_other_sub_commands_bit5(void **state)
 {
@@ -161,6 +184,7 @@ int main(void)
         cmocka_unit_test_setup(test_status_says_application, prv_setup),
         cmocka_unit_test_setup(test_enter_without_bootloader_is_bit5, prv_setup),
         cmocka_unit_test_setup(test_enter_with_bootloader_restarts, prv_setup),
+        cmocka_unit_test_setup(test_enter_hands_over_id_and_baud, prv_setup),
         cmocka_unit_test_setup(test_other_sub_commands_bit5, prv_setup),
         cmocka_unit_test_setup(test_start_confirmed_after_one_second, prv_setup),
     };
