@@ -15,9 +15,12 @@
 #define PRV_REG_VERSION 0x0Cu
 #define PRV_ST_EXCEPTION 0x20u
 
+/* The short answer (docs/protocol.md §4): the status byte where a
+ * response has its command, no body; the same bytes as km_encode_status,
+ * one encoder less in the bootloader. */
 static void prv_status_answer(km_boot_serve_t *s, km_boot_reply_t *r)
 {
-    r->len = km_encode_status(r->bytes, s->id, s->status);
+    r->len = km_encode_response(r->bytes, s->id, s->status, 0, 0u);
     s->status = 0u;
 }
 
@@ -25,17 +28,15 @@ static void prv_status_answer(km_boot_serve_t *s, km_boot_reply_t *r)
 static void prv_read(km_boot_serve_t *s, const km_frame_view_t *f, int own, km_boot_reply_t *r)
 {
     uint8_t body[5];
-    uint8_t n = 0u;
-    if (f->body_len == 1u && f->body[0] == PRV_REG_VERSION) {
-        body[0] = PRV_REG_VERSION;
-        for (uint32_t i = 0; i < 4u; i++) {
-            body[1u + i] = (uint8_t)(s->version >> (8u * i));
-        }
+    uint8_t n;
+    uint32_t value;
+    const uint8_t reg = f->body_len == 1u ? f->body[0] : 0u;
+    if (reg == PRV_REG_VERSION) {
+        value = s->version;
         n = 5u;
-    } else if (f->body_len == 1u && f->body[0] == PRV_REG_STATUS) {
-        body[0] = PRV_REG_STATUS;
-        body[1] = s->status;
-        body[2] = 0u; /* the "random" byte: one bootloader per ID is all it can tell */
+    } else if (reg == PRV_REG_STATUS) {
+        /* the status byte, then the "random" byte 0: one bootloader per ID is all it can tell */
+        value = s->status;
         n = 3u;
         s->status = 0u;
     } else {
@@ -44,6 +45,10 @@ static void prv_read(km_boot_serve_t *s, const km_frame_view_t *f, int own, km_b
             prv_status_answer(s, r);
         }
         return;
+    }
+    body[0] = reg;
+    for (uint32_t i = 0; i < 4u; i++) {
+        body[1u + i] = (uint8_t)(value >> (8u * i));
     }
     if (own) {
         r->len = km_encode_response(r->bytes, s->id, PRV_CMD_READ, body, n);

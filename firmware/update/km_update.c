@@ -193,8 +193,9 @@ km_update_result_t km_update_commit(km_update_t *u)
         return prv_result(u, KM_UPD_BAD_STATE);
     }
     const km_flash_t *f = u->flash;
+    km_image_header_t h; /* a header for km_boot_check to fill: its only callers pass one */
     if (f->program(f->ctx, 0u, u->header, f->prog_size) != KM_FLASH_OK ||
-        !prv_same(f, 0u, u->header, f->prog_size) || !km_boot_check(f, &u->target, 0)) {
+        !prv_same(f, 0u, u->header, f->prog_size) || !km_boot_check(f, &u->target, &h)) {
         return prv_fail(u, KM_UPD_FLASH);
     }
     u->state = KM_UPD_STATE_COMMITTED;

@@ -13,7 +13,6 @@
 #include "board_pins.h"
 #include "boot_layout.h"
 #include "g0_core.h"
-#include "g0_gpio.h"
 #include "g0_regs.h"
 #include "km_boot_board.h"
 
@@ -21,6 +20,9 @@
 #define PRV_CELL 8u
 #define PRV_PAGE 2048u
 #define PRV_SCB_VTOR G0_REG(0xE000ED08u)
+
+_Static_assert(PIN_BUS_PORT == GPIOB_BASE_R && PIN_BUS_AF == 0u,
+               "km_bootb_uart_init: the bus pin is on port B, AF0");
 
 extern volatile uint32_t km_boot_ecc_errors;
 
@@ -31,7 +33,7 @@ volatile km_boot_shared_t *km_bootb_shared(void)
 
 void km_bootb_init(void)
 {
-    RCC_APBENR1 |= RCC_APBENR1_TIM2;
+    RCC_APBENR1 = RCC_APBENR1_TIM2; /* from reset: nothing else on APB1 is on */
     TIM_PSC(TIM2_BASE_R) = PRV_HSI_HZ / 1000000u - 1u;
     TIM_ARR(TIM2_BASE_R) = 0xFFFFFFFFu;
     TIM_EGR(TIM2_BASE_R) = TIM_EGR_UG;
@@ -201,10 +203,16 @@ bool km_bootb_uart_init(uint32_t baud)
     if (baud < 9600u || baud > 1000000u) {
         return false;
     }
-    RCC_IOPENR |= RCC_IOPENR_GPIOB;
-    RCC_APBENR2 |= RCC_APBENR2_USART1;
-    g0_gpio_open_drain_pullup(PIN_BUS_PORT, PIN_BUS_PIN);
-    g0_gpio_af(PIN_BUS_PORT, PIN_BUS_PIN, PIN_BUS_AF);
+    /* Whole-register writes: the bootloader is the first code after reset
+     * and uses no other pin of port B, whose reset state is every pin
+     * analog, push-pull, no pull, AF0 (RM0444 §7.4): open drain with
+     * pull-up, alternate function AF0 (AFRL stays 0) on PB6 only. */
+    RCC_IOPENR = RCC_IOPENR_GPIOB;
+    RCC_APBENR2 = RCC_APBENR2_USART1;
+    GPIO_OTYPER(PIN_BUS_PORT) = 1u << PIN_BUS_PIN;
+    GPIO_PUPDR(PIN_BUS_PORT) = 1u << (2u * PIN_BUS_PIN);
+    GPIO_MODER(PIN_BUS_PORT) =
+        ~(1u << (2u * PIN_BUS_PIN)); /* 0b10 (AF) on the pin, 0b11 (analog) elsewhere */
     USART1_CR1 = 0u;
     USART1_CR3 = USART_CR3_HDSEL;
     USART1_BRR = (PRV_HSI_HZ + baud / 2u) / baud;
