@@ -5,6 +5,13 @@
 #define KM_EXT_H
 
 #define KM_CMD_EXT 0x7Fu
+
+/* The extension command 0x7F and the fault log behind it are compiled in
+ * (1, the default) or out (0: the 32 KiB STM32G031F6 build, where 0x7F is
+ * an unknown command, docs/footprint.md "What gives way"). */
+#ifndef KM_FEATURE_EXT
+#define KM_FEATURE_EXT 1
+#endif
 #define KM_EXT_USERDATA_SOURCE 0x01u /* u8 KM_USERDATA_*: where the user data came from */
 #define KM_EXT_RESET_CAUSE 0x02u     /* u8 km_reset_cause_t (hal/km_hal_system.h) */
 #define KM_EXT_ACTIVE_BAUD 0x03u     /* u16 baud / 100 in force (0x10 may differ) */

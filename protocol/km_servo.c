@@ -46,7 +46,9 @@ static const prv_command_t s_commands[16] = {
     [PRV_SLOT(CMD_SYNC_EXECUTE)] = {CMD_SYNC_EXECUTE, RULE_KEEPS_SYNC, km_cmd_sync_execute},
     [PRV_SLOT(CMD_MULTI_READ)] = {CMD_MULTI_READ, RULE_BROADCAST | RULE_KEEPS_SYNC, km_cmd_multi_read},
     [PRV_SLOT(CMD_MULTI_WRITE)] = {CMD_MULTI_WRITE, RULE_BROADCAST | RULE_KEEPS_SYNC, km_cmd_multi_write},
+#if KM_FEATURE_EXT
     [PRV_SLOT(KM_CMD_EXT)] = {KM_CMD_EXT, RULE_SUPER, km_cmd_ext},
+#endif
     [PRV_SLOT(KM_CMD_UPDATE_FW)] = {KM_CMD_UPDATE_FW, 0, km_cmd_update},
 };
 

@@ -56,6 +56,24 @@ endif()
 # (docs/update.md §3).
 option(KM_G031_BOOT_STORE_READER "stm32g031 bootloader: update mode at the stored ID and baud"
        ${KM_G031_FEATURE_DEFAULT})
+# This firmware's extension command 0x7F (not in docs/protocol.md) and the
+# fault log it reads, with the log's .noinit RAM; without it 0x7F is an
+# unknown command (status bit 5).
+option(KM_G031_EXT "stm32g031: extension command 0x7F and the fault log" ${KM_G031_FEATURE_DEFAULT})
+if(NOT KM_G031_EXT)
+  list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_FEATURE_EXT=0)
+endif()
+# The application links the bootloader's compact run-time routines
+# (boot/boot_rt.c: byte-loop mem*, bit-serial division) instead of
+# newlib's and libgcc's unrolled ones: smaller, slower. Off in the 64 KiB
+# build, on in the 32 KiB one.
+if(KM_G031_FEATURE_DEFAULT)
+  set(KM_G031_COMPACT_RT_DEFAULT OFF)
+else()
+  set(KM_G031_COMPACT_RT_DEFAULT ON)
+endif()
+option(KM_G031_COMPACT_RT "stm32g031 application: compact mem* and division (boot/boot_rt.c)"
+       ${KM_G031_COMPACT_RT_DEFAULT})
 list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_G031_FLASH_KB=${KM_G031_FLASH_KB}u -DKM_G031_BOOT_KB=${KM_G031_BOOT_KB}u)
 list(APPEND KM_BOARD_LINK_OPTIONS -Wl,--defsym=KM_FLASH_SIZE=${KM_G031_FLASH_KB}K
      -Wl,--defsym=KM_BOOT_SIZE=${KM_G031_BOOT_KB}K)

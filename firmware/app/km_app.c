@@ -63,7 +63,9 @@ static km_control_params_t s_params; /* the control registers, decoded */
  * or a fault reset keeps the record of what led to it at no flash cost;
  * km_fault_log_boot() tells a kept log from whatever RAM held. On the host
  * it is process memory (host-sim's restart re-executes: an empty log). */
+#if KM_FEATURE_EXT
 static km_fault_log_t s_fault_log __attribute__((section(".noinit")));
+#endif
 static uint32_t s_params_gen; /* km_servo_params_gen() they were decoded at */
 static uint32_t s_last_control_tick;
 static uint32_t s_next_tick;
@@ -300,7 +302,9 @@ static __attribute__((noinline)) void prv_control_tick(uint32_t now)
     km_hal_sensors_read(&sensors);
     km_control_step(&s_control, &sensors, prv_params(), prv_ticks_to_us(dt_ticks), &live, &bridge);
     km_servo_set_live(&s_servo, &live);
+#if KM_FEATURE_EXT
     km_fault_log_record(&s_fault_log, &live);
+#endif
     prv_apply_bridge(&bridge);
 }
 
@@ -384,6 +388,7 @@ static bool prv_ops_update(void *ctx, const uint8_t *body, uint8_t n, uint8_t *a
     return true;
 }
 
+#if KM_FEATURE_EXT
 /* 0x7F of the fault log's extension registers (km_servo.h KM_EXT_FAULT_*):
  * the summary, or entry n (0 = newest; one the log does not hold reads as
  * 18 zero bytes, kind 0: no event). */
@@ -409,6 +414,7 @@ static bool prv_ops_ext_read(void *ctx, uint8_t addr, uint8_t *out, uint8_t *n)
 _Static_assert(KM_FAULT_ENTRY_SIZE <= KM_EXT_VALUE_MAX && KM_FAULT_SUMMARY_SIZE <= KM_EXT_VALUE_MAX,
                "a fault-log value must fit the extension answer");
 _Static_assert(KM_EXT_FAULT_ENTRIES == KM_FAULT_LOG_LEN, "one extension register per fault-log entry");
+#endif
 
 /* No bootloader unless the board says so (a board with one defines it). */
 __attribute__((weak)) bool km_board_boot_request(uint8_t id, uint32_t baud)
@@ -444,7 +450,9 @@ static const km_servo_ops_t s_ops = {
     .restart = prv_ops_restart,
     .request = prv_ops_request,
     .update = prv_ops_update,
+#if KM_FEATURE_EXT
     .ext_read = prv_ops_ext_read,
+#endif
     .ctx = NULL,
 };
 
@@ -495,7 +503,9 @@ void km_app_init(void)
     s_store_prepare = mount != KM_STORE_MOUNT_ERR_ARG &&
                       (mount != KM_STORE_MOUNT_LOADED || km_board_store_prepare_each_boot());
     km_servo_set_reset_cause(&s_servo, (uint8_t)km_hal_reset_cause());
+#if KM_FEATURE_EXT
     (void)km_fault_log_boot(&s_fault_log);
+#endif
     km_servo_control_params(&s_servo, &s_params);
     s_params_gen = km_servo_params_gen(&s_servo);
     km_control_init(&s_control, &s_params);
@@ -606,10 +616,12 @@ __attribute__((noinline)) void km_app_poll(void)
     }
 }
 
+#if KM_FEATURE_EXT
 km_fault_log_t *km_app_fault_log(void)
 {
     return &s_fault_log;
 }
+#endif
 
 uint32_t km_app_tx_refused(void)
 {
