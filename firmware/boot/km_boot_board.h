@@ -2,8 +2,9 @@
 /* What a board gives its bootloader (docs/update.md §3, §5): polled UART,
  * a microsecond clock, the application region and the user-data store as
  * km_flash_t, the shared RAM words (km_boot_trial.h), the watchdog, and
- * the jump that starts an image on trial. The bootloader enables no
- * interrupt and polls, so it needs no handler of its own. A board's
+ * the jump that starts an image on trial. The bootloader takes no
+ * interrupt and polls (a board may sleep between bytes: km_bootb_wait),
+ * so it needs no handler of its own. A board's
  * boot_layout.h also names BOOT_RAM_BASE and BOOT_SHARED_ADDR: the range
  * an image's initial stack pointer must lie in. */
 #ifndef KM_BOOT_BOARD_H
@@ -32,6 +33,10 @@ bool km_bootb_uart_init(uint32_t baud);              /* false: the board cannot 
 bool km_bootb_uart_rx(uint8_t *byte);                /* a received byte, if any */
 void km_bootb_uart_tx(const uint8_t *p, uint32_t n); /* returns after the last stop bit */
 uint32_t km_bootb_now_us(void);
+/* A board whose boot_layout.h defines BOOT_HAS_WAIT: sleeps until a byte
+ * is received or at most ~10 ms passed (the watchdog's reloads and the
+ * parser's gap go on), without taking an interrupt. */
+void km_bootb_wait(void);
 
 /* Reloads the watchdog if a reset left it running (nRF51: a soft reset
  * may); harmless when it is not. */

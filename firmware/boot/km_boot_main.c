@@ -133,5 +133,10 @@ int main(void)
         if (got) {
             prv_handle(&v);
         }
+#ifdef BOOT_HAS_WAIT
+        else if (!in) {
+            km_bootb_wait(); /* nothing received, no frame waiting: sleep until a byte */
+        }
+#endif
     }
 }

@@ -54,6 +54,30 @@ uint32_t km_bootb_now_us(void)
     return NRF_REG(NRF_TIMER0, TIMER_CC(0));
 }
 
+#define PRV_UART0_IRQ 2u
+#define PRV_TIMER0_IRQ 8u
+#define PRV_WAKE_US 10000u
+
+/* WFI until UART0's RXDRDY or TIMER0's COMPARE1 (now + 10 ms) pends its
+ * interrupt: both are enabled at the peripheral and in the NVIC only
+ * around the WFI, with PRIMASK set, so the core wakes but never takes
+ * them (the vector stubs would reset: boot_startup.c). */
+void km_bootb_wait(void)
+{
+    __asm__ volatile("cpsid i" ::: "memory");
+    NRF_REG(NRF_TIMER0, TIMER_CC(1)) = km_bootb_now_us() + PRV_WAKE_US;
+    NRF_REG(NRF_TIMER0, TIMER_EVENTS_COMPARE(1)) = 0u;
+    NRF_REG(NRF_TIMER0, TIMER_INTENSET) = TIMER_INT_COMPARE(1);
+    NRF_REG(NRF_UART0, UART_INTENSET) = UART_INT_RXDRDY;
+    nrf_irq_enable(PRV_TIMER0_IRQ);
+    nrf_irq_enable(PRV_UART0_IRQ);
+    if (NRF_REG(NRF_UART0, UART_EVENTS_RXDRDY) == 0u) {
+        __asm__ volatile("wfi" ::: "memory");
+    }
+    nrf_irq_disable(PRV_UART0_IRQ);
+    nrf_irq_disable(PRV_TIMER0_IRQ);
+}
+
 uint32_t km_bootb_hw_version(void)
 {
     return 0x10u;

@@ -27,5 +27,8 @@
 #define BOOT_AIRCR 0xE000ED0C
 #define BOOT_AIRCR_RESET 0x05FA0004 /* VECTKEY | SYSRESETREQ */
 #define BOOT_PAGE 1024
+/* Update mode sleeps between bytes (km_bootb_wait): QEMU then runs the
+ * guest only when a byte or the 10 ms wake-up arrives. */
+#define BOOT_HAS_WAIT 1
 
 #endif
