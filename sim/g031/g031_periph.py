@@ -126,6 +126,10 @@ class Flash(Block):
     PGSERR, SIZERR, PGAERR, WRPERR, PROGERR = 1 << 7, 1 << 6, 1 << 5, 1 << 4, 1 << 3
     EOP, BSY1 = 1 << 0, 1 << 16
 
+    def __init__(self, machine):
+        self.ops = []            # [(start time, "erase" or "prog", page or offset)], kept over resets
+        super().__init__(machine)
+
     def reset(self):
         super().reset()
         self.key_state = 0
@@ -188,6 +192,7 @@ class Flash(Block):
     def _start(self, now, dur, op):
         self.busy_until = now + dur
         self.pending = (self.busy_until, op)
+        self.ops.append((now, op[0], op[1]))
 
     def array_write(self, addr, size, val, now):
         """A CPU store into the flash array (the machine undoes it in its

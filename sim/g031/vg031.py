@@ -17,11 +17,9 @@ cycles for loads, branches and flash wait states); the CPU runs in
 slices of 1 us and interrupts are taken between slices."""
 import argparse
 import ctypes
-import os
 import socket
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from unicorn import (Uc, UcError, UC_ARCH_ARM, UC_MODE_THUMB, UC_MODE_MCLASS, UC_PROT_ALL,  # noqa: E402
                      UC_HOOK_MEM_WRITE, UC_HOOK_MEM_READ, UC_HOOK_CODE, UC_HOOK_MEM_UNMAPPED, UC_HOOK_INTR)
@@ -184,6 +182,8 @@ class Machine:
         self.watches = {addr: [] for addr in watch}   # address: [(time, instructions before the slice)]
         for path in elves:
             self.find_wfi(path)
+        if not elves:
+            self.scan_code(bytes(flash_image), P.FLASH_BASE)   # a bare program: its code is in the flash
         self.uc = None
         self.ram = bytearray(RAM_SIZE)
         self.rcc = P.Rcc(self)
@@ -251,20 +251,25 @@ class Machine:
         self.uc = uc
 
     def find_wfi(self, elf_path):
-        """WFI sites of an image (unicorn's core just ends the run there)."""
+        """WFI and unmask sites of an image's code sections."""
         from elftools.elf.elffile import ELFFile
         with open(elf_path, "rb") as f:
             for sec in ELFFile(f).iter_sections():
                 if sec["sh_flags"] & 4 and sec["sh_type"] == "SHT_PROGBITS":
-                    data, base = sec.data(), sec["sh_addr"]
-                    for i in range(0, len(data) - 1, 2):
-                        if data[i] == 0x30 and data[i + 1] == 0xBF:
-                            self.wfi_sites.add(base + i)
-                        elif data[i] == 0x62 and data[i + 1] == 0xB6:          # cpsie i
-                            self.unmask_sites.add(base + i + 2)
-                        elif (data[i + 1] == 0xF3 and data[i] & 0xF0 == 0x80 and i + 3 < len(data)
-                              and data[i + 2] == 0x10 and data[i + 3] == 0x88):  # msr primask, rN
-                            self.unmask_sites.add(base + i + 4)
+                    self.scan_code(sec.data(), sec["sh_addr"])
+
+    def scan_code(self, data, base):
+        """Records the WFI sites (unicorn's core just ends the run there)
+        and the instruction after each CPSIE i / MSR PRIMASK in `data`
+        at address `base`."""
+        for i in range(0, len(data) - 1, 2):
+            if data[i] == 0x30 and data[i + 1] == 0xBF:
+                self.wfi_sites.add(base + i)
+            elif data[i] == 0x62 and data[i + 1] == 0xB6:          # cpsie i
+                self.unmask_sites.add(base + i + 2)
+            elif (data[i + 1] == 0xF3 and data[i] & 0xF0 == 0x80 and i + 3 < len(data)
+                  and data[i + 2] == 0x10 and data[i + 3] == 0x88):  # msr primask, rN
+                self.unmask_sites.add(base + i + 4)
 
     def sample(self, channel, when):
         """The analog input of ADC channel `channel` at virtual time `when`:
@@ -364,13 +369,14 @@ class Machine:
         self.wfi_at = addr
 
     def _unmask_hook(self, uc, addr, size, _):
-        """Right after PRIMASK may have been cleared: a pending interrupt is
-        taken before the next instruction (ARMv6-M B1.5.3), so the slice ends
-        here and the next one starts in the handler (a lock right after an
-        unlock would otherwise hide it until the next slice boundary). Only
-        one that may preempt: a handler that unlocks with a lower-priority
-        interrupt pending (SysTick inside TIM2's handler) would otherwise
-        stop here for ever without executing the next instruction."""
+        """Right after PRIMASK may have been cleared: a pending interrupt
+        that may preempt is taken before the next instruction (ARMv6-M
+        B1.5.3), so the slice ends here and the next one starts in the
+        handler (a lock right after an unlock would otherwise hide it until
+        the next slice boundary). One that may not preempt (its priority not
+        above the running handler's, B1.5.4) waits for the return: ending
+        the slice for it would restart here and stop again, for ever
+        (docs/virtual-g031.md "Found: servo 1 silent until its IWDG reset")."""
         if self._pending_exception() is not None:
             uc.emu_stop()
 

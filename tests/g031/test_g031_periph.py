@@ -2,11 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """Unit tests of the virtual G031's peripheral models against RM0444
 behaviour (sim/g031/g031_periph.py), without a CPU."""
-import os
-import sys
 import unittest
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "sim", "g031"))
 import g031_deps  # noqa: E402
 g031_deps.require()
 import g031_periph as P  # noqa: E402
@@ -269,6 +266,40 @@ class MachineFaultTests(unittest.TestCase):
 
     def test_unchecked_machine_lets_it_pass(self):
         m = self._machine(False)
+        self.assertEqual(m.faults, [])
+
+
+# Reset handler at 0x100 pends PendSV (ICSR.PENDSVSET) and parks. PendSV at
+# 0x200 pends SysTick (ICSR.PENDSTSET: the same priority 0, so it may not
+# preempt, ARMv6-M B1.5.4), masks and unmasks (CPSID i, MSR PRIMASK), sets
+# r5 = 1 and returns; SysTick at 0x300 then sets r6 = 1. Both handlers run
+# from reset priorities, so the SysTick waits for PendSV's return.
+SAME_PRIORITY_PENDS_IN_HANDLER = {
+    0x100: bytes.fromhex("0148" "0249" "0160" "fee7" "04ed00e0" "00000010"),
+    0x200: bytes.fromhex("0448" "0549" "0160" "72b6" "0022" "82f31088" "0125" "7047" "0000"
+                         "04ed00e0" "00000004"),
+    0x300: bytes.fromhex("0126" "7047"),
+}
+
+
+class MachineExceptionTests(unittest.TestCase):
+    """Exception entry and return around PRIMASK (ARMv6-M B1.5)."""
+
+    def test_unmask_with_same_priority_pending_runs_on(self):  # B1.5.3, B1.5.4
+        import vg031
+        from unicorn import arm_const as A
+        image = bytearray(b"\xff" * 0x800)
+        vectors = {0: 0x20002000, 1: 0x08000101, 14: 0x08000201, 15: 0x08000301}
+        for n, v in vectors.items():
+            image[4 * n:4 * n + 4] = v.to_bytes(4, "little")
+        for at, code in SAME_PRIORITY_PENDS_IN_HANDLER.items():
+            image[at:at + len(code)] = code
+        m = vg031.Machine(bytes(image))
+        m.run_until(200_000)   # 200 us: a few dozen instructions are needed
+        self.assertEqual(m.uc.reg_read(A.UC_ARM_REG_R5), 1,
+                         "PendSV stuck after MSR PRIMASK at pc %#x, active %s" % (m.pc, m.active))
+        self.assertEqual(m.uc.reg_read(A.UC_ARM_REG_R6), 1, "SysTick not taken after PendSV returned")
+        self.assertEqual(m.active, [])
         self.assertEqual(m.faults, [])
 
 
