@@ -564,6 +564,16 @@ class Machine:
         self.uc.reg_write(A.UC_ARM_REG_PRIMASK, 1)
         self.pc = addr
 
+    def bad_load(self, addr=0x0800E7F0):
+        """Fault injection for tests: the CPU goes on at addr (an erased
+        cell below the store) with a word load through a stray pointer
+        (0x30000000, unmapped), a HardFault (ARMv6-M B1.5.6); returns the
+        address of the faulting load."""
+        off = addr - P.FLASH_BASE
+        self.flash[off:off + 8] = bytes.fromhex("0048" "0068") + (0x30000000).to_bytes(4, "little")
+        self.pc = addr
+        return addr + 2
+
     def _slice_length(self):
         """A slice of slice_ns; after a slice that touched no peripheral,
         with no interrupt pending, up to QUIET_SLICE_NS or the next

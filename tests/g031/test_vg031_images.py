@@ -14,7 +14,6 @@ import argparse
 import zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "..", "sim", "g031"))
 import g031_deps  # noqa: E402
 g031_deps.require()
 import vg031  # noqa: E402
@@ -200,9 +199,12 @@ class Images(unittest.TestCase):
     def test_hung_main_loop_ends_in_iwdg_reset(self):
         m, (poll,) = boot_and_app()
         self.assertTrue(to_main_loop(m, poll))
-        m.run_until(m.now + 5 * MS)
+        # Past the 1 s after which the application confirms its start to the
+        # bootloader (docs/update.md §3a): the reset below is not a failed trial.
+        m.run_until(m.now + 1100 * MS)
+        self.assertEqual(exchange(m, frame(0, 0x01))[0][:4], bytes.fromhex("F9F50002"))
         m.hang()
-        m.slice_ns = 100_000
+        slice_ns, m.slice_ns = m.slice_ns, 100_000
         hung_at = m.now
         self.assertTrue(m.run_until(m.now + 2000 * MS, stop=lambda: bool(m.resets)), "no reset")
         when, why = m.resets[0]
@@ -210,6 +212,60 @@ class Images(unittest.TestCase):
         # 500 ms requested, LSI 32 kHz (km_hal_watchdog_start's rounding).
         self.assertTrue(400 * MS <= when - hung_at <= 600 * MS, (when - hung_at) / MS)
         self.assertTrue(m.rcc.read(0x60, m.now) & (1 << 29), "IWDGRSTF not set")
+        m.slice_ns = slice_ns
+        m.watches[poll].clear()   # (a watch keeps its first 1000 hits)
+        self.assertTrue(m.run_until(m.now + 200 * MS, stop=lambda: bool(m.watches[poll])),
+                        "no main loop after the IWDG reset")
+        m.run_until(m.now + 2 * MS)
+        answer, delay = exchange(m, frame(0, 0x01))
+        print("IWDG reset %.1f ms after the hang; ping answered %.1f us after its stop bit, %.1f ms after "
+              "the reset" % ((when - hung_at) / MS, delay or -1, (m.now - when) / MS))
+        self.assertEqual(answer[:4], bytes.fromhex("F9F50002"), "no answer after the IWDG reset")
+
+    def test_hardfault_frees_bridge_and_leaves_record(self):
+        # boards/stm32g031/fault.c: HardFault_Handler -> g0_fault_stop: the
+        # bridge's inputs to low outputs, TIM3's outputs off, the record in
+        # .noinit SRAM, SYSRESETREQ; the next boot keeps it in g0_last_fault.
+        elf = os.path.join(IMAGES, "km-servo-stm32g031.elf")
+        poll = vg031.symbol(elf, "km_app_poll")
+        m = vg031.make(argparse.Namespace(boot=None, app=None, elf=elf, app_elf=None), watch=[poll])
+        self.assertTrue(to_main_loop(m, poll))
+        m.run_until(m.now + 2 * MS)
+        exchange(m, frame(0, 0x03, 0x64, b"\x01"))           # torque on: the bridge holds
+        m.run_until(m.now + 20 * MS)
+        moder = m.gpioa.r[0x00]
+        self.assertEqual(((moder >> 12) & 3, (moder >> 14) & 3), (2, 2), "PA6/PA7 not TIM3's outputs")
+        self.assertNotEqual(m.tim3.r[0x20], 0, "TIM3 CCER: no output enabled before the fault")
+        free_at_request = []    # the bridge's state when the core asks for the reset
+        request_reset = m.request_reset
+        m.request_reset = lambda why: (free_at_request.append(bridge_free(m)), request_reset(why))
+        at = m.bad_load()
+        self.assertTrue(m.run_until(m.now + 10 * MS, stop=lambda: bool(m.resets)), "no reset after the fault")
+        self.assertEqual(free_at_request, [True], "bridge not freed before the reset request")
+        self.assertEqual(m.resets[0][1], "sysresetreq")
+        self.assertEqual(m.faults[0][1], "unmapped")
+        hits = len(m.watches[poll])
+        self.assertTrue(m.run_until(m.now + 200 * MS, stop=lambda: len(m.watches[poll]) > hits))
+        m.run_until(m.now + 2 * MS)
+        # The record the handler wrote: kind 3, the load's PC, LR, check =
+        # ~(magic ^ kind ^ pc ^ lr); the boot that read it zeroed its magic only.
+        ram = bytes(m.uc.mem_read(0x20000000, 8192))
+        kind_pc = (3).to_bytes(4, "little") + at.to_bytes(4, "little")
+        found = ram.find(kind_pc)
+        self.assertGreaterEqual(found, 4, "no fault record (kind 3, pc 0x%08x) in SRAM" % at)
+        lr, check = (int.from_bytes(ram[found + i:found + i + 4], "little") for i in (8, 12))
+        self.assertEqual(check, ~(0xFA017EC0 ^ 3 ^ at ^ lr) & 0xFFFFFFFF, "record check word")
+        # ... and the next boot reports a fault reset over 0x7F (KM_RESET_FAULT = 4).
+        answer, _ = exchange(m, frame(0, 0x7F, 0x02))
+        print("HardFault at 0x%08x: bridge free at the reset request, reset %.3f ms after the fault; "
+              "record pc 0x%08x lr 0x%08x; 0x7F reset cause answer %s"
+              % (at, (m.resets[0][0] - m.faults[0][0]) / MS, at, lr, answer.hex(" ")))
+        self.assertEqual(answer[:7], bytes.fromhex("F9F500047F0204"), answer.hex(" "))
+
+def bridge_free(m):
+    """PA6 and PA7 low outputs and TIM3's outputs off (boards/stm32g031/fault.c)."""
+    moder, odr = m.gpioa.r[0x00], m.gpioa.r[0x14]
+    return ((moder >> 12) & 3, (moder >> 14) & 3) == (1, 1) and not odr & 0xC0 and m.tim3.r[0x20] == 0
 
 
 def main():
