@@ -41,9 +41,15 @@ answers like QEMU's human monitor to the one command tools/servo-update
 --resets sends, "system_reset": a reset from the NRST pin (RM0444 §5.1.2:
 core and peripherals to their reset values, SRAM and flash kept, PINRSTF).
 
+--clock-file PATH: the bus's virtual time in PATH (8 bytes, little-endian
+ns), for a master that counts its timeouts in it (sim/g031/vclock.py).
+
 --flash-dir DIR: each servo's whole 64 KiB flash in DIR/servo-ID.flash,
 read at start (a servo that already answers on its ID is not written
 again) and written back when the bus stops (SIGTERM, SIGINT, client gone).
+
+KM_G031_TRACE=1 in the environment: every byte on the wire and every flash
+operation, with its virtual time, on stderr.
 
 stdout: exactly one line "ready 127.0.0.1:PORT" once every servo answers
 on its ID; everything else on stderr. Exit 0 after SIGTERM / SIGINT, 1 when
@@ -58,8 +64,8 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
 import g031_deps  # noqa: E402
+import vclock  # noqa: E402
 
 REPO = os.path.dirname(os.path.dirname(HERE))
 IMAGES = "boards/stm32g031"
@@ -68,6 +74,7 @@ HOST = "127.0.0.1"
 QUANTUM_NS = 50_000     # the servos advance together in steps of this much virtual time
 BACKLOG_NS = 20_000_000  # the master's bytes queued on the wire ahead of now, at most
 STOP = []
+TRACE = bool(os.environ.get("KM_G031_TRACE"))
 
 
 def log(msg):
@@ -99,6 +106,7 @@ def parse_args(argv):
     ap.add_argument("--qemu-arg", action="append", default=[])
     ap.add_argument("--monitor-dir")
     ap.add_argument("--flash-dir")
+    ap.add_argument("--clock-file", help="keep the virtual time here for the master (sim/g031/vclock.py)")
     ap.add_argument("--plant", default="realistic", choices=("realistic", "ideal", "none"),
                     help="each servo's plant (sim/plant configuration), or none: fixed sensor inputs")
     ap.add_argument("--timeout", type=float, default=10.0)
@@ -184,7 +192,7 @@ class Servo:
         plant = None if plant_config == "none" else g031_plant.Plant(plant_config, scenario)
         flash = image or (vg031.flash_from_images(boot, app) if boot else vg031.flash_from_images(elf=app_elf))
         self.m = vg031.Machine(flash, elves=[p for p in (boot, app_elf) if p], plant=plant)
-        self.faults_seen = 0
+        self.faults_seen = self.resets_seen = self.ops_seen = 0
 
     def exchange(self, data, wait_ns):
         """Alone on its wire: sends `data` at the master's 115200 baud (a
@@ -218,17 +226,25 @@ class Servo:
                 f.write(bytes(self.m.flash))
 
     def report_faults(self):
-        """Logs faults and resets the core took since the last call."""
+        """Logs faults and resets the core took since the last call, and
+        with KM_G031_TRACE set its flash operations."""
         for when, kind, pc in self.m.faults[self.faults_seen:]:
             log("servo id %d: %s at pc 0x%08x, %.3f ms" % (self.id, kind, pc, when / 1e6))
-        self.faults_seen = len(self.m.faults)
+        for when, reason in self.m.resets[self.resets_seen:]:
+            log("servo id %d: %s reset, %.3f ms" % (self.id, reason, when / 1e6))
+        if TRACE:
+            for when, kind, where in self.m.flashc.ops[self.ops_seen:]:
+                log("trace %.3f ms: servo id %d flash %s %s" % (when / 1e6, self.id, kind, where))
+        self.faults_seen, self.resets_seen, self.ops_seen = (
+            len(self.m.faults), len(self.m.resets), len(self.m.flashc.ops))
 
 
 class Bus:
     """The shared wire in virtual time, one TCP client as the master."""
 
-    def __init__(self, server, servos, baud):
+    def __init__(self, server, servos, baud, clock_file=None):
         self.server, self.servos = server, servos
+        self.clock = vclock.create(clock_file) if clock_file else None
         self.baud = baud
         self.line = Line(baud)
         self.client, self.rfc2217, self.fresh = None, None, False
@@ -242,6 +258,8 @@ class Bus:
         self.sel.register(server, selectors.EVENT_READ, "server")
         self.anchor = (time.monotonic(), self.now)
         self.started = self.anchor
+        if self.clock is not None:
+            vclock.publish(self.clock, self.now)
 
     def _accept(self):
         conn, addr = self.server.accept()
@@ -319,6 +337,8 @@ class Bus:
     def _to_servos(self, data, start):
         """The master's bytes on the wire from `start` at its baud; returns their end."""
         tx_bit = 1e9 / self.line.baudrate
+        if TRACE:
+            log("trace %.3f ms: master %s" % (start / 1e6, bytes(data).hex()))
         for byte in data:
             for s in self.servos:
                 self._deliver(s, start, byte, tx_bit)
@@ -343,9 +363,13 @@ class Bus:
             s.m.run_until(until)
             bit = s.m.usart1.bit_ns()
             sent += [(t, b, bit, s) for t, b in s.m.take_output()]
-            if len(s.m.faults) != s.faults_seen:
-                s.report_faults()
+            s.report_faults()
         self.now = until
+        if self.clock is not None:
+            vclock.publish(self.clock, until)
+        if TRACE and sent:
+            log("trace %.3f ms: sent %s" % (until / 1e6, " ".join(
+                "%d:%02x@%.3f" % (s.id, b, t / 1e6) for t, b, _bit, s in sorted(sent, key=lambda x: x[0]))))
         for t, byte, bit, src in sorted(sent, key=lambda x: x[0]):
             for s in self.servos:
                 if s is not src:
@@ -488,7 +512,7 @@ def main(argv=None):
             servos.append(s)
         if STOP:
             return 0
-        bus = Bus(server, servos, a.baud)
+        bus = Bus(server, servos, a.baud, a.clock_file)
         if a.monitor_dir:
             bus.add_monitors(a.monitor_dir)
         print("ready %s:%d" % server.getsockname(), flush=True)

@@ -31,6 +31,12 @@ protocol (broadcast write 0x10, broadcast restart), as tests/bus/bus_check.py
 does for QEMU, whose emulated UART has no line rate but whose super-ID slots
 follow the servos' baud (docs/protocol-decisions.md "Super-ID answer slots").
 
+--virtual-time (g031 only): servo-bus --clock-file keeps the virtual time
+of the servos, and each pass runs under sim/g031/vclock.py, so every
+timeout and pause of the suite counts that time, not the host's
+(docs/virtual-g031.md "Virtual time for the master"); no --time-scale is
+needed however slow the emulator.
+
 --slot-timing: "realtime" runs the bus with servo-bus --realtime (hub and
 emulators under SCHED_FIFO) and the suite under SCHED_FIFO below them, so
 emulated super-ID and 0x82 answers keep the real slot rule at 115200
@@ -54,11 +60,13 @@ import re
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SUITE = os.path.join(HERE, "conformance.py")
 import simbus  # noqa: E402  (sim/bus on PYTHONPATH)
+VCLOCK = os.path.join(simbus.REPO, "sim", "g031", "vclock.py")
 import wire as W  # noqa: E402
 import conformance as S  # noqa: E402  (its check selection: S.matches)
 
@@ -154,10 +162,12 @@ def tally(names, lines):
     return counts, skips, problems
 
 
-def run_pass(port, ids, baud, names, args):
-    """One conformance.py run on the bus at `baud` over exactly `names`;
-    its output lines (echoed), or None when it ended without its summary."""
-    out = subprocess.run([sys.executable, SUITE, "--bus", "rfc2217:127.0.0.1:%d@%d" % (port, baud),
+def run_pass(port, ids, baud, names, args, clock=None):
+    """One conformance.py run on the bus at `baud` over exactly `names`
+    (on the bus's virtual time with `clock`, sim/g031/vclock.py); its
+    output lines (echoed), or None when it ended without its summary."""
+    on_clock = [VCLOCK, clock] if clock else []
+    out = subprocess.run([sys.executable] + on_clock + [SUITE, "--bus", "rfc2217:127.0.0.1:%d@%d" % (port, baud),
                           "--ids", ids] + args + sum((["--only", "=" + n] for n in names), []),
                          stdout=subprocess.PIPE, text=True)
     sys.stdout.write(out.stdout)
@@ -187,7 +197,7 @@ def run_suite(port, a, realtime, t0):
             switch_baud(port, [int(x) for x in a.ids.split(",")], baud, now)
             now = baud
             print("# bus: servos switched to %d baud (%d checks)" % (baud, len(group)), flush=True)
-        out = run_pass(port, a.ids, now, group, rest)
+        out = run_pass(port, a.ids, now, group, rest, a.clock)
         crashed |= not out or not SUMMARY.match(out[-1])
         lines += out
     counts, skips, problems = tally(names, lines)
@@ -211,8 +221,14 @@ def main():
     ap.add_argument("--slow", action="append", default=[])
     ap.add_argument("--slot-timing", choices=("auto", "realtime", "plain"), default="auto")
     ap.add_argument("--image", help="passed to servo-bus: the servo image (default: the backend's)")
+    ap.add_argument("--virtual-time", action="store_true",
+                    help="g031 only: the suite's waits in the bus's virtual time (servo-bus --clock-file)")
     ap.add_argument("suite", nargs=argparse.REMAINDER)
     a = ap.parse_args()
+    if a.virtual_time and a.backend != "g031":
+        ap.error("--virtual-time: the g031 backend only (the others run in real time)")
+    clock_dir = tempfile.TemporaryDirectory(prefix="run-on-bus-") if a.virtual_time else None
+    a.clock = os.path.join(clock_dir.name, "clock") if clock_dir else None
     argv = ["--ids", a.ids, "--backend", a.backend, "--timeout", "30"]
     realtime = a.slot_timing == "realtime" or (a.slot_timing == "auto" and realtime_allowed())
     if realtime:
@@ -227,6 +243,9 @@ def main():
         argv += ["--gap-floor-us", str(a.gap_floor_us)]
     if a.image:
         argv += ["--image", a.image]
+    if a.clock:
+        argv += ["--clock-file", a.clock]
+        print("# virtual time: the suite's timeouts and pauses count the servos' time", flush=True)
     if a.slot_floor_us is not None:
         argv += ["--slot-floor-us", str(a.slot_floor_us)]
         print("# slot floor: every super-ID and 0x82 answer slot at least %d us (servo-bus "

@@ -16,7 +16,6 @@ import sys
 import unittest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "..", "sim", "g031"))
 import g031_regmap as R  # noqa: E402
 
 HEADER = os.path.join(HERE, "..", "..", "boards", "stm32g031", "g0_regs.h")

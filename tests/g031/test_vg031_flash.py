@@ -15,7 +15,6 @@ import sys
 import unittest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "..", "sim", "g031"))
 import g031_deps  # noqa: E402
 g031_deps.require()
 import vg031  # noqa: E402

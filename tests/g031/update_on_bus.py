@@ -28,7 +28,7 @@ import time
 import zlib
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
-sys.path.insert(0, os.path.join(REPO, "host"))
+import vclock  # noqa: E402  (sim/g031, on PYTHONPATH)
 from kmx.bus import Bus  # noqa: E402
 from kmx import frame as fr  # noqa: E402
 
@@ -60,7 +60,8 @@ def versions(spec, ids):
 
 
 def run_update(update, path, extra=()):
-    """tools/servo-update with its output echoed; its exit status and output."""
+    """tools/servo-update on the bus's virtual time (sim/g031/vclock.py) with
+    its output echoed; its exit status and output."""
     r = subprocess.run(update + list(extra) + [path], capture_output=True, text=True)
     print(r.stdout.strip(), flush=True)
     if r.stderr.strip():
@@ -72,7 +73,8 @@ def checks(spec, mon, tmp, image, a):
     """The four steps; the failures."""
     ids, failures = (1, 2, 3), []
     shipped = struct.unpack_from(HEADER, image)[3]
-    update = [os.path.join(REPO, "tools/servo-update"), "--bus", spec, "--ids", "1,2,3"]
+    update = [sys.executable, vclock.__file__, os.path.join(tmp, "clock"), os.path.join(REPO, "tools/servo-update"),
+              "--bus", spec, "--ids", "1,2,3"]
     v = versions(spec, ids)
     print("0x0C at start:", {i: None if x is None else "0x%08X" % x for i, x in v.items()}, flush=True)
     if any(x is None for x in v.values()):
@@ -121,7 +123,8 @@ def main():
     tmp = tempfile.TemporaryDirectory(prefix="g031-update-")
     bus_proc = subprocess.Popen([os.path.join(REPO, "sim/bus/servo-bus"), "--backend", "g031", "--ids", "1,2,3",
                                  "--port", "0", "--build-dir", a.build_stm32, "--monitor-dir", tmp.name,
-                                 "--timeout", "30"], stdout=subprocess.PIPE, text=True)
+                                 "--timeout", "30", "--clock-file", os.path.join(tmp.name, "clock")],
+                                stdout=subprocess.PIPE, text=True)
     t0 = time.monotonic()
     try:
         line = bus_proc.stdout.readline().strip()
@@ -130,7 +133,10 @@ def main():
             return 1
         spec = "tcp:" + line.split()[1]
         print("bus: %s, up in %.1f s" % (spec, time.monotonic() - t0), flush=True)
+        clock = vclock.install(os.path.join(tmp.name, "clock"))  # this process's waits too
+        v0 = clock.ns()
         failures = checks(spec, tmp.name, tmp.name, image, a)
+        print("virtual time %.1f s" % ((clock.ns() - v0) / 1e9))
     finally:
         bus_proc.send_signal(signal.SIGTERM)
         try:
@@ -138,7 +144,7 @@ def main():
         except subprocess.TimeoutExpired:
             bus_proc.kill()
         tmp.cleanup()
-    print("run time %.1f s" % (time.monotonic() - t0))
+    print("run time %.1f s real" % (vclock.real_monotonic() - t0))
     for f in failures:
         print("FAIL", f)
     if failures:

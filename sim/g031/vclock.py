@@ -1,0 +1,109 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The virtual G031 bus's clock for a master in another process, so that
+the master's timeouts and pauses are counted in the servos' virtual time
+(docs/virtual-g031.md "Virtual time for the master").
+
+The bus (vg031_bus.py --clock-file PATH) keeps its virtual time in PATH:
+8 bytes, little-endian, nanoseconds, rewritten as the wire advances. A
+master process calls install(PATH) before it talks to the bus:
+time.monotonic() then reads the virtual time and time.sleep() waits until
+the virtual time has moved on by its argument. Because the bus never runs
+ahead of real time, every real-time wait underneath (select, a queue's get,
+a socket timeout) lasts at least as long as the virtual wait it stands
+for; the callers that loop to a deadline (kmx.bus, pyserial's Timeout)
+then wait on until the virtual deadline.
+
+    python3 sim/g031/vclock.py CLOCK_FILE SCRIPT [ARGS...]
+
+runs SCRIPT (a Python program, e.g. tools/servo-update) as __main__ with
+the clock installed."""
+import mmap
+import os
+import runpy
+import sys
+import time
+
+STALL_S = 60.0   # the clock not moving for this long in real time: the bus is gone
+
+real_monotonic = time.monotonic
+real_sleep = time.sleep
+
+
+class Clock:
+    """Reads the bus's virtual time from its clock file."""
+
+    def __init__(self, path):
+        with open(path, "rb") as f:
+            self.map = mmap.mmap(f.fileno(), 8, access=mmap.ACCESS_READ)
+        self.last = (self.ns(), real_monotonic())
+
+    def ns(self):
+        """Virtual nanoseconds (read twice: the bus may be writing)."""
+        while True:
+            a = int.from_bytes(self.map[0:8], "little")
+            if a == int.from_bytes(self.map[0:8], "little"):
+                return a
+
+    def monotonic(self):
+        """Virtual seconds, for time.monotonic."""
+        return self.ns() / 1e9
+
+    def sleep(self, seconds):
+        """Waits until the virtual time has advanced by `seconds`; a clock
+        that stops for STALL_S real seconds raises RuntimeError."""
+        end = self.ns() + int(max(0.0, seconds) * 1e9)
+        moved = (self.ns(), real_monotonic())
+        while True:
+            now = self.ns()
+            if now >= end:
+                return
+            if now != moved[0]:
+                moved = (now, real_monotonic())
+            elif real_monotonic() - moved[1] > STALL_S:
+                raise RuntimeError("the virtual bus clock stopped (is the bus still running?)")
+            real_sleep(min((end - now) / 1e9, 0.01))
+
+
+def install(path):
+    """time.monotonic, time.sleep and pyserial's timeouts on the bus's
+    virtual time, for the rest of this process."""
+    clock = Clock(path)
+    time.monotonic = clock.monotonic
+    time.sleep = clock.sleep
+    try:
+        import serial.serialutil
+        serial.serialutil.Timeout.TIME = staticmethod(clock.monotonic)
+    except ImportError:
+        pass
+    return clock
+
+
+def create(path):
+    """The bus side: a zeroed clock file, mapped for writing; returns the map."""
+    with open(path, "wb") as f:
+        f.write(bytes(8))
+    fd = os.open(path, os.O_RDWR)
+    try:
+        return mmap.mmap(fd, 8)
+    finally:
+        os.close(fd)
+
+
+def publish(clock_map, ns):
+    """The bus side: its virtual time now."""
+    clock_map[0:8] = int(ns).to_bytes(8, "little")
+
+
+def main(argv):
+    if len(argv) < 2:
+        print(__doc__, file=sys.stderr)
+        return 2
+    install(argv[0])
+    sys.argv = argv[1:]
+    sys.path[0] = os.path.dirname(os.path.abspath(argv[1]))  # as `python3 SCRIPT` would have it
+    runpy.run_path(argv[1], run_name="__main__")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
