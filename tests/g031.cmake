@@ -39,6 +39,12 @@ add_test(NAME g031_first_saved_setting_ping_on_time
   COMMAND ${KM_DEBIAN_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/g031/test_vg031_flash.py
           ${KM_G031_IMAGES} Flash.test_first_saved_setting_after_idle_format_ping_on_time)
 set_tests_properties(g031_first_saved_setting_ping_on_time PROPERTIES LABELS g031 TIMEOUT 600)
+# A ping during each kind of flash operation: bytes lost and answer delay
+# (docs/virtual-g031.md "Flash work and the bus").
+add_test(NAME g031_ping_during_flash_operations
+  COMMAND ${KM_DEBIAN_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/g031/test_vg031_flash.py
+          ${KM_G031_IMAGES} Flash.test_ping_during_each_kind_of_flash_operation)
+set_tests_properties(g031_ping_during_flash_operations PROPERTIES LABELS g031 TIMEOUT 600)
 # The bus suites on three virtual G031s (servo-bus --backend g031: one
 # process, one wire in virtual time, sim/g031/vg031_bus.py) at 115200 baud,
 # with the master on the bus's virtual time (servo-bus --clock-file, the

@@ -283,6 +283,10 @@ class Usart(Block):
     CR1, CR3, BRR, ISR, ICR, RDR, TDR = 0x00, 0x08, 0x0C, 0x1C, 0x20, 0x24, 0x28
     RXNE, TC, TXE, ORE, FE = 1 << 5, 1 << 6, 1 << 7, 1 << 3, 1 << 1
 
+    def __init__(self, machine):
+        self.overruns = 0        # bytes lost to ORE since power-on, kept over resets
+        super().__init__(machine)
+
     def reset(self):
         super().reset()
         self.tdr_full = False
@@ -345,6 +349,7 @@ class Usart(Block):
             return
         if self.flags & self.RXNE:
             self.flags |= self.ORE
+            self.overruns += 1    # the byte is lost (§33.5.6: RDR keeps the older one)
         else:
             self.rdr, self.flags = byte, self.flags | self.RXNE | (self.FE if framing_error else 0)
 
