@@ -22,6 +22,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", "..", ".."))
 sys.path.insert(0, HERE)
 import bench_realpath  # noqa: E402
+import g031_figures  # noqa: E402  (sim/g031, on the path bench_realpath gives)
 
 DOC = os.path.join(ROOT, "docs", "figures.md")
 STEP = 8  # list lengths: 1, 9, 17, ... and the longest
@@ -57,7 +58,8 @@ def render(build):
            "|---|---|---|---|"]
     for fig, ins, cyc, tgt in rows:
         out.append("| %s | %s | %s | %s |" % (fig, ins or "—", cyc or "—", tgt or "—"))
-    out += ["", "## Flash and RAM (stm32g031 servo image, from its linker map)", "", "```"]
+    out += [""] + g031_figures.markdown(images)
+    out += ["## Flash and RAM (stm32g031 servo image, from its linker map)", "", "```"]
     out += footprint(os.path.join(images, "km-servo-stm32g031.map"))
     out += ["```", "", "Reproduce: `cmake --build --preset stm32g031 && /usr/bin/python3"
             " tests/bench/m0/figures.py --write`.", ""]
