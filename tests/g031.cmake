@@ -85,10 +85,11 @@ set_property(TEST g031_bus_protect APPEND PROPERTY ENVIRONMENT_MODIFICATION
 # end. protect on virtual time: every supply and temperature trip and
 # release came 2989-3000 ms after its cause (the fixed 3 s), then "0x65
 # +45 deg against the load: 0x49 reads None" (a read unanswered): not
-# explained yet. update: on a host at load average 15-28 the bootloader
-# (which polls instead of sleeping) ran at 1,500-20,000 virtual us per real
-# second; the wrong-model refusal passed, the full run was not seen to its
-# end before this branch stopped. Run them by hand with
+# explained yet. update on virtual time: the wrong-model refusal passed,
+# BEGIN erased all three, then every round lost about half the blocks
+# (117, 58, 29, 14 of 236) and kmx update gave up after 3 passes; likely
+# the bootloader's flash stall (it runs from flash and polls the UART, so
+# bytes arriving while a block is programmed are lost), not yet checked. Run them by hand with
 # PYTHONPATH=host:sim/bus:sim/g031 (protect also tests/conformance).
 set_tests_properties(g031_update_on_bus g031_bus_protect PROPERTIES LABELS "g031;bus" TIMEOUT 1500 RUN_SERIAL TRUE
   PASS_REGULAR_EXPRESSION "all checks passed" DISABLED TRUE)
