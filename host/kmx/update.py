@@ -82,6 +82,10 @@ RESULTS = {0: "ok", 1: "bad length", 2: "bad state", 3: "bad magic", 4: "bad hea
            5: "wrong model", 6: "too big", 7: "bad block", 8: "bad block CRC", 9: "mismatch",
            10: "flash error", 11: "verify failed", 12: "blocks missing"}
 BOOT_WAIT_S = 5.0
+# After a broadcast block the servos program it, and a bootloader fetching
+# from flash meanwhile does not read the bus (docs/update.md §4): G0, 16
+# double words x 85 us = 1.36 ms; the master keeps the wire quiet this long.
+PROGRAM_GAP_S = 0.002
 
 
 class Monitor:
@@ -151,6 +155,10 @@ class Updater:
         if self.wire_free > now:
             time.sleep(self.wire_free - now)
         self.wire_free = max(now, self.wire_free) + nbytes * 10.0 / self.baud
+
+    def quiet_for(self, seconds):
+        """No frame for `seconds` after the one just sent (the servos' program time)."""
+        self.wire_free = max(time.monotonic(), self.wire_free) + seconds
 
     def send(self, data, answers=0, timeout=None):
         self.pace(len(data))
@@ -309,6 +317,7 @@ class Updater:
                            struct.pack("<I", zlib.crc32(data) & 0xFFFFFFFF))
                 if self.dest == BCAST:
                     self.send(wr)
+                    self.quiet_for(PROGRAM_GAP_S)
                 else:
                     self.send(wr, 1, 0.5)  # to one ID: wait for its answer, as on a wire
             need = set()
@@ -354,6 +363,7 @@ class Updater:
                 data = self.padded[b * BLOCK:(b + 1) * BLOCK]
                 self.send(frame(BCAST, WRITE, struct.pack("<H", b) + data +
                                 struct.pack("<I", zlib.crc32(data) & 0xFFFFFFFF)))
+                self.quiet_for(PROGRAM_GAP_S)
         self.send(frame(BCAST, VERIFY))
         self.send(frame(BCAST, COMMIT))
         time.sleep(0.1)
