@@ -348,7 +348,18 @@ class Updater:
                     i, st and (STATES.get(st["state"]), RESULTS.get(st["result"]))))
         self.send(frame(self.dest, START, START_MAGIC))
         time.sleep(0.2)
+        self.restart_missed(ids)
         return ids
+
+    def restart_missed(self, ids):
+        """A lost broadcast START leaves a servo committed in its bootloader:
+        STATUS finds it (an application answers state 0), START to it alone."""
+        for i in ids:
+            st = self.status(i)
+            if st is not None and st["state"] == 4:
+                self.log("  ID %d missed START: sent to it alone" % i)
+                self.send(frame(i, START, START_MAGIC))
+                time.sleep(0.2)
 
     def rescue_pass(self, rounds):
         """Everything by broadcast, blind: the servo is alone on the bus and

@@ -11,7 +11,11 @@ Ctrl-C of `kmx update` and the command it prints: tests/tools/
 servo_update_qemu.py (CTest update_qemu_interrupt). About 8 s."""
 import os
 import re
+import struct
 import unittest
+from types import SimpleNamespace
+
+from kmx import update as kup
 
 from test_kmx import REPO, ServoBus
 from update_tool_rig import AppServos, ImageDir, make_image, run_tool
@@ -109,6 +113,44 @@ class Trace(unittest.TestCase):
         self.assertRegex(r.stderr, re.compile(r"^> F9 FF 02 03 02 4B AD$", re.M))
         self.assertRegex(r.stderr, re.compile(r"^< F9 F5 02 05 02 4B E8 1C A7   id 2 voltage \(0x4B\) = 7.400 V$",
                                               re.M))
+
+
+class LostStart(unittest.TestCase):
+    """A broadcast START gets no answer, so a servo that missed it stays
+    committed in its bootloader: the updater asks STATUS of each ID and
+    sends START to that one alone (docs/update.md §4, step 6)."""
+
+    class Bus:
+        """Answers 0x78 STATUS: state 4 (committed) for the IDs in `stuck`
+        until a START reaches them alone, else state 0 (application)."""
+
+        def __init__(self, stuck):
+            self.stuck, self.sent, self.pending = set(stuck), [], []
+
+        def transact(self, data, answers=0, timeout=None):
+            dev_id, sub = data[2], data[5]
+            self.sent.append((dev_id, sub))
+            if sub == kup.START and dev_id in self.stuck:
+                self.stuck.discard(dev_id)
+            if sub == kup.STATUS:
+                state = 4 if dev_id in self.stuck else 0
+                params = struct.pack("<BBHHH", state, 0, 0, 0, 0)
+                self.pending.append(SimpleNamespace(id=dev_id, is_status=False, cmd=kup.CMD,
+                                                    addr=kup.STATUS, params=params))
+            return []
+
+        def listen(self, timeout, n):
+            out, self.pending = self.pending, []
+            return out
+
+    def test_start_resent_only_to_the_servo_that_missed_it(self):
+        bus = self.Bus(stuck=[2])
+        lines = []
+        up = kup.Updater(bus, [1, 2, 3], make_image(), lines.append)
+        up.restart_missed([1, 2, 3])
+        self.assertEqual([d for d, sub in bus.sent if sub == kup.START], [2])
+        self.assertEqual(lines, ["  ID 2 missed START: sent to it alone"])
+        self.assertEqual(bus.stuck, set())
 
 
 if __name__ == "__main__":
