@@ -104,7 +104,12 @@ km_report_t km_cmd_multi_write(km_servo_t *s, const km_frame_view_t *f, km_reply
  * zero byte of w = word ^ pat, and (w - 0x01010101) & ~w has a top bit set
  * in some byte exactly when w has a zero byte. A function of its own with
  * nothing else live, so the loop's eight values stay in registers. */
-static __attribute__((noinline, optimize("O2"))) const uint32_t *
+#if defined(__GNUC__) && !defined(__clang__)
+#define PRV_LOOP_O2 __attribute__((optimize("O2"))) /* GCC only: clang has no per-function level */
+#else
+#define PRV_LOOP_O2
+#endif
+static __attribute__((noinline)) PRV_LOOP_O2 const uint32_t *
 prv_find_pair(const uint32_t *q, const uint32_t *q_end, uint32_t pat)
 {
     const uint32_t ones = 0x01010101u;
