@@ -149,6 +149,23 @@ def ping(sock, dev_id, timeout):
     return False
 
 
+def start_boot_bus(test, ids):
+    """servo-bus on the QEMU bootloader image with servos `ids`, stopped at
+    the test's end: its ready line and its stderr (a file)."""
+    errlog = tempfile.TemporaryFile(mode="w+")
+    test.addCleanup(errlog.close)
+    p = subprocess.Popen([sys.executable, SERVO_BUS, "--ids", ids, "--port", "0", "--image", BOOT_IMAGE],
+                         stdout=subprocess.PIPE, stderr=errlog, text=True)
+
+    def stop():
+        p.terminate()
+        p.communicate(timeout=30)
+    test.addCleanup(stop)
+    ready = p.stdout.readline()
+    test.assertTrue(ready.startswith("ready 127.0.0.1:"), ready)
+    return ready, errlog
+
+
 class BusyGuest(unittest.TestCase):
     @unittest.skipUnless(fifo_allowed(), "this host refuses SCHED_FIFO: no real-time servo to guard")
     @unittest.skipUnless(os.path.isfile(BOOT_IMAGE) and shutil.which("qemu-system-arm"),
@@ -157,17 +174,7 @@ class BusyGuest(unittest.TestCase):
         """The micro:bit bootloader sleeps between bytes (docs/update.md §6,
         km_bootb_wait): in update mode its guests do not busy-loop, so they
         keep SCHED_FIFO, and each answers a ping there and after START."""
-        errlog = tempfile.TemporaryFile(mode="w+")
-        self.addCleanup(errlog.close)
-        p = subprocess.Popen([sys.executable, SERVO_BUS, "--ids", "1,2,3", "--port", "0", "--image",
-                              BOOT_IMAGE], stdout=subprocess.PIPE, stderr=errlog, text=True)
-
-        def stop():
-            p.terminate()
-            p.communicate(timeout=30)
-        self.addCleanup(stop)
-        ready = p.stdout.readline()
-        self.assertTrue(ready.startswith("ready 127.0.0.1:"), ready)
+        ready, errlog = start_boot_bus(self, "1,2,3")
         errlog.seek(0)
         pids = {int(i): int(pid) for i, pid in re.findall(r"servo id (\d+): pid (\d+) on port",
                                                           errlog.read())}
@@ -205,17 +212,7 @@ class BootPriority(unittest.TestCase):
     @unittest.skipUnless(os.path.isfile(BOOT_IMAGE) and shutil.which("qemu-system-arm"),
                          "no QEMU bootloader image or qemu-system-arm")
     def test_an_image_with_the_polling_bootloader_runs_below_other_servos(self):
-        errlog = tempfile.TemporaryFile(mode="w+")
-        self.addCleanup(errlog.close)
-        p = subprocess.Popen([sys.executable, SERVO_BUS, "--ids", "1", "--port", "0", "--image",
-                              BOOT_IMAGE], stdout=subprocess.PIPE, stderr=errlog, text=True)
-
-        def stop():
-            p.terminate()
-            p.communicate(timeout=30)
-        self.addCleanup(stop)
-        ready = p.stdout.readline()
-        self.assertTrue(ready.startswith("ready 127.0.0.1:"), ready)
+        ready, errlog = start_boot_bus(self, "1")
         errlog.seek(0)
         err = errlog.read()
         pids = [int(pid) for pid in re.findall(r"servo id \d+: pid (\d+) on port", err)]
