@@ -1,11 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* The master's frame (docs/protocol.md §5.1): position = (sensor + 0x16 +
- * 0x17), negated when 0x11 bit 2 is set. The product's travel is a fact of
- * the mechanics, so it is fixed in the sensor's frame and moves with the
- * offsets (docs/protocol-decisions.md "Zero offsets, direction and the
- * travel"). A frame change (0x17, 0x18, 0x46 zeroing, 0x11 bit 2) is an
- * affine map of master positions, x -> sign x + shift, which control
- * applies to its state so that the shaft does not move. */
+ * 0x17), negated when 0x11 bit 2 is set; a frame change maps control's
+ * state so the shaft does not move. docs/control-design.md. */
 #ifndef KM_AXIS_H
 #define KM_AXIS_H
 
@@ -19,18 +15,14 @@ typedef struct {
     bool reverse;   /* 0x11 bit 2 */
 } km_axis_t;
 
-/* uint32 to int32 modulo 2^32: what C11 leaves implementation-defined
- * (6.3.1.3) and GCC and Clang define so (their manuals, "Integers
- * implementation"); one instruction or none on the M0. */
+/* uint32 to int32 modulo 2^32 (implementation-defined in C11 6.3.1.3;
+ * GCC and Clang define it so). */
 static inline int32_t km_s32(uint32_t u)
 {
     return (int32_t)u;
 }
 
-/* a - b on positions, modular: the multi-turn count wraps at int32
- * (docs/protocol-decisions.md "Multi-turn position and its wrap"), so the
- * difference of two positions either side of the wrap is the short way
- * round, with no signed overflow. */
+/* a - b on positions, modular: the short way round across the int32 wrap. */
 static inline int32_t km_pos_diff(int32_t a, int32_t b)
 {
     return km_s32((uint32_t)a - (uint32_t)b);
@@ -58,8 +50,7 @@ static inline bool km_axis_differs(const km_axis_t *a, const km_control_params_t
 /* The frame `p` describes. */
 km_axis_t km_axis_of(const km_control_params_t *p);
 
-/* A master position of frame `from` as a position of frame `to` (the same
- * shaft angle); modular on int32 like the positions themselves. */
+/* A position of frame `from` in frame `to` (the same shaft angle). */
 int32_t km_axis_map(const km_axis_t *from, const km_axis_t *to, int32_t pos);
 
 /* -1 when the two frames count in opposite directions, else 1. */

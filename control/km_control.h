@@ -1,41 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Control: one tick turns the sensors into the live registers and a bridge
- * command, as step(state, inputs, dt) so host tests drive it without
- * hardware. The app runs it every KM_CONTROL_TICK_US (1 kHz) on every
- * board, and hands it the dispatcher's typed requests.
- *
- * One tick, in order (sensing, limits and output in one place):
- *   1. sensing: position in the master's frame = (sensor + 0x16 + 0x17),
- *      negated when 0x11 bit 2 is set; speeds (km_speed_est);
- *   2. self-test (km_selftest: 0x35 over the first ticks, the motor lead
- *      whenever driven) and protection supervisor (km_protect: 0x32-0x3F),
- *      on the sensors and the PWM the bridge drives now; a new hardware
- *      fault or protection stops motion here;
- *   3. servo mode: torque switch and profile (km_servo_mode, km_profile),
- *      position loop (km_position_loop) when the torque is on;
- *   4. output (km_output): PWM limit min(0x5B, 0x13, a move's own cap, the
- *      current limit's cap: km_current_limit, 0x5C/0x14), direction back
- *      to the sensor's frame, bridge mode; then the protection's action
- *      (free, brake, or hold = servo mode holding where it tripped), so
- *      nothing reaches the bridge without passing the supervisor.
- * Motor mode (0x6E..0x70, km_motor_mode) replaces step 3 while it owns
- * the bridge (hand-over rules in km_motor_mode.h).
- * A change of the master's frame (0x17, 0x18, 0x46 zeroing, 0x11 bit 2)
- * is rebased before step 1: the held target, a move's set-point, a run's
- * start and the speed estimates follow it, so the shaft does not move (a
- * move in progress ends at its set-point of that tick).
- *
- * While protecting, 0x64 reads 5; motion requests and 0x64 = 2/3 are
- * refused (status bit 6); a request for less motion (km_request.h) is
- * always taken, here and with a hardware fault latched: 0x64 = 0/1 (the
- * output is off anyway) are what 0x64 returns to, a motor stop (0x6E/0x6F
- * = 0, 0x70 stop) leaves motor mode stopped, and ends a hold action's
- * hold. On release 0x64 returns to 0/1 if it was
- * off, to 2 if the output held position throughout (a hold action), else
- * to 3 (armed: on at the next rotation command, so a released servo never
- * moves by itself). Only this header
- * and the shared types of include/km/ are the interface; the modules are
- * internals. */
+/* Control: every KM_CONTROL_TICK_US the sensors become the live registers
+ * and a bridge command (sensing, self-test and protection, servo or motor
+ * mode, output), and the dispatcher's typed requests are taken or refused.
+ * This header and include/km/ are the interface. The tick and the rules
+ * while protecting: docs/control-design.md "The tick". */
 #ifndef KM_CONTROL_H
 #define KM_CONTROL_H
 
@@ -59,8 +27,7 @@
 #define KM_CONTROL_TICK_US 1000u /* 1 kHz: sensing, position loop and output */
 
 typedef struct {
-    /* The tick's own scalars first: on the M0 a byte load or store reaches
-     * 32 bytes into a struct, a word one 128. */
+    /* Byte scalars first: an M0 byte access reaches 32 bytes into a struct. */
     uint8_t action;   /* km_prot_action_t in force */
     uint8_t ts_after; /* 0x64 once the protections are released */
     uint8_t hw;       /* 0x35 bits found */

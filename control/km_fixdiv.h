@@ -1,22 +1,14 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Division by the control tick's constants without a divide: the Cortex-M0
- * (ARMv6-M) has no divide instruction, and libgcc's __aeabi_idiv costs
- * 15..100 instructions a call. Each quotient here is a multiply by a
- * rounded-up reciprocal, M = ceil(2^(32+s) / d), keeping the high word:
- *     floor(n / d) = (n x M) >> (32 + s)   for every uint32 n,
- * exact because M x d - 2^(32+s) <= 2^s (Granlund & Montgomery 1994,
- * theorem 4.2); tests/unit/control/test_control_fixdiv.c checks that condition for
- * each constant and compares against C's / and % over the whole ranges the
- * tick uses. Signed quotients truncate toward zero, as C's / does.
- * The 32 x 32 -> 64 high word is built from four 16 x 16 products (the M0's
- * MULS gives only the low 32 bits; __aeabi_lmul would cost ~40). */
+/* Division by the tick's constants without a divide instruction (the M0
+ * has none): floor(n / d) = (n x M) >> (32 + s), M = ceil(2^(32+s) / d),
+ * exact for every uint32 n (docs/control-design.md "Division without a
+ * divide"; tests/unit/control/test_control_fixdiv.c). */
 #ifndef KM_FIXDIV_H
 #define KM_FIXDIV_H
 
 #include <stdint.h>
 
-/* High 32 bits of a x b, exact. Always inlined: -Os would otherwise
- * call it, a third of its cost again. */
+/* High 32 bits of a x b, exact, from four 16 x 16 products. */
 static inline __attribute__((always_inline)) uint32_t km_umulhi(uint32_t a, uint32_t b)
 {
     const uint32_t ah = a >> 16, al = a & 0xFFFFu, bh = b >> 16, bl = b & 0xFFFFu;
@@ -33,9 +25,7 @@ static inline __attribute__((always_inline)) uint32_t km_umulhi(uint32_t a, uint
 #define KM_FIXDIV_M5 0xCCCCCCCDu    /* d = 5, s = 2 */
 #define KM_FIXDIV_M100 0xA3D70A3Eu  /* d = 100, s = 6 */
 
-/* Quotients of uint32 (floor) and int32 (truncated toward zero, as C's
- * `/`; INT32_MIN included). Real functions (km_fixdiv.c), so that every
- * module shares one copy: these M0 parts have 16..32 KiB of flash. */
+/* Quotients of uint32 (floor) and int32 (toward zero, as C's `/`). */
 uint32_t km_udiv10(uint32_t n);
 uint32_t km_udiv100(uint32_t n);
 uint32_t km_udiv1000(uint32_t n);

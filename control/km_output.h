@@ -1,8 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Output stage: the one place a bridge command is made. Applies the
- * direction bit (0x11 bit 2: the loop works in the master's frame, the
- * motor turns the sensor's way), the PWM limit (0x5B, and a move's own
- * cap from 0x67 low nibble 2), and the bridge mode (free, brake, PWM). */
+/* Output stage: the one place a bridge command is made (direction 0x11
+ * bit 2, the PWM bound, the bridge mode). */
 #ifndef KM_OUTPUT_H
 #define KM_OUTPUT_H
 
@@ -20,8 +18,7 @@ typedef struct {
     int16_t pwm; /* -1000..1000 when mode is PWM, sensor frame */
 } km_bridge_t;
 
-/* The bridge for `mode`; with PWM, `pwm_user` (master's frame) is clamped
- * to +-pwm_limit and turned into the sensor's frame when `reverse`. */
+/* The bridge for `mode`; PWM clamped to +-pwm_limit, sensor's frame. */
 km_bridge_t km_output_bridge(km_bridge_mode_t mode, int32_t pwm_user, int32_t pwm_limit, bool reverse);
 
 /* |PWM| for 0x49 (0 unless driving). */

@@ -1,13 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Position loop: the PWM that makes the shaft follow the profile's
- * set-point. PWM = feedforward kv x (set-point speed + tau x set-point
- * acceleration), plus friction while the set-point moves; + kp x position
- * error + kd x speed error (set-point speed - measured speed) + ki x
- * integrated error. The integrator runs only while holding (a moving
- * set-point is followed by the feedforward; integrating its lag would wind
- * up into overshoot), stops growing while the output is saturated in the
- * direction it would push, and is bounded by i_max. Output clamped to
- * +-pwm_max. Units: 0.1 deg, 0.1 deg/s, PWM 0..1000, gains km_product.h. */
+ * set-point (feedforward, PD, an integrator only while holding). Units
+ * 0.1 deg, 0.1 deg/s, PWM 0..1000, gains km_product.h; docs/tuning.md. */
 #ifndef KM_POSITION_LOOP_H
 #define KM_POSITION_LOOP_H
 
@@ -16,18 +10,10 @@
 
 #include "km_product.h"
 
-/* Held still, the integrator waits while the shaft returns faster than
- * this toward the target (0.1 deg/s). */
-#define KM_HOLD_RETURN_DDPS 20
-/* kp_hold and ki_hold apply once the held position (the hold filter's)
- * has not changed for this long (ticks):
- * the end of a move settles on kp and ki, a push on a settled hold is
- * met by the stiffer gains. */
-#define KM_HOLD_SETTLED_MS 200
-/* ki_hold takes up a push: the shaft more than this away from where the
- * settled hold rested (0.1 deg); a move's residue inside the band is
- * left to ki (a fast integrator there breaks stiction into a jump). */
-#define KM_HOLD_PUSH_DDEG 2
+/* The hold's gain switches (docs/tuning.md "Three phases of one move"). */
+#define KM_HOLD_RETURN_DDPS 20 /* integrator waits while the shaft returns faster */
+#define KM_HOLD_SETTLED_MS 200 /* held position unchanged this long: kp_hold */
+#define KM_HOLD_PUSH_DDEG 2    /* pushed this far from rest: ki_hold */
 
 typedef struct {
     int32_t i_acc;        /* integrator, PWM x 256000 */

@@ -1,47 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Power-on self-test (docs/protocol.md §5.2 0x35, status bit 4): sensor
- * plausibility over the first KM_SELFTEST_SAMPLES control ticks after
- * boot, with the bridge off; the same plausibility of the position and
- * temperature sensors supervised at run time; and one check that needs the
- * motor driven, made whenever it is (an open motor lead). Pure,
- * fixed-point.
- *
- * A power-on check fails only when more than half of its samples fail, so
- * one noisy sample never raises a fault. Power-on checks (bits of 0x35):
- *   5 position sensor  potentiometer product: the reading is outside what
- *                      the mechanics can give (pos_read_min/max of the
- *                      product: its end stops and a tolerance, inside the
- *                      pot's electrical range), i.e. an open or shorted
- *                      wiper reading a rail. A shaft resting on or past the
- *                      end of its travel, up to its stop, is no fault:
- *                      motion commands bring it back. And whatever the
- *                      hal's sensor driver flags;
- *   2 temperature      below -30.0 degC (an open NTC) or above 150.0 degC
- *                      (a shorted one);
- *   3 voltage sensor   supply reads below 2.0 V (the MCU runs, so the
- *                      divider or its ADC input is broken) or above 40.0 V;
- *   4 current sensor   more than 200 mA with the bridge free (offset): only
- *                      the samples taken with the bridge free count, and
- *                      at least 4 of them are needed (a servo commanded
- *                      in its first milliseconds skips this check);
- * At run time (after the power-on samples):
- *   5, 2               the position and temperature checks above, each on
- *                      an up/down timer as the protections' (km_protect.h):
- *                      +1 tick while the reading is implausible, -1 while
- *                      it is plausible (not below 0); a fault when it
- *                      reaches its time T: 20 ms for the position (the
- *                      loop drives on a lost wiper's reading: it must stop
- *                      soon), 500 ms for the temperature (heat is slow).
- *                      So a sensor that fails for good is found T after it
- *                      failed, one noisy sample never is, and one that
- *                      chatters is only when it is bad more than half the
- *                      time;
- *   6 motor            |PWM| >= 300 with |current| < 10 mA for 500 ms: a
- *                      driven motor that draws nothing is an open lead.
- * Bits 1 (memory: the store found damage) and 0 (crystal) come from the
- * app and the board; bit 7 from the hal. The dispatcher latches every bit
- * until restart and refuses more motion while any is set (§5.2); a
- * request for less motion is always taken (km_request.h). */
+/* Self-test (docs/protocol.md §5.2 0x35, status bit 4): sensor plausibility
+ * over the first KM_SELFTEST_SAMPLES ticks (a majority of failed samples
+ * fails a check), position and temperature supervised at run time on
+ * up/down timers, and an open motor lead whenever driven. Rules:
+ * docs/protocol-decisions.md "Protections"; docs/control-design.md. */
 #ifndef KM_SELFTEST_H
 #define KM_SELFTEST_H
 
@@ -76,8 +38,7 @@ typedef struct {
 
 void km_selftest_init(km_selftest_t *t);
 
-/* One tick. `drive_pwm` is the PWM the bridge drove during the tick
- * (0 when free or braked), `bridge_free` whether it was free. Returns the
+/* One tick on the PWM the bridge drove (0 unless driving); returns the
  * 0x35 bits found so far. */
 uint8_t km_selftest_step(km_selftest_t *t, const km_sensors_t *in, const km_control_params_t *p,
                          int32_t drive_pwm, bool bridge_free, uint32_t dt_us);

@@ -1,18 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Speed estimation from the position samples of the control tick.
- *  - km_speed_window_t: the reported speed (0x47, deg/s): position change
- *    over a 20 ms window. At 0.1 deg resolution a 1 ms difference would
- *    quantise speed to 100 deg/s steps.
- *  - km_speed_fast_t: the position loop's damping input (0.1 deg/s):
- *    position change over the last KM_SPEED_FAST_N ticks (8 ms at 1 kHz,
- *    12.5 deg/s resolution, 4 ms of lag against the plant's ~28 ms).
- *  - km_hold_filter_t: the position a hold works on and reports (0x46)
- *    while servo mode holds still: a first-order low pass (1/8 per tick
- *    for KM_HOLD_FILTER_SETTLE ticks, then 1/16;
- *    a reading more than KM_HOLD_FILTER_JUMP away is taken as is) whose output moves
- *    only when the filtered value is more than 3/4 count away from it
- *    (hysteresis), so sensor noise of about a count neither reaches the
- *    bridge nor 0x46 (docs/tuning.md). Off, it passes the reading through. */
+/* Speed estimation from the tick's positions: 0x47 over a 20 ms window,
+ * the loops' damping speed over KM_SPEED_FAST_N samples, and the hold
+ * filter for the position a still hold works on and reports (0x46).
+ * docs/control-design.md "Speed estimates", docs/tuning.md. */
 #ifndef KM_SPEED_EST_H
 #define KM_SPEED_EST_H
 
