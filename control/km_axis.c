@@ -1,8 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The master's frame and its changes (see km_axis.h). Arithmetic on
- * positions is done in uint32 and converted back (km_s32): a defined two's
- * complement wrap, like the multi-turn count's (docs/protocol-decisions.md
- * "Multi-turn position and its wrap"). */
+/* The master's frame and its changes (km_axis.h); uint32 arithmetic. */
 #include "km_axis.h"
 
 km_axis_t km_axis_of(const km_control_params_t *p)

@@ -1,7 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The control tick (see km_control.h): sensing, self-test and protection,
- * servo mode, position loop and output stage, in that order, once per
- * tick. */
+/* The control tick (km_control.h; docs/control-design.md "The tick"). */
 #include "km_control.h"
 
 #include <string.h>
@@ -24,8 +22,7 @@ void km_control_init(km_control_t *c, const km_control_params_t *p)
     c->bridge = km_output_bridge(p->power_on_brake ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE, 0, 0, false);
 }
 
-/* The speed estimates' positions into the new frame (sign: the
- * direction flipped), so no speed step appears. */
+/* The speed estimates and the hold filter into the new frame. */
 static void prv_rebase_axis_speeds(km_control_t *c, const km_axis_t *was, const km_axis_t *now, int32_t sign)
 {
     for (uint32_t k = 0; k < KM_SPEED_FAST_N; k++) {
@@ -35,14 +32,12 @@ static void prv_rebase_axis_speeds(km_control_t *c, const km_axis_t *was, const 
     c->speed.last_position = km_axis_map(was, now, c->speed.last_position);
     c->speed.acc *= sign;
     c->speed.dps *= sign;
-    c->hold.out = km_axis_map(was, now, c->hold.out); /* the hold filter holds the same shaft angle */
+    c->hold.out = km_axis_map(was, now, c->hold.out);
     c->hold.frac *= sign;
 }
 
-/* 0. the master's frame changed (km_control.h): servo mode holds the
- * same shaft angle (a move ends at its set-point, still running until it
- * arrives), the loop keeps its integral (negated with the direction), a
- * motor run keeps turning the same way (km_motor_mode_reaxis). */
+/* 0. the master's frame changed: control's state follows it, the shaft
+ * stays where it is. */
 static void prv_rebase_axis(km_control_t *c, const km_axis_t *now)
 {
     const km_axis_t was = c->frame;
@@ -84,12 +79,8 @@ static bool prv_torque(km_control_t *c, km_torque_t torque)
     return km_servo_mode_torque(&c->servo, torque, c->position);
 }
 
-/* While protecting (km_control.h): a request for less motion is taken,
- * every other torque or motion request refused. FREE/BRAKE is remembered
- * for the release; a motor stop (a run of nothing) stays in force after
- * it: motor mode takes the bridge, stopped (a servo hold under a hold
- * action ends: less motion). The protection's action keeps the last word
- * on the bridge meanwhile (step 4b). */
+/* While protecting: only a request for less motion is taken; FREE/BRAKE
+ * is what 0x64 returns to, a motor stop stays after the release. */
 static bool prv_request_protecting(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
 {
     if (!km_request_less_motion(req)) {
@@ -105,8 +96,7 @@ static bool prv_request_protecting(km_control_t *c, const km_request_t *req, con
     return prv_torque(c, (km_torque_t)req->u.torque);
 }
 
-/* A torque switch or a move: servo mode takes the shaft back from the
- * motor, restarting from where the shaft is. */
+/* A torque switch or a move: servo mode takes the shaft back from the motor. */
 static bool prv_request_servo(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
 {
     if (c->motor.active && c->servo.ts == KM_TORQUE_ON) {
@@ -121,8 +111,7 @@ static bool prv_request_servo(km_control_t *c, const km_request_t *req, const km
     return ok;
 }
 
-/* A motor run: ends a servo-mode hold or move (km_motor_mode.h); the
- * variant and 0x5A rules are the dispatcher's. */
+/* A motor run: ends a servo-mode hold or move. */
 static bool prv_request_motor(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
 {
     km_motor_mode_run(&c->motor, &req->u.run, p, c->position);
@@ -131,8 +120,7 @@ static bool prv_request_motor(km_control_t *c, const km_request_t *req, const km
     return true;
 }
 
-/* A clear request (0x36): refused while the excursion holds; what it
- * released is reported with the next tick's events. */
+/* A clear request (0x36); what it released goes into the next tick's events. */
 static bool prv_clear(km_control_t *c, uint8_t mask)
 {
     const uint8_t was = km_protect_active(&c->prot);
@@ -145,7 +133,7 @@ static bool prv_clear(km_control_t *c, uint8_t mask)
 
 bool km_control_request(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
 {
-    prv_follow_axis(c, p); /* a request is in the frame of the params it comes with */
+    prv_follow_axis(c, p);
     c->requests++;
     c->last_request = *req;
     if (req->kind == KM_REQ_PROTECTION_CLEAR) {
@@ -171,10 +159,7 @@ bool km_control_request(km_control_t *c, const km_request_t *req, const km_contr
     }
 }
 
-/* A protection began acting (`was` none) or changed its action: the
- * motor stops; a hold in servo mode holds where the shaft is, any other
- * action lets the output go (0x64 = 5; km_control.h for what it returns
- * to). */
+/* A protection began acting (`was` none) or changed its action. */
 static void prv_protect_act(km_control_t *c, km_prot_action_t act, km_prot_action_t was)
 {
     if (was == KM_PROT_ACT_NONE) {
@@ -185,11 +170,7 @@ static void prv_protect_act(km_control_t *c, km_prot_action_t act, km_prot_actio
     }
     if (act == KM_PROT_ACT_HOLD && c->servo.ts == KM_TORQUE_ON && !c->motor.active) {
         if (was == KM_PROT_ACT_NONE) {
-            /* a move stops where the shaft is; a servo already holding
-             * keeps its target and its loop: rebasing it would reset the
-             * loop's integral, and the load that tripped it would push
-             * the shaft away (6.8 deg under 1.5 N.m on the plant, before
-             * the loop wound up again: test_protect_scenarios.c) */
+            /* a move stops where the shaft is; a hold keeps its loop's integral */
             if (c->servo.running || c->servo.streaming) {
                 km_servo_mode_rebase(&c->servo, c->position);
             }
@@ -214,7 +195,6 @@ static void prv_protect_transition(km_control_t *c, km_prot_action_t act)
     if (act != KM_PROT_ACT_NONE) {
         prv_protect_act(c, act, was);
     } else if (c->ts_after != KM_TORQUE_ON) {
-        /* released: 0x64 back to what km_control.h says */
         (void)km_servo_mode_torque(&c->servo, (km_torque_t)c->ts_after, c->position);
     }
 }
@@ -231,16 +211,13 @@ static void prv_hw_fault(km_control_t *c)
     c->ts_after = KM_TORQUE_FREE;
 }
 
-/* §5.1: reported position = sensor + level-1 + level-2 zero offsets, with
- * the sign flipped when 0x11 bit 2 makes counter-clockwise positive
- * (km_axis.h: modular, the int32 wrap defined). */
+/* §5.1: position = sensor + 0x16 + 0x17, negated by 0x11 bit 2. */
 static int32_t prv_position(const km_control_t *c, const km_sensors_t *in)
 {
     return km_axis_position(&c->frame, in->position);
 }
 
-/* The position control works on: while servo mode holds still (on, the
- * profile at rest, the move ended), through the hold filter. */
+/* The position control works on: through the hold filter while holding still. */
 static int32_t prv_hold_position(km_control_t *c, int32_t pos)
 {
     const bool hold =
@@ -272,8 +249,7 @@ static int32_t prv_sense(km_control_t *c, int32_t pos, uint32_t dt_us, int32_t *
     return speed_ddps;
 }
 
-/* 2. self-test and protection, on what the bridge drives now; their
- * events go into live. Returns the hardware faults found at this tick. */
+/* 2. self-test and protection; returns the hardware faults found at this tick. */
 static uint8_t prv_supervise(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p,
                              int32_t pos, uint32_t dt_us, km_live_t *live)
 {
@@ -296,8 +272,7 @@ static uint8_t prv_supervise(km_control_t *c, const km_sensors_t *in, const km_c
     return hw_found;
 }
 
-/* The output bound of this tick: min(0x5B, 0x13, the current limit's cap
- * (km_current_limit, 0x5C/0x14)). */
+/* The output bound of this tick: min(0x5B, 0x13, the 0x5C/0x14 cap). */
 static int32_t prv_limit(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p)
 {
     const int32_t limit = p->torque_limit < p->max_torque ? p->torque_limit : p->max_torque;
@@ -306,8 +281,7 @@ static int32_t prv_limit(km_control_t *c, const km_sensors_t *in, const km_contr
     return icap < limit ? icap : limit;
 }
 
-/* 3. motor mode owns the bridge (servo mode's output is unused); 0x5A = 1
- * (servo only) stops it. Output limited like every bridge command. */
+/* 3. motor mode owns the bridge; 0x5A = 1 (servo only) stops it. */
 static void prv_drive_motor(km_control_t *c, const km_control_params_t *p, int32_t pos, int32_t speed_ddps,
                             uint32_t dt_us, int32_t limit)
 {
@@ -319,11 +293,7 @@ static void prv_drive_motor(km_control_t *c, const km_control_params_t *p, int32
     c->bridge = km_output_bridge(mode, mpwm, limit, p->reverse);
 }
 
-/* 4. 0x5D bounds the shaft, not only the profile: while the shaft turns
- * faster than 0.9 x 0x5D (the speed estimate lags the shaft) in the
- * drive's direction, the drive is cut to what holds that (kv, friction)
- * less kd x the excess. Only a 0x5D below the product's fastest governs:
- * at full speed the motor is the limit. */
+/* 4. the 0x5D governor: the drive cut while the shaft exceeds 0.9 x 0x5D. */
 static int32_t prv_speed_governor(const km_control_params_t *p, int32_t pwm, int32_t speed_ddps)
 {
     const int32_t dps = (int32_t)p->speed_limit_dps;
@@ -342,9 +312,7 @@ static int32_t prv_speed_governor(const km_control_params_t *p, int32_t pwm, int
     return -pwm > cap ? -cap : pwm;
 }
 
-/* 3. servo mode, the position loop, 4. output. Not stepped while the motor
- * owns the bridge: its output would be unused, and the hand-back
- * (km_control_request) restarts it from where the shaft is. */
+/* 3. servo mode and the position loop, 4. output. */
 static void prv_drive_servo(km_control_t *c, const km_control_params_t *p, int32_t pos, int32_t speed_ddps,
                             uint32_t dt_us, int32_t limit)
 {
@@ -364,8 +332,7 @@ static void prv_drive_servo(km_control_t *c, const km_control_params_t *p, int32
             .position = km_pos_diff(pos, c->servo.profile.origin), /* from the set-point's origin */
             .speed_ddps = speed_ddps,
             .pwm_max = limit,
-            /* a protection's hold holds where it tripped: the integrator
-             * stops there (pushing harder would feed the excursion) */
+            /* not under a protection's hold or a closing current limit */
             .integrate = sm.holding && c->action == KM_PROT_ACT_NONE && c->ilim.cap >= KM_CURRENT_LIMIT_OPEN,
             .still = c->hold.on && c->action == KM_PROT_ACT_NONE,
         };
@@ -384,8 +351,7 @@ static void prv_protect_output(km_control_t *c)
     }
 }
 
-/* What this tick reports: every field of live assigned (no memset: it is
- * a byte loop on the M0) but the events the supervisor filled. */
+/* What this tick reports: every field of live but the supervisor's events. */
 static void prv_report(km_control_t *c, const km_sensors_t *in, int32_t pos, int32_t speed_dps,
                        bool was_acting, uint8_t hw_found, km_live_t *live)
 {
@@ -404,7 +370,6 @@ static void prv_report(km_control_t *c, const km_sensors_t *in, int32_t pos, int
     live->rotation_ms = motor ? c->motor.rotation_ms : c->servo.rotation_ms;
     live->running = motor ? c->motor.running : c->servo.running;
     live->protecting = c->action != KM_PROT_ACT_NONE;
-    /* the torque switch moved by itself: protecting, just released, or stopped by a fault */
     live->torque_forced = live->protecting || was_acting || hw_found != 0u;
     live->torque_switch = live->protecting ? (uint8_t)KM_TORQUE_PROTECTED : c->servo.ts;
     live->protections = km_protect_active(&c->prot);

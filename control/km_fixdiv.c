@@ -1,7 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Division by the control tick's constants without a divide instruction:
- * reciprocal multiplies, exact (km_fixdiv.h says why;
- * tests/unit/control/test_control_fixdiv.c checks it). */
+/* Division by the tick's constants: reciprocal multiplies (km_fixdiv.h). */
 #include "km_fixdiv.h"
 
 /* (n x m) >> (32 + s): one copy of the multiply for every divisor (flash). */
@@ -12,8 +10,7 @@ static __attribute__((noinline)) uint32_t prv_mulhi_shr(uint32_t n, uint32_t m, 
 
 #define PRV_INLINE static inline __attribute__((always_inline))
 
-/* floor(n / d), 0 at once below d: the tick's many small operands (a shaft
- * holding still) then cost a compare, not a call. */
+/* floor(n / d), 0 at once below d (a compare, not a call). */
 PRV_INLINE uint32_t prv_udiv(uint32_t n, uint32_t d, uint32_t m, uint32_t s)
 {
     return n < d ? 0u : prv_mulhi_shr(n, m, s);
@@ -46,8 +43,7 @@ PRV_INLINE uint32_t prv_udiv256000(uint32_t n)
     return prv_udiv(n >> 8, 1000u, KM_FIXDIV_M1000, 6u);
 }
 
-/* Each unsigned one, and its signed twin: truncated toward zero like C's
- * `/` (the magnitude of INT32_MIN is formed in uint32). */
+/* Each unsigned quotient and its signed twin (toward zero, as C's `/`). */
 #define PRV_DIVS(d)                                                             \
     uint32_t km_udiv##d(uint32_t n)                                             \
     {                                                                           \

@@ -1,7 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Position loop (see km_position_loop.h): PID with speed feedforward and
- * anti-windup, 32-bit fixed point; its divisions by constants are
- * reciprocal multiplies (km_fixdiv.h: the M0 has no divide), equal to C's. */
+/* Position loop (km_position_loop.h): PID with feedforward and anti-windup. */
 #include "km_position_loop.h"
 
 #include "km_fixdiv.h"
@@ -19,8 +17,7 @@ void km_position_loop_init(km_position_loop_t *l)
     l->last_sp_ddps = 0;
 }
 
-/* The integrator gain while holding still (prv_integrate's rules), or -1 when it does not integrate this
- * tick: inside the band (a small remainder bleeds away), or a pushed shaft on its way back. */
+/* The integrator gain while holding still, or -1 when it waits this tick. */
 static int32_t prv_hold_ki(km_position_loop_t *l, const km_control_gains_t *g,
                            const km_position_loop_in_t *in, int32_t e_u, bool in_band)
 {
@@ -43,13 +40,8 @@ static int32_t prv_hold_ki(km_position_loop_t *l, const km_control_gains_t *g,
     return (int32_t)g->ki_hold_q4 * 16; /* Q4 -> Q8 */
 }
 
-/* The integrator's PWM after this tick: ki x the error (e_u, 0.001 x 0.1
- * deg) while holding, frozen while the output is saturated the way it
- * would push. Held still (the move over): inside the hold band a small
- * remainder (below twice the friction feedforward: friction holds the
- * shaft) bleeds away, a larger one is a load and stays; outside it a
- * load pushed the shaft: ki_hold takes it up while the shaft stands, and
- * waits while the shaft is on its way back (no overshoot). */
+/* The integrator's PWM after this tick: ki x the error (u), frozen while
+ * the output is saturated the way it would push (docs/tuning.md). */
 static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
                              const km_position_loop_in_t *in, int32_t e_u, bool in_band, int32_t before,
                              uint32_t dt_us)
@@ -74,10 +66,8 @@ static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
     return i_pwm;
 }
 
-/* Holding still (the move over): the hold band is a dead band (no P, no
- * D inside it, the error beyond it outside), so a count of sensor noise
- * moves nothing; the settled clock runs while the position stays put.
- * Returns kp (kp_hold once settled); *in_band says where the error is. */
+/* Holding still: the hold band as a dead band and the settled clock;
+ * returns kp (kp_hold once settled). */
 static int32_t prv_hold_terms(km_position_loop_t *l, const km_control_gains_t *g,
                               const km_position_loop_in_t *in, int32_t *e_u, int32_t *ev, uint32_t dt_us,
                               bool *in_band)
@@ -101,8 +91,7 @@ static int32_t prv_hold_terms(km_position_loop_t *l, const km_control_gains_t *g
 int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g,
                               const km_position_loop_in_t *in, uint32_t dt_us)
 {
-    /* error in 0.001 x 0.1 deg, bounded to +-200 deg: far past saturation */
-    /* both within +-1e9 u (from the profile's origin: km_profile.h), so the difference fits */
+    /* error in u, bounded to +-200 deg */
     const int32_t pos_u = prv_clamp(in->position, -1000000, 1000000) * 1000;
     const int32_t sp_u = prv_clamp(in->setpoint_u, -1000000000, 1000000000);
     int32_t e_u = prv_clamp(sp_u - pos_u, -2000000, 2000000);
@@ -115,13 +104,13 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     } else {
         l->still_ms = 0;
     }
-    /* kp: PWM per 0.1 deg Q8 -> kp x e_u / 1000 / 256; e_u / 100 first keeps 32 bits */
+    /* kp: PWM per 0.1 deg Q8 */
     int32_t out = km_sdiv2560(kp * km_sdiv100(e_u));
     out += km_sdiv2560((int32_t)g->kd_q8 * ev); /* kd: PWM per deg/s Q8, ev 0.1 deg/s */
     /* acceleration feedforward: tau x dv/dt as a speed, 0.1 deg/s */
     const int32_t dvs = prv_clamp(vs - l->last_sp_ddps, -20000, 20000);
     const int32_t tau = g->tau_ms > 1000u ? 1000 : (int32_t)g->tau_ms;
-    int32_t va = dvs * tau; /* over dt in ms, at least 1: a tick under 2 ms divides by 1 */
+    int32_t va = dvs * tau; /* over dt in ms, at least 1 */
     if (dt_us >= 2000u) {
         va /= (int32_t)km_udiv1000(dt_us);
     }
@@ -131,7 +120,6 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     if (vs != 0) {
         out += vs > 0 ? (int32_t)g->friction_pwm : -(int32_t)g->friction_pwm;
     }
-    /* the integrator runs only while holding: a moving tick skips its divisions */
     if (in->integrate) {
         out += prv_integrate(l, g, in, e_u, in_band, out, dt_us);
     } else {

@@ -1,9 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Trajectory generator (see km_profile.h): time-optimal moves under speed
- * and acceleration bounds, moves in a given time, and constant-speed
- * stream segments. 32-bit arithmetic (one 32 x 32 -> 64 product and its
- * square root in two words: no 64-bit divide on the M0); the tick's
- * divisions by 1000 are reciprocal multiplies (km_fixdiv.h). */
+/* Trajectory generator (km_profile.h; docs/control-design.md). */
 #include "km_profile.h"
 
 #include <string.h>
@@ -11,13 +7,9 @@
 #include "km_axis.h"
 #include "km_fixdiv.h"
 
-/* Longer ticks are integrated in pieces. 2 ms, not 1: the app measures
- * each tick's dt, so a 1 kHz tick a few us late (1,010 us) is still one
- * piece (one square root), not 1,000 + 10 us (two). */
-#define STEP_MAX_US 2000u
-#define ACCEL_MAX 1000000 /* u/s per ms = 100,000 deg/s^2: keeps accel x dt (2 ms) in 32 bits */
-/* |speed| < 2^30 u/s (107,374 deg/s; 0x5D's u16 allows 65,535): so
- * |vel| / 1000 x dt stays in 32 bits for a 2 ms piece */
+/* Bounds that keep a piece's products in 32 bits. */
+#define STEP_MAX_US 2000u /* a late 1 ms tick stays one piece */
+#define ACCEL_MAX 1000000 /* u/s per ms */
 #define VMAX_MAX 0x3FFFFFFF
 
 static int32_t prv_abs(int32_t v)
@@ -25,8 +17,7 @@ static int32_t prv_abs(int32_t v)
     return v < 0 ? -v : v;
 }
 
-/* The origin for a set-point at `ddeg`: the nearest multiple of
- * KM_PROFILE_ORIGIN_DDEG, modular (0 within +-3,276.8 deg). */
+/* The origin for a set-point at `ddeg`: the nearest multiple, modular. */
 static int32_t prv_origin_for(int32_t ddeg)
 {
     const uint32_t q = (uint32_t)KM_PROFILE_ORIGIN_DDEG;
@@ -36,16 +27,15 @@ static int32_t prv_origin_for(int32_t ddeg)
 /* |pos| below this (u): the set-point is within half an origin of it. */
 #define PRV_NEAR_U (KM_PROFILE_ORIGIN_DDEG / 2 * KM_PROFILE_U_PER_DDEG)
 
-/* A command's start: the origin moves to the one nearest the set-point,
- * pos and target by the same whole origins (nothing else changes), so
- * the set-point is within half an origin of it (already so: no divide). */
+/* Moves the origin to the one nearest the set-point (pos and target by
+ * whole origins); no work when it is already near. */
 static void prv_rebase(km_profile_t *p)
 {
     if (p->pos < PRV_NEAR_U && p->pos >= -PRV_NEAR_U) {
         return;
     }
     const int32_t now = prv_origin_for(km_profile_pos_ddeg(p));
-    const int32_t shift = km_pos_diff(p->origin, now); /* a whole number of origins */
+    const int32_t shift = km_pos_diff(p->origin, now);
     if (shift != 0) {
         const uint32_t shift_u = (uint32_t)shift * (uint32_t)KM_PROFILE_U_PER_DDEG;
         p->origin = now;
@@ -54,8 +44,7 @@ static void prv_rebase(km_profile_t *p)
     }
 }
 
-/* A target (0.1 deg, modular) as u from the origin, within the span of
- * the set-point (km_profile_reach); after prv_rebase. */
+/* A target (0.1 deg) as u from the origin, after prv_rebase. */
 static int32_t prv_target_u(const km_profile_t *p, int32_t ddeg)
 {
     return km_pos_diff(km_profile_reach(p, ddeg), p->origin) * KM_PROFILE_U_PER_DDEG;
@@ -63,8 +52,7 @@ static int32_t prv_target_u(const km_profile_t *p, int32_t ddeg)
 
 int32_t km_profile_reach(const km_profile_t *p, int32_t target_ddeg)
 {
-    /* a set-point within half an origin of it and a target within the span
-     * less an origin of it: the target is within the span, no divide */
+    /* near the origin: within the span without a divide */
     const int32_t rel = km_pos_diff(target_ddeg, p->origin);
     const int32_t easy = KM_PROFILE_SPAN_DDEG - KM_PROFILE_ORIGIN_DDEG;
     if (p->pos < PRV_NEAR_U && p->pos >= -PRV_NEAR_U && rel <= easy && rel >= -easy) {
@@ -92,11 +80,8 @@ static int32_t prv_speed_for(int32_t d, int32_t ms, int32_t vmax)
     return v < vmax ? v : vmax;
 }
 
-/* Four bits of x a step, two of the root: with R the root so far and
- * rem = prefix - R^2 (<= 2R), X = 16 rem + the next four bits, and the new
- * root is 4R + b for the largest b in 0..3 with 8Rb + b^2 <= X. For roots
- * below 2^28, R < 2^26 before the last step, so X <= 32R + 15 < 2^31: all
- * 32-bit. */
+/* Four bits of the radicand, two of the root, a step; 32-bit for roots
+ * below 2^28 (docs/control-design.md "Arithmetic"). */
 #define PRV_SQRT_NIBBLES(w, n)                              \
     for (; (n) > 0u; (n)--) {                               \
         const uint32_t x = (rem << 4) | ((w) >> 28);        \
@@ -120,10 +105,7 @@ static int32_t prv_speed_for(int32_t d, int32_t ms, int32_t vmax)
         }                                                   \
     }
 
-/* floor(sqrt(hi:lo)) for hi:lo < 2^56, one word after the other, leading
- * zero nibbles skipped (they leave root and remainder 0): ~9 instructions
- * a root bit on the M0, where the 64-bit version below costs ~1,100 a
- * root. */
+/* floor(sqrt(hi:lo)) for hi:lo < 2^56, leading zero nibbles skipped. */
 static uint32_t prv_isqrt56(uint32_t hi, uint32_t lo)
 {
     uint32_t root = 0, rem = 0;
@@ -148,8 +130,7 @@ static uint32_t prv_isqrt56(uint32_t hi, uint32_t lo)
     return root;
 }
 
-/* floor(sqrt(x)), bit by bit: for the speeds above 2^28 u/s (26,843 deg/s)
- * that only a 0x5D near its maximum allows. */
+/* floor(sqrt(x)), bit by bit: speeds above 2^28 u/s and retimes only. */
 static uint32_t prv_isqrt64(uint64_t x)
 {
     uint64_t r = 0;
@@ -181,8 +162,7 @@ void km_profile_reset(km_profile_t *p, int32_t pos_ddeg)
     p->done = true;
 }
 
-/* A command's target (0.1 deg) as u from the origin, the origin moved
- * first (prv_rebase): once per command. */
+/* A command's target (0.1 deg) as u from the rebased origin. */
 static int32_t prv_begin(km_profile_t *p, int32_t target_ddeg)
 {
     prv_rebase(p);
@@ -216,8 +196,7 @@ static void prv_move_time_u(km_profile_t *p, int32_t tgt, uint32_t time_ms, int3
     }
     const int32_t ta = time_ms >= 4u ? (int32_t)(time_ms / 4u) : 1;
     const int32_t tc = (int32_t)time_ms - ta > 0 ? (int32_t)time_ms - ta : 1;
-    /* cruise speed D / (T - T/4) in u/s, the remainder kept so short moves
-     * are exact; the speed limit wins (the move takes longer) */
+    /* cruise D / (3T/4); the speed limit wins */
     int32_t v = prv_speed_for(d, tc, vlimit_ups);
     if (v < 1) {
         v = 1;
@@ -231,12 +210,8 @@ void km_profile_move_time(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms
     prv_move_time_u(p, prv_begin(p, target_ddeg), time_ms, vlimit_ups);
 }
 
-/* The cruise speed (0.1 deg/s) of a move in time `t` ms over `dm`
- * (0.001 x 0.1 deg) starting at `v0` (0.1 deg/s, + toward the target),
- * changing speed at `a` (0.1 deg/s per ms) both ways: slowing to it,
- * T = v0 / a + (dm - v0^2 / 2a) / vc; speeding up (or turning back),
- * vc^2 - (v0 + a T) vc + a dm + v0^2 / 2 = 0, its smaller root; the
- * shortest move when T is too short for either. */
+/* The cruise speed (0.1 deg/s) of a retimed move of `dm` u in `t` ms from
+ * `v0` (+ toward the target) at `a` (docs/tuning.md "Moves"). */
 static int32_t prv_retime_cruise(int32_t v0, int32_t dm, int32_t t, int32_t a)
 {
     if (v0 > 0) {
@@ -258,8 +233,7 @@ static int32_t prv_retime_cruise(int32_t v0, int32_t dm, int32_t t, int32_t a)
     return (int32_t)((b - (int64_t)prv_isqrt64((uint64_t)disc)) / 2);
 }
 
-/* `acc` (u/s per ms), or the harder braking a speed `v0` (0.1 deg/s toward
- * the target) needs to stop within `dabs` (u): never past the target. */
+/* `acc`, or the harder braking `v0` needs to stop within `dabs` u. */
 static int32_t prv_brake_accel(int32_t v0, int32_t dabs, int32_t acc)
 {
     if (v0 <= 0) {
@@ -304,10 +278,8 @@ static int32_t prv_speed_us(int32_t d, int32_t us, int32_t vmax)
     return d < 0 ? -v : v;
 }
 
-/* The periods since the previous target (1 + the frames lost): the step
- * `d` (u) over the last period's step when the stream moves (arrival
- * jitter of half a period cannot fool it), else the time since the
- * previous target's filtered arrival; 1..8. */
+/* The periods since the previous target (1 + frames lost), 1..8: from the
+ * step `d` when the stream moves, else from the time. */
 static int32_t prv_stream_periods(const km_profile_t *p, int32_t d)
 {
     int32_t n = (p->s_since + p->s_period / 2) / p->s_period;
@@ -329,17 +301,16 @@ void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_u
         p->s_since = 0;
         p->s_frames = 0;
         p->s_step = 0;
-    } else { /* n periods since the previous target's filtered arrival: n - 1 frames lost */
+    } else {
         n = prv_stream_periods(p, tgt - p->target);
         const int32_t late = p->s_since - n * p->s_period;
-        /* the period: the mean of the intervals so far (each within 1/4
-         * of it: a frame's jitter), then 1/64 of each */
+        /* the filtered period (docs/control-design.md "Streams") */
         int32_t each = iv / n;
         const int32_t q = p->s_period / 4;
         each = each < p->s_period - q ? p->s_period - q : (each > p->s_period + q ? p->s_period + q : each);
         p->s_period += (each - p->s_period) / (p->s_frames + 2);
         p->s_frames = p->s_frames < 62 ? p->s_frames + 1 : 62;
-        p->s_since = late - late / 8; /* the arrival estimate takes 1/8 of the lateness */
+        p->s_since = late - late / 8;
     }
     p->vmax = vlimit_ups > 0 ? (vlimit_ups < VMAX_MAX ? vlimit_ups : VMAX_MAX) : 1;
     p->accel = accel > 0 ? (accel < ACCEL_MAX ? accel : ACCEL_MAX) : 1;
@@ -352,17 +323,16 @@ void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_u
     p->done = false;
 }
 
-/* pos += vel * dt / 1e6 exactly, remainder carried (dt <= 2000). The
- * remainder is normalised by compares: |pos_rem| < 4e6 before it, so this
- * is C's / and % by 1e6 without a divide. Returns vel / 1000. */
+/* pos += vel * dt / 1e6 exactly, remainder carried (dt <= 2000; |pos_rem|
+ * < 4e6 before normalising). Returns vel / 1000. */
 static int32_t prv_advance(km_profile_t *p, uint32_t dt_us)
 {
     const int32_t q = km_sdiv1000(p->vel), r = p->vel - q * 1000;
-    if (dt_us == 1000u) { /* the tick: q x 1000 / 1000 = q, no remainder */
+    if (dt_us == 1000u) {
         p->pos += q;
         p->pos_rem += r * 1000;
     } else {
-        const int32_t qd = q * (int32_t)dt_us; /* |q| < 2^20 (VMAX_MAX), dt <= 2000 */
+        const int32_t qd = q * (int32_t)dt_us; /* |q| < 2^20 */
         const int32_t qq = km_sdiv1000(qd);
         p->pos += qq;
         p->pos_rem += (qd - qq * 1000) * 1000 + r * (int32_t)dt_us;
@@ -378,28 +348,24 @@ static int32_t prv_advance(km_profile_t *p, uint32_t dt_us)
     return q;
 }
 
-/* The braking-curve speed min(floor(sqrt(k x d)), vmax); k x d is compared
- * with vmax^2 first, so a move away from its braking phase (speeding up,
- * cruising) takes no square root at all. */
+/* The braking-curve speed min(floor(sqrt(k x d)), vmax); no root above vmax^2. */
 static int32_t prv_brake_speed(const km_profile_t *p, uint32_t k, uint32_t d)
 {
     const uint32_t hi = km_umulhi(k, d), lo = k * d;
     if (hi > p->vsq_hi || (hi == p->vsq_hi && lo >= p->vsq_lo)) {
         return p->vmax;
     }
-    /* below vmax^2: the root is below vmax */
     if ((uint32_t)p->vmax < (1u << 28)) {
         return (int32_t)prv_isqrt56(hi, lo);
     }
     return (int32_t)prv_isqrt64(((uint64_t)hi << 32) | lo);
 }
 
-/* The speed change a piece allows: accel (u/s per ms) x dt, the remainder
- * kept for the next piece. */
+/* The speed change a piece allows, remainder carried. */
 static int32_t prv_dv(km_profile_t *p, uint32_t dt_us)
 {
     if (dt_us == 1000u && p->vel_rem >= 0) {
-        return p->accel; /* (accel x 1000 + rem) / 1000 with 0 <= rem < 1000: rem stays */
+        return p->accel; /* 0 <= rem < 1000: rem stays */
     }
     const int32_t dv = p->accel * (int32_t)dt_us + p->vel_rem;
     const int32_t dvq = km_sdiv1000(dv);
@@ -407,14 +373,12 @@ static int32_t prv_dv(km_profile_t *p, uint32_t dt_us)
     return dvq;
 }
 
-/* A stream piece: the set-point's speed goes toward the targets' speed
- * plus 1/32 ms of the distance to the reference (s_lag behind the newest
- * target), at most `accel` per ms; once no newer target came within
- * s_lag, a move that brakes onto the last one. */
+/* A stream piece: follow the reference s_lag behind the newest target, or
+ * brake onto it once no newer target came. */
 static void prv_step_stream(km_profile_t *p, uint32_t dt_us)
 {
     const int32_t ahead = p->s_lag - p->s_since; /* us the reference is behind the target */
-    if (ahead <= 0) { /* no newer target: brake on the target at the product's acceleration */
+    if (ahead <= 0) {
         p->stream = false;
         p->accel = p->accel < ACCEL_MAX / 8 ? p->accel * 8 : ACCEL_MAX;
         p->vsq_hi = km_umulhi((uint32_t)p->vmax, (uint32_t)p->vmax);
@@ -454,15 +418,12 @@ static void prv_step(km_profile_t *p, uint32_t dt_us)
         return;
     }
     const int32_t dv = prv_dv(p, dt_us);
-    /* the fastest speed that can still brake to a stop on the target from
-     * where this piece ends (so the last piece arrives at a crawl, not at
-     * the speed of the tick before) */
+    /* the braking speed from where this piece ends */
     const int32_t vq = prv_abs(km_sdiv1000(p->vel));
     int32_t d = prv_abs(e) - (dt_us == 1000u ? vq : km_sdiv1000(vq * (int32_t)dt_us));
     if (d < 0) {
         d = 0;
     }
-    /* 2 x accel x 1000 < 2^32 (ACCEL_MAX) */
     const int32_t vb = prv_brake_speed(p, 2000u * (uint32_t)p->accel, (uint32_t)d);
     const int32_t want = e >= 0 ? vb : -vb;
     if (p->vel < want) {
@@ -470,9 +431,9 @@ static void prv_step(km_profile_t *p, uint32_t dt_us)
     } else if (p->vel > want) {
         p->vel = p->vel - dv > want ? p->vel - dv : want;
     }
-    const int32_t q = prv_abs(prv_advance(p, dt_us)); /* |vel| / 1000: C's / truncates */
+    const int32_t q = prv_abs(prv_advance(p, dt_us));
     const int32_t left = p->target - p->pos;
-    /* arrived (or crossed within one piece): stop on the target */
+    /* arrived or crossed: stop on the target */
     if (left == 0 || ((left > 0) != (e > 0) && e != 0) || (prv_abs(left) <= q + 1 && prv_abs(p->vel) <= dv)) {
         p->pos = p->target;
         p->pos_rem = 0;
@@ -486,7 +447,7 @@ bool km_profile_step(km_profile_t *p, uint32_t dt_us)
 {
     while (!p->done && dt_us > 0u) {
         const uint32_t piece = dt_us > STEP_MAX_US ? STEP_MAX_US : dt_us;
-        if (p->s_period > 0 && p->s_since < 4000000) { /* a stream's clock, also while braking at its end */
+        if (p->s_period > 0 && p->s_since < 4000000) { /* a stream's clock */
             p->s_since += (int32_t)piece;
         }
         prv_step(p, piece);
@@ -498,8 +459,7 @@ bool km_profile_step(km_profile_t *p, uint32_t dt_us)
 int32_t km_profile_pos_ddeg(const km_profile_t *p)
 {
     const int32_t h = KM_PROFILE_U_PER_DDEG / 2;
-    const int32_t from =
-        p->pos >= 0 ? km_sdiv1000(p->pos + h) : -km_sdiv1000(-p->pos + h); /* u per 0.1 deg */
+    const int32_t from = p->pos >= 0 ? km_sdiv1000(p->pos + h) : -km_sdiv1000(-p->pos + h);
     return km_pos_add(p->origin, from);
 }
 

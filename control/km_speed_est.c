@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Speed estimators of the control tick (see km_speed_est.h). Pure, 32-bit. */
+/* Speed estimators of the control tick (km_speed_est.h). */
 #include "km_speed_est.h"
 
 #include <string.h>
@@ -20,12 +20,8 @@ int32_t km_speed_window_step(km_speed_window_t *w, int32_t position, uint32_t dt
         w->acc += km_pos_diff(position, w->last_position);
         w->us += dt_us;
         if (w->us >= KM_SPEED_WINDOW_US) {
-            /* 0.1 deg per us -> deg/s: x 1e6 / 10. Clamped so the product
-             * stays in 32 bits (M0 has no 64-bit divide instruction);
-             * +-20000 x 0.1 deg in one window is far past any servo. */
+            /* 0.1 deg per us -> deg/s; clamped so the product stays in 32 bits */
             const int32_t acc = w->acc > 20000 ? 20000 : (w->acc < -20000 ? -20000 : w->acc);
-            /* a window of exactly 20 ms (20 ticks of 1 ms): x 1e5 / 20000 is
-             * exactly x 5, no divide */
             w->dps = w->us == KM_SPEED_WINDOW_US ? acc * (100000 / (int32_t)KM_SPEED_WINDOW_US)
                                                  : (acc * 100000) / (int32_t)w->us;
             w->acc = 0;
@@ -49,10 +45,7 @@ int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
     if (dt_us > 100000u) {
         dt_us = 100000u; /* a stalled tick: the estimate stays finite */
     }
-    /* span: the newest count-1 intervals, from the oldest sample kept, as
-     * a running sum: the new interval comes in and, once the ring is full,
-     * the interval that led to the new oldest sample goes out (it was
-     * measured from the sample just overwritten). */
+    /* span: running sum of the intervals since the oldest sample kept */
     f->head = (uint8_t)((f->head + 1u) % KM_SPEED_FAST_N);
     const uint8_t oldest = (uint8_t)((f->head + 1u) % KM_SPEED_FAST_N);
     f->pos[f->head] = position;
@@ -70,10 +63,7 @@ int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
     int32_t d = km_pos_diff(position, f->pos[i]);
     d = d > 2000 ? 2000 : (d < -2000 ? -2000 : d); /* keeps d x 1e6 in 32 bits */
     if (span == (KM_SPEED_FAST_N - 1u) * 1000u) {
-        /* the steady 1 kHz tick: d x 1e6 / 7000 = d x 1000 / 7, and for
-         * n = |d| x 1000 <= 2e6 (n x M) >> 32 with M = ceil(2^32 / 7) is
-         * floor(n / 7) (the error n x (7M - 2^32) / 2^32 stays below 1/7);
-         * tests/unit/control/test_control_fixdiv.c checks every d */
+        /* the steady 1 kHz tick: d x 1000 / 7, exact for n <= 2e6 */
         const uint32_t q = km_umulhi((uint32_t)(d < 0 ? -d : d) * 1000u, KM_FIXDIV_M7);
         f->ddps = d < 0 ? -(int32_t)q : (int32_t)q;
     } else {

@@ -1,6 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Multi-turn position from a single-turn absolute encoder: wrap counting
- * (see km_turn_counter.h for the contract). */
+/* Multi-turn position from a single-turn encoder (km_turn_counter.h). */
 #include "km_turn_counter.h"
 
 #define KM_DDEG_PER_TURN 3600u
@@ -20,8 +19,7 @@ void km_turn_counter_init(km_turn_counter_t *t, uint16_t counts_per_turn, uint16
 int32_t km_turn_counter_update(km_turn_counter_t *t, uint16_t raw)
 {
     raw = prv_in_range(t, raw);
-    /* The shortest way from the last reading: a step of more than half a
-     * turn forward is a wrap backwards, and the other way round. */
+    /* more than half a turn forward is a wrap backwards, and vice versa */
     const int32_t step = (int32_t)raw - (int32_t)t->last;
     const int32_t half = (int32_t)(t->counts / 2u);
     if (step > half) {
