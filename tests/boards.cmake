@@ -75,3 +75,5 @@ add_test(NAME board_stm32g031_f6_fit
   COMMAND ${KM_DEBIAN_PYTHON} ${KM_ROOT_DIR}/tests/footprint/f6_fit.py ${KM_ROOT_DIR}
           ${CMAKE_BINARY_DIR}/f6-fit)
 set_tests_properties(board_stm32g031_f6_fit PROPERTIES LABELS board TIMEOUT 900)
+set_property(TEST board_stm32g031_f6_fit APPEND PROPERTY ENVIRONMENT_MODIFICATION
+  "PYTHONPATH=path_list_append:${KM_ROOT_DIR}/sim/g031")  # the virtual G031

@@ -12,18 +12,19 @@ frame to the last: the speed ripple (largest |0x47 - 90| / 90) and the
 largest |0x48| over its mean. Wall-clock timing on a shared host: the
 figures carry the host's own scheduling jitter on top of the asked one.
 Prints one markdown line per rate; exit 1 only on a run it cannot make.
-  usage: bench_bus_stream.py [--build-dir DIR]   (default build/host-sim)"""
+  usage: bench_bus_stream.py [--build-dir DIR]   (default build/host-sim)
+with host, sim/bus, tests/bus and tests/conformance on PYTHONPATH, as
+tools/bench/bench-control runs it."""
 import argparse
 import os
 import random
 import struct
-import sys
 import time
 
+import bus_check  # tests/bus: its Bus, reads and writes (tests/conformance for its master)
+from kmx import frame as kmbus
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(ROOT, "tests", "bus"))
-import bus_check  # noqa: E402  (its Bus, reads and writes; tests/conformance on PYTHONPATH for its master)
-from kmx import frame as kmbus  # noqa: E402  (kmx on PYTHONPATH)
 
 SPEED_DPS = 90
 FROM_DDEG, TO_DDEG = -600, 600

@@ -8,7 +8,7 @@ bootloader <= 4,096 B, RAM <= 6 KiB), and runs that bootloader alone on
 the virtual G031 (sim/g031): with no application and no store reader it
 answers at ID 1, 115200 (docs/update.md §3), and at no other ID.
 
-    f6_fit.py SOURCE_DIR BUILD_DIR
+    PYTHONPATH=sim/g031 f6_fit.py SOURCE_DIR BUILD_DIR   (CTest board_stm32g031_f6_fit)
 """
 import os
 import subprocess
@@ -47,8 +47,7 @@ def ask(m, data):
 
 def bootloader_alone(source, images):
     """Update mode of a servo without an application: ID 1 at 115200."""
-    sys.path.insert(0, os.path.join(source, "sim", "g031"))
-    import g031_deps
+    import g031_deps  # sim/g031, on PYTHONPATH
     g031_deps.require()
     import argparse
     import vg031

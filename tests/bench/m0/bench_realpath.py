@@ -29,7 +29,7 @@ hides sequential fetches; the cache is not modelled, so this is an upper
 estimate), plus 15 cycles per interrupt entry and 13 per return (not
 instructions, done by the core). Method: docs/benchmarks.md.
 
-    bench_realpath.py BUILD_DIR [--base DIR] [--json OUT]
+    PYTHONPATH=sim/g031 /usr/bin/python3 tests/bench/m0/bench_realpath.py BUILD_DIR [--base DIR] [--json OUT]
 
 BUILD_DIR holds km-servo-stm32g031.elf (the stm32g031 preset's
 build/stm32g031/boards/stm32g031). Prints a table; --json writes the figures
@@ -42,10 +42,11 @@ import re
 import subprocess
 import sys
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.normpath(os.path.join(HERE, "..", "..", ".."))
-sys.path.insert(0, os.path.join(ROOT, "sim", "g031"))
-import g031_deps  # noqa: E402
+try:
+    import g031_deps  # sim/g031, on PYTHONPATH (the command above; CTest sets it)
+except ImportError:
+    sys.exit("bench_realpath: sim/g031 is not on PYTHONPATH: run it as"
+             " PYTHONPATH=sim/g031 /usr/bin/python3 ... (docs/benchmarks.md)")
 g031_deps.require()
 import vg031  # noqa: E402
 from unicorn import UC_HOOK_CODE  # noqa: E402

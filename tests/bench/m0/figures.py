@@ -8,7 +8,7 @@ control tick) and the image's flash and RAM per module from its linker map
 (virtual time on sim/g031; the map), so CTest's `figures_doc_current`
 checks that the committed file is what this prints.
 
-    figures.py [--build DIR] [--write | --check]
+    PYTHONPATH=sim/g031 /usr/bin/python3 tests/bench/m0/figures.py [--build DIR] [--write | --check]
 
 DIR: the stm32g031 preset's build directory (default build/stm32g031).
 Without --write or --check the document goes to stdout."""
@@ -20,9 +20,8 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", "..", ".."))
-sys.path.insert(0, HERE)
-import bench_realpath  # noqa: E402
-import g031_figures  # noqa: E402  (sim/g031, on the path bench_realpath gives)
+import bench_realpath  # beside this script; it needs sim/g031 on PYTHONPATH
+import g031_figures  # sim/g031
 
 DOC = os.path.join(ROOT, "docs", "figures.md")
 STEP = 8  # list lengths: 1, 9, 17, ... and the longest
@@ -30,12 +29,7 @@ STEP = 8  # list lengths: 1, 9, 17, ... and the longest
 
 def footprint(map_path):
     """tools/check/footprint's table for one image, as its lines."""
-    tool = os.path.join(ROOT, "tools", "footprint")
-    if not os.path.exists(tool):  # tools/ may be sorted into subfolders
-        for dirpath, _dirs, files in os.walk(os.path.join(ROOT, "tools")):
-            if "footprint" in files:
-                tool = os.path.join(dirpath, "footprint")
-                break
+    tool = os.path.join(ROOT, "tools", "check", "footprint")
     out = subprocess.run([sys.executable, tool, map_path], check=True, capture_output=True, text=True).stdout
     return [ln.rstrip() for ln in out.splitlines() if ln.strip()]
 
@@ -61,8 +55,8 @@ def render(build):
     out += [""] + g031_figures.markdown(images)
     out += ["## Flash and RAM (stm32g031 servo image, from its linker map)", "", "```"]
     out += footprint(os.path.join(images, "km-servo-stm32g031.map"))
-    out += ["```", "", "Reproduce: `cmake --build --preset stm32g031 && /usr/bin/python3"
-            " tests/bench/m0/figures.py --write`.", ""]
+    out += ["```", "", "Reproduce: `cmake --build --preset stm32g031 && PYTHONPATH=sim/g031"
+            " /usr/bin/python3 tests/bench/m0/figures.py --write`.", ""]
     return "\n".join(out)
 
 
