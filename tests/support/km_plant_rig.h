@@ -101,6 +101,25 @@ static inline void kr_init(kr_rig_t *r)
     kr_init_at(r, &km_plant_default_config, 0);
 }
 
+/* The encoder product on `base` without pot or end stops (a free multi-turn
+ * shaft), at rest at `pos_ddeg`: position from the turn count, the encoder
+ * variant, no travel and no angle limits. `cfg` is the caller's static: the
+ * plant keeps a pointer to it. */
+static inline void kr_init_encoder_at(kr_rig_t *r, km_plant_config_t *cfg, const km_plant_config_t *base,
+                                      int32_t pos_ddeg)
+{
+    *cfg = *base;
+    cfg->pot_travel_ddeg = 0;
+    cfg->endstop_ddeg = 0;
+    kr_init_at(r, cfg, pos_ddeg);
+    r->encoder = true;
+    r->params.variant = KM_VARIANT_ENCODER;
+    r->params.travel_min = INT16_MIN;
+    r->params.travel_max = INT16_MAX;
+    r->params.angle_min = 0;
+    r->params.angle_max = 0;
+}
+
 static inline bool kr_request(kr_rig_t *r, const km_request_t *req)
 {
     return km_control_request(&r->ctl, req, &r->params);

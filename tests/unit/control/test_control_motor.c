@@ -42,17 +42,8 @@ static kt_fx_t fx;
 /* Encoder product on a free multi-turn plant, at rest at 0. */
 static void rig_encoder(void)
 {
-    static km_plant_config_t cfg; /* the plant keeps a pointer to it */
-    cfg = km_plant_default_config;
-    cfg.pot_travel_ddeg = 0;
-    cfg.endstop_ddeg = 0;
-    kr_init_at(&r, &cfg, 0);
-    r.encoder = true;
-    r.params.variant = KM_VARIANT_ENCODER;
-    r.params.travel_min = INT16_MIN;
-    r.params.travel_max = INT16_MAX;
-    r.params.angle_min = 0;
-    r.params.angle_max = 0;
+    static km_plant_config_t cfg;
+    kr_init_encoder_at(&r, &cfg, &km_plant_default_config, 0);
 }
 
 /* 0x6E (KM_RUN_PWM) or 0x6F (KM_RUN_SPEED) as the dispatcher decodes it. */
