@@ -44,12 +44,19 @@ def call(url, path, body=None):
         return json.load(r)
 
 
-class WebApi(unittest.TestCase):
+class WebOnBus(unittest.TestCase):
+    """Three host-sim servos on servo-bus and `kmx web` on them for the
+    class's tests; with `bench` both get one --inject-dir. Its stderr
+    must hold no traceback at the end."""
+    bench = False
+
     @classmethod
     def setUpClass(cls):
-        cls.wire = ServoBus()
+        cls.tmp = tempfile.TemporaryDirectory(prefix="kmx-bench-") if cls.bench else None
+        extra = ("--inject-dir", cls.tmp.name) if cls.bench else ()
+        cls.wire = ServoBus(extra=extra)
         try:
-            cls.proc, cls.url = start_web(cls.wire.spec)
+            cls.proc, cls.url = start_web(cls.wire.spec, *extra)
         except AssertionError:
             cls.wire.close()
             raise
@@ -59,8 +66,12 @@ class WebApi(unittest.TestCase):
         cls.proc.send_signal(signal.SIGINT)
         out, err = cls.proc.communicate(timeout=20)
         cls.wire.close()
+        if cls.tmp:
+            cls.tmp.cleanup()
         assert "Traceback" not in err, err
 
+
+class WebApi(WebOnBus):
     def call(self, path, body=None):
         return call(self.url, path, body)
 
@@ -134,27 +145,10 @@ class WebApi(unittest.TestCase):
         self.assertEqual(self.call("/api/servo/1/bench", {"preset": "sag"}), {"ok": False, "error": why})
 
 
-class WebBench(unittest.TestCase):
+class WebBench(WebOnBus):
     """The emulated bus's bench from the API (docs/web.md "Bench"; the
     thresholds of docs/protocol.md §5.2: 0x3C low 6 V, detection 3 s)."""
-
-    @classmethod
-    def setUpClass(cls):
-        cls.tmp = tempfile.TemporaryDirectory(prefix="kmx-bench-")
-        cls.wire = ServoBus(extra=("--inject-dir", cls.tmp.name))
-        try:
-            cls.proc, cls.url = start_web(cls.wire.spec, "--inject-dir", cls.tmp.name)
-        except AssertionError:
-            cls.wire.close()
-            raise
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.proc.send_signal(signal.SIGINT)
-        out, err = cls.proc.communicate(timeout=20)
-        cls.wire.close()
-        cls.tmp.cleanup()
-        assert "Traceback" not in err, err
+    bench = True
 
     def protection_until(self, what, check, seconds=30):
         """Polls /api/servo/2/protection until check(answer) holds: the answer."""
