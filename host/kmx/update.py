@@ -99,12 +99,14 @@ class Monitor:
         self._prompt()
 
     def _prompt(self):
+        """Reads up to the next prompt: the monitor's text before it."""
         got = b""
         while not got.endswith(b"(qemu) "):
             chunk = self.sock.recv(4096)
             if not chunk:
                 raise OSError("monitor closed")
             got += chunk
+        return got.decode(errors="replace")
 
     def system_reset(self):
         self.sock.sendall(b"system_reset\n")

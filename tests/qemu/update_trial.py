@@ -31,7 +31,6 @@ failure.
 """
 import argparse
 import re
-import socket
 import struct
 import subprocess
 import sys
@@ -39,6 +38,7 @@ import time
 
 from kmx.bus import Bus  # noqa: E402
 from kmx import frame as fr  # noqa: E402
+from kmx import update as kmx_update  # noqa: E402
 import update_rig as rig  # noqa: E402
 
 IDS = (1, 2)
@@ -52,23 +52,9 @@ BAD_SW = 0x0BAD         # the bad images' software version (boards/qemu-microbit
 GOOD_BAUD = 19200       # servo-update's pacing of the good image: emulators on a loaded host keep up
 
 
-class Monitor:
-    """One servo's QEMU human monitor (sim/bus/servo-bus --monitor-dir)."""
-
-    def __init__(self, path):
-        self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        self.sock.connect(path)
-        self.sock.settimeout(5.0)
-        self._prompt()
-
-    def _prompt(self):
-        got = b""
-        while not got.endswith(b"(qemu) "):
-            chunk = self.sock.recv(4096)
-            if not chunk:
-                raise OSError("monitor closed")
-            got += chunk
-        return got.decode(errors="replace")
+class Monitor(kmx_update.Monitor):
+    """One servo's QEMU human monitor (sim/bus/servo-bus --monitor-dir),
+    the client `kmx update --resets` uses, which also reads RAM."""
 
     def shared(self):
         """The 8 shared words: request, app_running, boot_version, check,
