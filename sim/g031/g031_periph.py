@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """Peripheral models of the virtual STM32G031, one class per block, each
 after its RM0444 section. Pure Python, no unicorn: the unit tests drive
-them directly (tests/g031/test_periph.py). Time is virtual, in
+them directly (tests/g031/test_g031_periph.py). Time is virtual, in
 nanoseconds, handed in by the machine (vg031.py) as `now`."""
 import bisect
 

@@ -94,7 +94,7 @@ static void test_enter_without_bootloader_is_bit5(void **state)
 }
 
 /* A bootloader: ENTER leaves the request and restarts at once, without an
- * answer; a ping in the same write never runs (docs/protocol-decisions
+ * answer; a ping in the same write never runs (docs/protocol-decisions.md
  * "Restart"), the servo answers again after the restart. */
 static void test_enter_with_bootloader_restarts(void **state)
 {
