@@ -1,20 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The firmware application (see km_app.h). One main loop, three interrupt
- * handlers (RX byte, answer timer, and whatever the hal uses for TX):
- *
- *   RX IRQ --byte+tick--> km_rx_queue --(main loop, bounded)--> parser
- *     --frame--> dispatcher --answer + delay--> one-shot timer IRQ --> UART TX
- *
- * The answer starts exactly `delay_us` after the frame's last byte because
- * the timer is armed at end_tick + delay, end_tick being stamped by the RX
- * interrupt, not by when the main loop got to the frame. The main loop runs
- * the control tick every KM_APP_TICK_US and does the store's flash work
- * (formatting, compaction) only when idle and the bus is silent.
- *
- * The loop never waits on the bus: an answer that cannot be handed to the
- * TX path yet (the previous one is still on the wire) and a restart that
- * must let an earlier answer finish are states the loop checks on each
- * pass, sleeping in between, so the control tick and the watchdog go on. */
+/* The firmware application (km_app.h): one main loop, the RX byte and
+ * answer timer interrupts; answers timed from the frame's end tick; the
+ * loop never waits on the bus (docs/app-design.md). */
 #include <stdbool.h>
 #include <stdint.h>
 #include <string.h>
@@ -35,22 +22,13 @@
 #define KM_APP_TICK_US KM_CONTROL_TICK_US /* control tick: 1 kHz */
 #define KM_APP_RX_BUDGET 64u              /* bytes parsed per loop pass: bounds tick jitter */
 #define KM_APP_WATCHDOG_MS 500u
-/* docs/store.md "Preparing in idle time": idle flash work (an erase stalls
- * the G0's flash for 22-40 ms) starts only after the bus has been silent
- * this long. */
-#define KM_APP_FLASH_QUIET_US 50000u
-/* docs/update.md §3a: the main loop has served the bus this long before
- * the start is confirmed to the bootloader (its trial timer: 2 s). */
-#define KM_APP_CONFIRM_US 1000000u
+#define KM_APP_FLASH_QUIET_US 50000u /* bus silence before idle flash work */
+#define KM_APP_CONFIRM_US 1000000u   /* service before the boot is confirmed (docs/update.md §3a) */
 
 static km_rx_queue_t s_rxq;
-/* Where the RX interrupt thinks the frame ends (docs/benchmarks.md "Per
- * byte"): owned by the interrupt, re-aligned by the main loop with the
- * interrupt masked before it sleeps. */
+/* The RX interrupt's frame tracker (docs/benchmarks.md "Per byte"). */
 static km_rx_track_t s_rx_track;
-/* Set by the RX interrupt when the main loop must parse (a frame may be
- * complete, half the queue holds one frame's bytes); cleared by the main loop before it
- * looks. */
+/* Set by the RX interrupt when the main loop must parse. */
 static volatile bool s_wake;
 static km_parser_t s_parser;
 static km_parser_out_t s_out; /* the frame the parser hands out: a view */
@@ -58,11 +36,7 @@ static km_servo_t s_servo;
 static km_reply_t s_reply;
 static km_control_t s_control;
 static km_control_params_t s_params; /* the control registers, decoded */
-/* The fault log outlives a reset, not a power loss: .noinit on the MCU
- * boards (neither loaded nor zeroed at startup), so a restart, a watchdog
- * or a fault reset keeps the record of what led to it at no flash cost;
- * km_fault_log_boot() tells a kept log from whatever RAM held. On the host
- * it is process memory (host-sim's restart re-executes: an empty log). */
+/* The fault log outlives a reset, not a power loss (.noinit). */
 #if KM_FEATURE_EXT
 static km_fault_log_t s_fault_log __attribute__((section(".noinit")));
 #endif
@@ -77,23 +51,19 @@ static uint16_t s_tx_len;
 static volatile bool s_tx_armed;
 static uint32_t s_armed_frame_end; /* the armed answer's frame end tick */
 static uint32_t s_armed_delay_us;  /* and the delay it asked for */
-/* The answer that started, as the timer interrupt saw it: its own frame end
- * and delay are copied with its start tick, so a report made late (after a
- * next answer was armed) never pairs one answer's start with another's frame. */
+/* The answer that started, copied together by the timer interrupt. */
 static volatile uint32_t s_answer_frame_end;
 static volatile uint32_t s_answer_delay_us;
 static volatile uint32_t s_answer_start; /* tick the answer's first byte was handed to the UART */
 static volatile bool s_answer_started;
 static volatile uint32_t s_tx_refused; /* answers the UART would not take (diagnostic) */
 
-/* An answer in s_reply waiting for the TX buffer (frame end in s_reply_end):
- * while it waits, no further frame is parsed, so s_reply stays intact. */
+/* An answer in s_reply waiting for the TX buffer; no frame is parsed meanwhile. */
 static bool s_reply_waiting;
 static uint32_t s_reply_end;
 static bool s_restart_pending;
 static bool s_boot_confirmed; /* km_board_boot_confirm() was called */
-/* The store does not hold this session's state in its current format
- * (blank, invalid, migrated or old schema): format it in idle time. */
+/* The store needs preparing in idle time this session. */
 static bool s_store_prepare;
 static uint32_t s_confirm_at; /* tick at which the start is confirmed */
 
@@ -116,17 +86,11 @@ static void ISR_answer_due(void *ctx)
         s_answer_delay_us = s_armed_delay_us;
         s_answer_started = true;
     } else {
-        /* Cannot happen while the loop arms only with TX idle; counted so
-         * a board whose send refuses is seen in tests, not silently. */
         s_tx_refused++;
     }
 }
 
-/* Ticks per microsecond, fixed at init: the hal tick is a whole number of
- * MHz, so microseconds to ticks is one 32-bit multiply, and ticks to
- * microseconds a shift when the tick is a power of two MHz (every board
- * here: on the M0 a 32-bit divide is a libgcc call, and the control tick
- * needs one each tick), a divide otherwise. */
+/* Ticks per microsecond, fixed at init (the hal tick is whole MHz). */
 static uint32_t s_ticks_per_us = 1u;
 static uint32_t s_ticks_us_shift; /* log2(s_ticks_per_us), or 32: not a power of two */
 
@@ -135,7 +99,7 @@ static uint32_t prv_us_to_ticks(uint32_t us)
     return us * s_ticks_per_us;
 }
 
-/* Ticks to whole microseconds, without a division on the usual boards. */
+/* Ticks to whole microseconds: a shift when the tick is 2^n MHz. */
 static uint32_t prv_ticks_to_us(uint32_t ticks)
 {
     return s_ticks_us_shift < 32u ? ticks >> s_ticks_us_shift : ticks / s_ticks_per_us;
@@ -145,12 +109,7 @@ static uint32_t prv_ticks_to_us(uint32_t ticks)
  * previous answer (try again on a later pass). */
 static bool prv_try_schedule_answer(void)
 {
-    /* Cancel first: once cancel returns, the timer handler cannot run, so
-     * s_tx is either armed-and-unsent (a master that did not wait for it:
-     * the new answer replaces it rather than colliding with it) or handed
-     * to the UART. Checking TX before cancelling would leave a window in
-     * which the timer fires and the copy below overwrites a frame being
-     * sent. */
+    /* Cancel first: then s_tx is armed-and-unsent or already sending. */
     km_hal_timer_cancel();
     if (!s_tx_armed && km_hal_uart_tx_busy()) {
         return false;
@@ -164,10 +123,7 @@ static bool prv_try_schedule_answer(void)
     return true;
 }
 
-/* Measurement hook, called from the main loop after each answer started:
- * the frame's end tick, the tick the answer was handed to the UART, and the
- * delay asked for. Empty here; the QEMU timing image (boards/qemu-microbit/
- * tests/firmware/qemu-microbit/answer_timing.c) prints it to measure answer-delay accuracy. */
+/* Measurement hook after each answer started; the QEMU timing image overrides it. */
 __attribute__((weak)) void km_app_answer_started(uint32_t frame_end, uint32_t started, uint32_t delay_us)
 {
     (void)frame_end;
@@ -175,17 +131,13 @@ __attribute__((weak)) void km_app_answer_started(uint32_t frame_end, uint32_t st
     (void)delay_us;
 }
 
-/* Hands the last answer's timing to the hook. Called at the top of the main
- * loop and right after each frame: with a delay of 0 the answer starts while
- * the frame is being handled, and the next frame of the same drain pass
- * would otherwise overwrite the record before it is reported. */
+/* Hands the last answer's timing to the hook (top of a pass, after each frame). */
 static void prv_report_answer(void)
 {
     if (!s_answer_started) {
         return;
     }
-    /* One consistent record: the timer interrupt may start the next answer
-     * between two of these reads. */
+    /* one consistent record */
     const uint32_t irq = km_hal_irq_lock();
     const uint32_t frame_end = s_answer_frame_end;
     const uint32_t start = s_answer_start;
@@ -207,8 +159,7 @@ static void prv_on_frame(void)
 
 static void prv_on_events(unsigned events)
 {
-    /* The parser reports a call's checksum failures before the frame that
-     * call hands out, so they are judged against the ID in force then. */
+    /* checksum errors come before the call's frame: the ID in force now */
     if ((events & KM_PARSE_CHECKSUM_ERR) && km_parser_take_checksum_error(&s_parser, km_servo_id(&s_servo))) {
         km_servo_note_checksum_error(&s_servo);
     }
@@ -217,17 +168,13 @@ static void prv_on_events(unsigned events)
     }
 }
 
-/* True while the parser must not be fed: a restart was requested (nothing
- * received after a valid restart frame may take effect), or an answer
- * waits for the TX buffer (the next frame's answer would overwrite it). */
+/* True while the parser must not be fed: a restart or an answer pending. */
 static inline __attribute__((always_inline)) bool prv_rx_blocked(void)
 {
     return s_restart_pending || s_reply_waiting;
 }
 
-/* Runs of bytes from the RX queue to the parser, where they lie: one call
- * per run (it stops at a frame), the frame handled as a view of the queue's
- * bytes before they are released. */
+/* Runs of bytes from the RX queue to the parser, frames as views of the queue. */
 static void prv_drain_rx(void)
 {
     uint32_t budget = KM_APP_RX_BUDGET;
@@ -254,15 +201,13 @@ static void prv_drain_rx(void)
     }
 }
 
-/* 0x02 restart has no answer, but an answer to an earlier frame may still
- * be armed or on the wire: the reset waits until it has gone out. */
+/* 0x02 restart: due once an earlier answer has gone out. */
 static bool prv_restart_ready(void)
 {
     return s_restart_pending && !s_reply_waiting && !s_tx_armed && !km_hal_uart_tx_busy();
 }
 
-/* The control registers in engineering units, decoded again only after
- * the dispatcher applied a change. */
+/* The control registers in engineering units, decoded again after a change. */
 static const km_control_params_t *prv_params(void)
 {
     const uint32_t gen = km_servo_params_gen(&s_servo);
@@ -288,10 +233,8 @@ static void prv_apply_bridge(const km_bridge_t *b)
     }
 }
 
-/* One control tick: sensors, step, live values, fault log, bridge.
- * noinline: under LTO it stays a function, the landmark by which the
- * benches tell a tick from the work it shares a wake-up with
- * (docs/benchmarks.md "Control tick"). */
+/* One control tick: sensors, step, live values, fault log, bridge
+ * (noinline: the benches' landmark under LTO). */
 static __attribute__((noinline)) void prv_control_tick(uint32_t now)
 {
     km_sensors_t sensors;
@@ -310,12 +253,8 @@ static __attribute__((noinline)) void prv_control_tick(uint32_t now)
 
 /* ---- what the dispatcher calls --------------------------------------- */
 
-/* docs/architecture.md ("Flash work and the bridge"): a flash erase stalls the CPU
- * (22-40 ms on the G0) while the bridge keeps its last PWM and no control
- * tick runs. Store work therefore runs only with the bridge free or braked:
- * a commit asked for while driving brakes first (the next tick drives
- * again), and idle-time compaction waits until the bridge is not driving
- * (a commit compacts by itself when it must). */
+/* Store work only with the bridge not driving (docs/app-design.md "Flash
+ * work and the bridge"). */
 static bool prv_bridge_driving(void)
 {
     return s_control.bridge.mode == KM_BRIDGE_PWM;
@@ -330,10 +269,7 @@ static bool prv_ops_commit(void *ctx, const uint8_t *addrs, const uint32_t *valu
     return km_app_userdata_commit(addrs, values, n);
 }
 
-/* One step of idle-time store work, with the bridge not driving and the
- * bus silent for KM_APP_FLASH_QUIET_US (docs/store.md "Preparing in idle
- * time"): first the session's preparation if the store needs formatting,
- * then compaction ahead of a full page. True if it did flash work. */
+/* One step of idle-time store work on a silent bus; true if it did flash work. */
 static bool prv_idle_flash_work(uint32_t now)
 {
     if (prv_bridge_driving() || !km_rx_queue_empty(&s_rxq) ||
@@ -341,7 +277,6 @@ static bool prv_idle_flash_work(uint32_t now)
         return false;
     }
     if (s_store_prepare) {
-        /* Done, or a step failed: either way no more of it this session. */
         s_store_prepare = km_app_userdata_prepare();
         return true;
     }
@@ -360,9 +295,7 @@ static bool prv_ops_request(void *ctx, const km_request_t *req)
     return km_control_request(&s_control, req, prv_params());
 }
 
-/* 0x78 in the application (docs/update.md §4): ENTER leaves the request
- * for the bootloader and restarts like 0x02 (nothing after it runs);
- * without a bootloader (km_board_boot_request() false) it is refused. */
+/* 0x78 in the application (docs/update.md §4): STATUS, or ENTER the bootloader. */
 static bool prv_ops_update(void *ctx, const uint8_t *body, uint8_t n, uint8_t *answer, uint8_t *answer_len)
 {
     km_update_answer_t a;
@@ -372,7 +305,6 @@ static bool prv_ops_update(void *ctx, const uint8_t *body, uint8_t n, uint8_t *a
         return false;
     }
     if (a.action == KM_UPD_ACT_ENTER) {
-        /* Weak default false; a board with a bootloader links its own. */
         // cppcheck-suppress knownConditionTrueFalse
         if (!km_board_boot_request(km_servo_id(&s_servo), km_servo_active_baud(&s_servo))) {
             return false;
@@ -389,9 +321,7 @@ static bool prv_ops_update(void *ctx, const uint8_t *body, uint8_t n, uint8_t *a
 }
 
 #if KM_FEATURE_EXT
-/* 0x7F of the fault log's extension registers (km_servo.h KM_EXT_FAULT_*):
- * the summary, or entry n (0 = newest; one the log does not hold reads as
- * 18 zero bytes, kind 0: no event). */
+/* 0x7F of the fault log: the summary, or entry n (zeros when not held). */
 static bool prv_ops_ext_read(void *ctx, uint8_t addr, uint8_t *out, uint8_t *n)
 {
     (void)ctx;
@@ -435,8 +365,7 @@ __attribute__((weak)) bool km_board_store_prepare_each_boot(void)
     return false;
 }
 
-/* docs/update.md §3a: once the main loop has run KM_APP_CONFIRM_US with
- * the bus open, the start was good; told the bootloader once per boot. */
+/* docs/update.md §3a: confirms the start once, after KM_APP_CONFIRM_US. */
 static void prv_confirm_boot(uint32_t now)
 {
     if (!s_boot_confirmed && (int32_t)(now - s_confirm_at) >= 0) {
@@ -456,9 +385,7 @@ static const km_servo_ops_t s_ops = {
     .ctx = NULL,
 };
 
-/* Opens the bus at the stored baud, or, if the board cannot make it, at
- * the baud a fresh servo uses: a servo deaf at its own baud could never be
- * reached to fix it. Extension register 0x03 tells the master. */
+/* Opens the bus at the stored baud, else at a fresh servo's (ext 0x03 tells). */
 static uint32_t prv_open_bus(uint32_t baud)
 {
     if (km_hal_uart_init(baud, ISR_rx_byte, NULL)) {
@@ -479,8 +406,7 @@ void km_app_init(void)
     s_boot_confirmed = false;
 
     km_hal_system_init();
-    /* First, so a fault or a hang anywhere later (a store mount on bad
-     * flash, a stuck sensor) resets the MCU instead of hanging for ever. */
+    /* first: a hang anywhere later resets */
     km_hal_watchdog_start(KM_APP_WATCHDOG_MS);
     km_hal_time_init();
     km_hal_motor_init();
@@ -497,8 +423,6 @@ void km_app_init(void)
     uint32_t persisted[KM_USERDATA_MAX];
     const km_store_mount_t mount = km_app_userdata_mount(km_board_flash(), product, persisted);
     km_servo_init(&s_servo, product, persisted, km_hal_entropy(), &s_ops);
-    /* Extension 0x01 tells the master where the user data came from; the
-     * store's mount results are in the same order as KM_USERDATA_*. */
     km_servo_set_userdata_source(&s_servo, (uint8_t)mount);
     s_store_prepare = mount != KM_STORE_MOUNT_ERR_ARG &&
                       (mount != KM_STORE_MOUNT_LOADED || km_board_store_prepare_each_boot());
@@ -513,9 +437,7 @@ void km_app_init(void)
     km_rx_queue_init(&s_rxq);
     const uint32_t baud = prv_open_bus(km_servo_active_baud(&s_servo));
     km_servo_set_active_baud(&s_servo, baud);
-    /* docs/protocol-decisions.md "Inter-byte gap": the parser's rule (an
-     * emulated board raises it with km_app_set_bus_floors()). The slot
-     * floor is 0, the real rule: km_servo_init() cleared it. */
+    /* docs/protocol-decisions.md "Inter-byte gap"; the slot floor is 0 */
     km_parser_init(&s_parser, prv_us_to_ticks(km_parser_default_gap_us(baud)));
     s_rx_track.gap_ticks = s_parser.gap_ticks;
 
@@ -525,8 +447,7 @@ void km_app_init(void)
     s_confirm_at = s_last_control_tick + prv_us_to_ticks(KM_APP_CONFIRM_US);
 }
 
-/* Emulated buses: the gap floor raises the parser's rule at the baud the
- * bus was opened at; the slot floor goes to the dispatcher (km_app.h). */
+/* Emulated buses: the gap floor raises the parser's rule at the open baud. */
 void km_app_set_bus_floors(uint32_t gap_floor_us, uint32_t slot_floor_us)
 {
     km_servo_set_slot_floor_us(&s_servo, slot_floor_us);
@@ -544,12 +465,8 @@ static bool prv_tick_due(uint32_t now)
     return (int32_t)(now - s_next_tick) >= 0;
 }
 
-/* The grid point of the tick after the one due at `now`. A tick found
- * half a period late or more was missed by the wake-up that should have
- * run it (docs/benchmarks.md "Control tick": a 1 kHz wake-up in a fixed
- * phase just before the grid, or flash work): the grid moves to an eighth
- * of a period before this wake-up's phase, so the next wake-ups find their
- * tick due, instead of running a late tick and the next one back to back. */
+/* The next grid point; a tick half a period late moves the grid to just
+ * before this wake-up (docs/benchmarks.md "Control tick"). */
 static void prv_next_tick(uint32_t now)
 {
     const uint32_t late = now - s_next_tick;
@@ -561,10 +478,7 @@ static void prv_next_tick(uint32_t now)
 }
 
 /* Sleeps, under the caller's lock, until something needs a pass of the
- * main loop: the control tick, a frame that may be complete, 64 bytes of a
- * long frame waiting, an answer started. A byte inside a frame wakes the core for its
- * interrupt alone (docs/benchmarks.md "Per byte"). With an answer waiting
- * for TX or a restart pending every interrupt ends the sleep, as before. */
+ * main loop (docs/benchmarks.md "Per byte"). */
 static void prv_sleep(uint32_t irq)
 {
     const bool blocked = prv_rx_blocked();
@@ -584,8 +498,7 @@ static void prv_sleep(uint32_t irq)
     }
 }
 
-/* noinline: one pass of the main loop stays a function under LTO, the
- * entry the virtual G031 and the benches watch (docs/footprint.md "LTO"). */
+/* One pass (noinline: watched under LTO, docs/footprint.md "LTO"). */
 __attribute__((noinline)) void km_app_poll(void)
 {
     prv_report_answer();
@@ -603,9 +516,7 @@ __attribute__((noinline)) void km_app_poll(void)
         km_hal_watchdog_kick();
         prv_confirm_boot(now);
     } else if (!prv_idle_flash_work(now)) {
-        /* Check and sleep under the lock: WFI still wakes on an interrupt
-         * that became pending after the check (a byte, the answer timer,
-         * TX done, the 1 ms wake-up). */
+        /* check and sleep under the lock: WFI still wakes on a pending IRQ */
         const uint32_t irq = km_hal_irq_lock();
         const bool rx_work = !prv_rx_blocked() && !km_rx_queue_empty(&s_rxq);
         const bool tx_work = s_reply_waiting && !km_hal_uart_tx_busy();
@@ -633,10 +544,7 @@ const km_servo_t *km_app_servo(void)
     return &s_servo;
 }
 
-/* Diagnostics for the line-rate benchmark (tests/bench/m0/bench_m0_app.c):
- * frames the parser delivered and bytes the RX queue dropped, so that every
- * frame of a stream is accounted for. Declared here, not in km_app.h (not
- * this file's owner): km_app.h should carry them. */
+/* Diagnostics for tests/bench/m0/bench_m0_app.c (km_app.h should declare them). */
 const km_parser_stats_t *km_app_parser_stats(void);
 uint32_t km_app_rx_dropped(void);
 

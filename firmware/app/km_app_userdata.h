@@ -14,14 +14,12 @@
 #include "km_registers.h"
 
 #define KM_USERDATA_MAX KM_REG_PERSISTED_COUNT
-/* Bump when a persisted register's meaning or encoding changes: stored
- * values are then replaced by the product defaults (the store reports it).
- * The bootloader mounts with it too, to find the ID and baud. */
+/* Bump when a persisted register's meaning or encoding changes (stored
+ * values then give way to the defaults; the bootloader mounts with it). */
 #define KM_USERDATA_SCHEMA_VERSION 1u
 _Static_assert(KM_USERDATA_MAX <= KM_STORE_MAX_KEYS, "the store holds every persisted register");
 
-/* Mounts the store (zero flash operations) and fills `values` in the
- * register table's order of P registers. Returns how they were found. */
+/* Mounts the store (no flash operation) and fills `values` in table order. */
 km_store_mount_t km_app_userdata_mount(const km_flash_t *flash, const km_product_t *product,
                                        uint32_t *values);
 

@@ -1,14 +1,12 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Fault log: a ring of the last events, kept across resets in RAM that a
- * reset leaves alone (contract in km_fault_log.h). */
+/* Fault log: a ring of the last events in RAM a reset keeps (km_fault_log.h). */
 #include "km_fault_log.h"
 
 #include <string.h>
 
 #define PRV_MAGIC 0x4B4D464Cu /* "KMFL" */
 
-/* A rotate-xor over the words before `check`: cheap on the M0 and enough to
- * tell a log from power-up RAM or a log torn by a reset mid-update. */
+/* A rotate-xor over the bytes before `check`. */
 static uint32_t prv_check(const km_fault_log_t *log)
 {
     const uint8_t *b = (const uint8_t *)log;
@@ -46,8 +44,7 @@ bool km_fault_log_boot(km_fault_log_t *log)
 
 void km_fault_log_add(km_fault_log_t *log, const km_fault_entry_t *e)
 {
-    /* Invalidate first: a reset in the middle leaves a log that fails its
-     * check and starts empty, never one with a half-written entry. */
+    /* invalidate first: a torn update starts empty */
     log->check = ~log->check;
     log->entries[log->head] = *e;
     log->entries[log->head].boots_ago = 0;

@@ -1,20 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Fault log (beyond the spec: a servo that shut down in the field must say
- * why): the last KM_FAULT_LOG_LEN protection and self-test events, each with
- * when (ms since its boot, and which boot), what (trip, release, clear,
- * hardware fault, which bits) and the live state at that moment (supply,
- * current, temperature, position). Pure. Written from the events control
- * reports with its live values (km_fault_log_record: control is the one
- * source of what tripped, released, was cleared or found), read over the
- * bus through the extension command 0x7F, which the app serves from here
- * (docs/protocol-decisions.md "Fault log").
- *
- * Kept across restarts, not across power loss: the log is plain RAM that
- * the board places where a reset does not clear it (.noinit on the MCU
- * boards), guarded by a magic and a check word; at boot a log that checks
- * is kept (its entries marked one boot older), anything else starts empty.
- * So a 0x02 restart, a watchdog or a fault reset keeps the record of what
- * led to it, and normal operation never costs a flash erase or program. */
+/* Fault log (beyond the spec): the last KM_FAULT_LOG_LEN protection and
+ * self-test events with when, what and the live state, written from the
+ * events control reports and read through 0x7F. Plain RAM kept across
+ * resets, guarded by a magic and a check word (docs/protocol-decisions.md
+ * "Fault log", docs/app-design.md). */
 #ifndef KM_FAULT_LOG_H
 #define KM_FAULT_LOG_H
 
@@ -57,27 +46,20 @@ typedef struct {
     uint32_t check; /* over everything above */
 } km_fault_log_t;
 
-/* At boot, on the log's RAM as the reset left it: keeps a log that checks
- * (one boot older), else starts an empty one. Returns true if kept. */
+/* At boot: keeps a log that checks (one boot older), else starts empty. */
 bool km_fault_log_boot(km_fault_log_t *log);
 
 /* Adds an event (the oldest is dropped when full). */
 void km_fault_log_add(km_fault_log_t *log, const km_fault_entry_t *e);
 
-/* The events of one control tick (live->events), each kind that happened
- * as one entry with the live state of that tick: trips, clears, releases,
- * hardware faults, in that order. Nothing for a tick without events. */
+/* One entry per kind of event in live->events, with that tick's live state. */
 void km_fault_log_record(km_fault_log_t *log, const km_live_t *live);
 
 /* Entry `n`, 0 = the newest; false if there are not that many. */
 bool km_fault_log_get(const km_fault_log_t *log, uint8_t n, km_fault_entry_t *out);
 
-/* Wire forms for 0x7F (little-endian):
- *   summary (7 B): u32 total, u8 held, u8 kept, u8 KM_FAULT_LOG_LEN;
- *   entry (18 B):  u32 t_ms, u8 kind, u8 bits, u8 boots_ago, u8 0,
- *                  u16 voltage mV, i16 current mA, i16 temperature 0.1 degC,
- *                  i32 position 0.1 deg.
- * Each returns the bytes written (out holds at least that many). */
+/* Wire forms for 0x7F: summary (u32 total, u8 held, u8 kept, u8 length)
+ * and entry (docs/protocol-decisions.md "Fault log"); bytes written. */
 #define KM_FAULT_SUMMARY_SIZE 7u
 size_t km_fault_log_summary(const km_fault_log_t *log, uint8_t *out);
 size_t km_fault_log_entry_bytes(const km_fault_entry_t *e, uint8_t *out);

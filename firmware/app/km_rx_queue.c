@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* SPSC receive queue: see km_rx_queue.h for why it exists and its ordering. */
+/* SPSC receive queue (km_rx_queue.h). */
 #include "km_rx_queue.h"
 
 #include <string.h>
@@ -32,8 +32,7 @@ void km_rx_queue_push_marked(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool
     if (lost || q->pending_loss) {
         q->flags[slot] = KM_RX_LOST; /* the consumer clears it when it takes the byte */
         q->pending_loss = false;
-        /* One writer: a plain load and store (ARMv6-M has no atomic add);
-         * the release of head below publishes it with the byte. */
+        /* one writer: a plain load and store, published with head */
         atomic_store_explicit(&q->marks, atomic_load_explicit(&q->marks, memory_order_relaxed) + 1u,
                               memory_order_relaxed);
     }
@@ -86,8 +85,7 @@ bool km_rx_queue_peek(km_rx_queue_t *q, km_rx_run_t *run)
     run->bytes = &q->byte[slot];
     run->ticks = &q->tick[slot];
     run->lost = false;
-    /* Read after head (acquire): counts at least every mark among the
-     * bytes seen; a mark of a byte not yet seen only costs a look here. */
+    /* read after head: covers every mark among the bytes seen */
     if (atomic_load_explicit(&q->marks, memory_order_relaxed) != q->marks_taken) {
         run->lost = (q->flags[slot] & KM_RX_LOST) != 0u;
         for (uint32_t i = 1; i < n; i++) {

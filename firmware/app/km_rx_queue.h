@@ -1,26 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Single-producer single-consumer queue of received bus bytes, from the UART
- * receive interrupt (producer) to the main loop (consumer).
- *
- * Why a queue and not the parser in the interrupt: the parser's worst case
- * (a resync scan over up to 256 bytes after a failed frame) and the
- * dispatcher's work would then run at interrupt priority and delay the
- * answer-timer interrupt; the queue keeps the RX interrupt at a few dozen
- * instructions and lets the main loop bound its work per poll. Each entry
- * keeps the byte's arrival tick, so a frame's end is still stamped by the
- * interrupt, not by when the main loop got to it.
- *
- * Lock-free: the producer writes only `head`, the consumer only `tail`; both
- * are 32-bit words, read and written whole on Cortex-M0. Producer and
- * consumer run on one core (an interrupt and the main loop; host-sim's
- * receive runs inside km_hal_idle on its one thread), so they are ordered
- * like a signal handler and its thread: relaxed accesses and C11 signal
- * fences, which keep the compiler's order and cost no DMB.
- *
- * The LOST marks: a slot's flag is non-zero only while it holds a marked
- * byte not yet taken. The producer writes a flag only with a marked byte
- * (km_rx_queue_push_marked); the consumer clears it when it takes that
- * byte, so the push of every other byte stores no flag. */
+/* Single-producer single-consumer queue of received bus bytes and their
+ * arrival ticks, from the UART receive interrupt to the main loop.
+ * Lock-free on one core: the producer writes only `head`, the consumer only
+ * `tail`, ordered by signal fences. A slot's LOST flag is set only while it
+ * holds a marked byte not yet taken. docs/app-design.md "Receive queue". */
 #ifndef KM_RX_QUEUE_H
 #define KM_RX_QUEUE_H
 
@@ -28,28 +11,22 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-/* Power of two. 128 bytes = 1.1 ms of traffic at 1 Mbaud; the main loop
- * drains every control tick (1 ms) and more often when idle. */
+/* Power of two: 1.1 ms of traffic at 1 Mbaud. */
 #define KM_RX_QUEUE_SIZE 128u
 
 #define KM_RX_LOST 0x01u /* bytes were lost before this one (overrun) */
 
 typedef struct {
-    /* The scalars first, the word array next: on ARMv6-M every field is
-     * then one load or store from the queue pointer (immediate offsets
-     * reach 124 bytes for words, 31 for bytes), which the interrupt side
-     * pays per received byte. */
+    /* Scalars first: each field one ARMv6-M load or store from the pointer. */
     atomic_uint head; /* written by the producer only */
     atomic_uint tail; /* written by the consumer only */
-    /* LOST-marked bytes stored, ever (producer) and taken (consumer): while
-     * they are equal no byte waiting is marked, and a run is handed out
-     * without looking at one flag. */
+    /* LOST-marked bytes stored (producer) and taken (consumer): equal = none waits. */
     atomic_uint marks;
     uint32_t marks_taken;
-    uint32_t dropped;               /* producer side: bytes lost because the queue was full */
-    bool pending_loss;              /* producer side: mark the next stored byte as LOST */
-    bool run_lost;                  /* consumer side: the run peeked starts with a LOST byte */
-    uint8_t byte[KM_RX_QUEUE_SIZE]; /* right after the scalars: its base is one add away */
+    uint32_t dropped;  /* producer side: bytes lost because the queue was full */
+    bool pending_loss; /* producer side: mark the next stored byte as LOST */
+    bool run_lost;     /* consumer side: the run peeked starts with a LOST byte */
+    uint8_t byte[KM_RX_QUEUE_SIZE];
     uint32_t tick[KM_RX_QUEUE_SIZE];
     uint8_t flags[KM_RX_QUEUE_SIZE]; /* KM_RX_LOST on a marked byte not yet taken, else 0 */
 } km_rx_queue_t;
@@ -64,13 +41,10 @@ typedef struct {
 
 void km_rx_queue_init(km_rx_queue_t *q);
 
-/* Interrupt context, the rare cases of km_rx_queue_push: a full queue, a
- * byte after a loss. */
+/* Interrupt context: km_rx_queue_push's rare cases (full, after a loss). */
 void km_rx_queue_push_marked(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost);
 
-/* Interrupt context. A full queue drops the byte and marks the next one
- * stored as following a loss, so the parser drops the broken frame.
- * Inline: the receive interrupt pays it on every byte. */
+/* Interrupt context, every byte: a full queue drops it and marks the next. */
 static inline void km_rx_queue_push(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost)
 {
     const unsigned head = atomic_load_explicit(&q->head, memory_order_relaxed);
@@ -94,11 +68,8 @@ bool km_rx_queue_empty(km_rx_queue_t *q);
 /* Main loop. Returns false when empty. */
 bool km_rx_queue_pop(km_rx_queue_t *q, uint8_t *byte, uint32_t *tick, uint8_t *flags);
 
-/* Main loop, the batch way (no call per byte, no copy): the oldest waiting
- * bytes, up to the queue's end and up to (not including) the next byte
- * after a loss, left in place; false when empty. The bytes stay valid and
- * in the queue until km_rx_queue_release() takes the first n of them
- * (n <= run->n), so a frame can be handled where it lies first. */
+/* Main loop: the oldest waiting bytes as a run, in place, up to the next
+ * loss; valid until km_rx_queue_release() takes n <= run->n. False: empty. */
 bool km_rx_queue_peek(km_rx_queue_t *q, km_rx_run_t *run);
 void km_rx_queue_release(km_rx_queue_t *q, uint32_t n);
 
