@@ -1,10 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Where the bootloader's update mode answers (docs/update.md §3): at the ID
- * and baud the application handed over with its ENTER request; else, with
- * the store reader, at the stored ones (km_store_peek: what a mount of
- * 0x0F and 0x10 would load) or ID 0 at 115200; without it (the 32 KiB
- * STM32G031F6, whose bootloader has no room for it), at ID 1, 115200.
- * Pure: the shared words and the store are passed in. */
+/* Where update mode answers (docs/update.md §3): the ID and baud the
+ * application handed over, else the stored pair or a fallback. Pure. */
 #ifndef KM_BOOT_ADDRESS_H
 #define KM_BOOT_ADDRESS_H
 
@@ -23,8 +19,8 @@ typedef struct {
     uint32_t baud;
 } km_boot_address_t;
 
-/* asked: the trial decision was KM_BOOT_STAY_ASKED; store: the user-data
- * store of `schema`, or NULL for a bootloader without the store reader. */
+/* Fills *out. asked: the decision was KM_BOOT_STAY_ASKED; store: the
+ * user-data store of `schema`, NULL without the store reader. */
 void km_boot_address(const volatile km_boot_shared_t *sh, bool asked, const km_flash_t *store,
                      uint16_t schema, km_boot_address_t *out);
 

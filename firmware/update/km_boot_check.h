@@ -1,9 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The boot decision (docs/update.md §3), shared by the bootloaders and the
- * host tests: start the application only if its header is sound for this
- * board and the CRC-32 of its body, read back through the flash interface,
- * matches. Any read error (an ECC error on a torn cell) means "do not
- * start". Pure: it only reads through the km_flash_t it is given. */
+/* The boot and entry checks (docs/update.md §3), shared by the bootloaders
+ * and the host tests; a read error means "do not start". Pure. */
 #ifndef KM_BOOT_CHECK_H
 #define KM_BOOT_CHECK_H
 
@@ -12,8 +9,8 @@
 #include "km_hal_flash.h"
 #include "km_image.h"
 
-/* True if the application region holds an image to start; fills *h (may
- * be NULL) with its header whatever the verdict. */
+/* True if the region holds an image sound for this board whose body CRC-32
+ * matches; fills *h (may be NULL) whatever the verdict. */
 bool km_boot_check(const km_flash_t *region, const km_image_target_t *t, km_image_header_t *h);
 
 /* Where a checked image starts: its vector table's first two words. */
@@ -22,11 +19,9 @@ typedef struct {
     uint32_t pc; /* reset vector (Thumb: bit 0 set) */
 } km_boot_entry_t;
 
-/* The entry check (docs/update.md §3) of an image km_boot_check passed,
- * read through the region: the initial SP lies in [sp_lo, sp_hi] and the
- * reset vector is a Thumb address whose first halfword lies inside the
- * image, from its vector table to its length (not merely inside the
- * region). False on a read error. Fills *e whatever the verdict. */
+/* The entry check of a checked image: SP in [sp_lo, sp_hi], the reset
+ * vector a Thumb address inside the image (vector table to length). False
+ * on a read error; fills *e whatever the verdict. */
 bool km_boot_entry(const km_flash_t *region, const km_image_header_t *h, uint32_t sp_lo, uint32_t sp_hi,
                    km_boot_entry_t *e);
 

@@ -1,11 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The bootloader's frame decoder (km_boot_rx.h). The held bytes are one
- * array, the head candidate at buf[0]; a failed candidate loses its F9 and
- * the array shifts left, so the rescan is the same judging loop. A shift
- * moves at most 255 bytes and happens once per failed F9: the bootloader
- * polls and has nothing else to do. One frame is handed out per call; the
- * bytes after it are judged at the next call (feed or poll), as in the
- * parser. */
+/* The bootloader's frame decoder (km_boot_rx.h): one array, the head
+ * candidate at buf[0]; one frame per call (docs/update.md §12). */
 #include "km_boot_rx.h"
 
 #include <string.h>
@@ -16,6 +11,7 @@ void km_boot_rx_init(km_boot_rx_t *rx, uint32_t gap)
     rx->gap = gap;
 }
 
+/* Drops the first k bytes held. */
 static void prv_drop(km_boot_rx_t *rx, uint16_t k)
 {
     rx->n = (uint16_t)(rx->n - k);
@@ -23,8 +19,7 @@ static void prv_drop(km_boot_rx_t *rx, uint16_t k)
     rx->stale = rx->stale > k ? (uint16_t)(rx->stale - k) : 0u;
 }
 
-/* The n bytes held so far of the head candidate (h) cannot start a
- * frame: the parser's header rules, byte by byte. */
+/* The head candidate's n bytes break a header rule of the parser. */
 static bool prv_header_bad(const uint8_t *h, uint16_t n)
 {
     return h[0] != KM_HDR0 || (n > 1u && h[1] != KM_HDR1_COMMAND && h[1] != KM_HDR1_RESPONSE) ||
@@ -32,8 +27,7 @@ static bool prv_header_bad(const uint8_t *h, uint16_t n)
            (n > 3u && (h[3] < KM_LENGTH_MIN || h[3] > KM_LENGTH_MAX));
 }
 
-/* 0: the head candidate is good so far but incomplete; 1: it failed;
- * else its whole length (it is complete and its checksum matches). */
+/* 0: good so far, incomplete; 1: failed; else its length (complete, checksum good). */
 static uint16_t prv_judge(const km_boot_rx_t *rx)
 {
     const uint8_t *h = rx->buf;
@@ -51,6 +45,7 @@ static uint16_t prv_judge(const km_boot_rx_t *rx)
     return km_checksum(h + 2, need - 3u) == h[need - 1u] ? need : 1u;
 }
 
+/* Drops failed candidates and other servos' answers; true: *out is a frame. */
 static bool prv_settle(km_boot_rx_t *rx, km_frame_view_t *out)
 {
     while (rx->n != 0u) {
@@ -85,9 +80,8 @@ static void prv_begin(km_boot_rx_t *rx, uint32_t now)
             rx->stale = rx->n;
             rx->stale_tick = rx->last;
         } else {
-            /* A second cut before the first one's bytes were judged (frames
-             * were waiting): the bytes between the cuts go, as in the
-             * parser, so no frame spans a cut. */
+            /* A second cut before the first one's bytes were judged: the
+             * bytes between go, so no frame spans a cut. */
             rx->n = rx->stale;
         }
     }

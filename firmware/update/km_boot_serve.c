@@ -15,9 +15,7 @@
 #define PRV_REG_VERSION 0x0Cu
 #define PRV_ST_EXCEPTION 0x20u
 
-/* The short answer (docs/protocol.md §4): the status byte where a
- * response has its command, no body; the same bytes as km_encode_status,
- * one encoder less in the bootloader. */
+/* The short answer (docs/protocol.md §4): the status byte for the command, no body. */
 static void prv_status_answer(km_boot_serve_t *s, km_boot_reply_t *r)
 {
     r->len = km_encode_response(r->bytes, s->id, s->status, 0, 0u);
@@ -35,7 +33,7 @@ static void prv_read(km_boot_serve_t *s, const km_frame_view_t *f, int own, km_b
         value = s->version;
         n = 5u;
     } else if (reg == PRV_REG_STATUS) {
-        /* the status byte, then the "random" byte 0: one bootloader per ID is all it can tell */
+        /* the status byte, then "random" byte 0 */
         value = s->status;
         n = 3u;
         s->status = 0u;

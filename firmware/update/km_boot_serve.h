@@ -1,12 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* What the bootloader answers on the bus in update mode (docs/update.md
- * §3, §4): ping, read 0x01 (status) and 0x0C (versions), the standard
- * restart (write 0x02 E1 E2 E3 E4), and 0x78 on the update state machine.
- * Anything else sets status bit 5 (docs/protocol.md §4), answered by the next
- * ping. Frames to its own ID and broadcast (never answered) run; the rest
- * are ignored. A committed image and START give the image new tries
- * (§3a: km_boot_trial_fresh on the shared words); the standard restart
- * keeps the count. Pure: frame view in, answer bytes and an action out. */
+/* The bootloader's dispatcher (docs/update.md §3, §3a, §4): ping, read
+ * 0x01 and 0x0C, the standard restart and 0x78; anything else is status
+ * bit 5 (docs/protocol.md §4). Pure. */
 #ifndef KM_BOOT_SERVE_H
 #define KM_BOOT_SERVE_H
 
@@ -35,6 +30,7 @@ typedef struct {
     uint8_t action; /* km_boot_action_t */
 } km_boot_reply_t;
 
+/* Runs a frame to its own ID or broadcast; *r: the answer (own ID only) and action. */
 void km_boot_serve(km_boot_serve_t *s, const km_frame_view_t *f, km_boot_reply_t *r);
 
 #endif

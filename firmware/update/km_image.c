@@ -7,13 +7,11 @@
 
 #include "km_crc32.h"
 
-/* The header is eight little-endian words in the struct's field order. */
 _Static_assert(sizeof(km_image_header_t) == 8u * sizeof(uint32_t) &&
                    offsetof(km_image_header_t, head_crc) == 7u * sizeof(uint32_t),
                "km_image_header_t is the eight header words, in order, unpadded");
 
-/* The header's fields from its bytes: a copy on a little-endian machine
- * (every board and the host), else word by word. */
+/* The header's fields from its (little-endian) bytes. */
 void km_image_decode(const uint8_t raw[KM_IMAGE_HEADER_SIZE], km_image_header_t *h)
 {
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__

@@ -1,7 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The application image's header (docs/update.md §2): what BEGIN checks
- * before anything is erased and what the boot check reads at every reset.
- * Pure: bytes in, fields and a verdict out. */
+/* The application image's header (docs/update.md §2), checked by BEGIN and
+ * at every reset. Pure. */
 #ifndef KM_IMAGE_H
 #define KM_IMAGE_H
 
@@ -12,7 +11,7 @@
 #define KM_IMAGE_VECTORS 0x100u                  /* vector table offset (VTOR: 256-aligned) */
 #define KM_IMAGE_MIN_LEN (KM_IMAGE_VECTORS + 8u) /* at least initial SP + reset vector */
 
-/* Board models (docs/update.md §2): an image carries the one it is built for. */
+/* Board models (docs/update.md §2). */
 #define KM_MODEL_QEMU_MICROBIT 0x4B4D0001u
 #define KM_MODEL_STM32G031 0x4B4D0002u
 
@@ -43,9 +42,8 @@ typedef struct {
 
 void km_image_decode(const uint8_t raw[KM_IMAGE_HEADER_SIZE], km_image_header_t *h);
 
-/* Checks a header against the board; fills *h (may be NULL). The header
- * CRC and magic come first, so a wrong model is reported only for a header
- * that is otherwise sound. */
+/* Checks a header against the board; fills *h (may be NULL). A wrong model
+ * is reported only for an otherwise sound header. */
 km_image_verdict_t km_image_check(const uint8_t raw[KM_IMAGE_HEADER_SIZE], const km_image_target_t *t,
                                   km_image_header_t *h);
 

@@ -9,12 +9,14 @@
 
 #define PRV_CHUNK 64u
 
+/* Records r as the last result. */
 static km_update_result_t prv_result(km_update_t *u, km_update_result_t r)
 {
     u->result = (uint8_t)r;
     return r;
 }
 
+/* Records r and fails the session. */
 static km_update_result_t prv_fail(km_update_t *u, km_update_result_t r)
 {
     u->state = KM_UPD_STATE_FAILED;

@@ -1,16 +1,10 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The update state machine (docs/update.md §4, §7): a session that takes an
- * image in 128-byte blocks into the application region and makes it
- * bootable with a single program at the end (the commit cell).
- *
- * Pure C over a km_flash_t whose page 0 is the application region's first
- * page: it cannot address the bootloader or the user-data store. No heap,
- * no hardware. Rules it keeps (the power-cut runner checks them):
- *  - nothing is erased before the header passed every check (model first);
- *  - page 0 (the header) is erased first, every page it programs it erased
- *    and blank-checked in this session, and it programs each cell once;
- *  - the first program cell of the image is programmed last, by COMMIT,
- *    after the whole image was read back and its CRC-32s matched. */
+/* The update state machine (docs/update.md §4): an image in 128-byte blocks
+ * into the application region (page 0 of its km_flash_t), made bootable by
+ * one last program, the commit cell. Pure. Keeps §7's flash rules: nothing
+ * erased before the header passed; page 0 erased first; each cell
+ * programmed once, in a page erased and blank-checked this session; the
+ * commit cell last, after VERIFY. */
 #ifndef KM_UPDATE_H
 #define KM_UPDATE_H
 
@@ -21,16 +15,16 @@
 #include "km_image.h"
 
 #define KM_UPDATE_BLOCK 128u
-#define KM_UPDATE_MAX_BLOCKS 1024u /* 128 KiB of image: the largest region is 112 KiB */
+#define KM_UPDATE_MAX_BLOCKS 1024u /* 128 KiB: the largest region is 112 KiB */
 #define KM_UPDATE_MAX_CELL 8u
 
 typedef enum {
-    KM_UPD_STATE_APP = 0,   /* the application is running (its STATUS answer) */
+    KM_UPD_STATE_APP = 0,   /* the application's STATUS answer */
     KM_UPD_STATE_IDLE,      /* bootloader, no session */
     KM_UPD_STATE_RECEIVING, /* erased, taking blocks */
     KM_UPD_STATE_VERIFIED,  /* every block in, CRCs matched */
     KM_UPD_STATE_COMMITTED, /* commit cell programmed, boot check passed */
-    KM_UPD_STATE_FAILED,    /* a flash error: a new BEGIN starts over */
+    KM_UPD_STATE_FAILED,    /* a flash error: BEGIN starts over */
 } km_update_state_t;
 
 typedef enum {
@@ -43,7 +37,7 @@ typedef enum {
     KM_UPD_TOO_BIG = 6,      /* image length out of range */
     KM_UPD_BAD_BLOCK = 7,    /* block index beyond the image */
     KM_UPD_BAD_CRC = 8,      /* block CRC-32 */
-    KM_UPD_MISMATCH = 9,     /* block 0 vs the header, or a re-sent block that differs */
+    KM_UPD_MISMATCH = 9,     /* block 0 vs header, or a re-sent block differs */
     KM_UPD_FLASH = 10,       /* erase, program or read-back failed */
     KM_UPD_VERIFY_FAIL = 11, /* read-back CRC differs */
     KM_UPD_MISSING = 12,     /* VERIFY with blocks missing */
@@ -64,16 +58,20 @@ typedef struct {
 /* target.region_size must equal the flash's page_size * page_count. */
 void km_update_init(km_update_t *u, const km_flash_t *region, const km_image_target_t *target);
 
-/* ENTER in the bootloader: ends any session (state IDLE), flash untouched. */
+/* ENTER: ends any session (IDLE), flash untouched. */
 void km_update_reset(km_update_t *u);
 
+/* BEGIN: checks the header, then erases the pages the image needs. */
 km_update_result_t km_update_begin(km_update_t *u, const uint8_t header[KM_IMAGE_HEADER_SIZE]);
+/* WRITE: programs and reads back one block; a re-send only compares. */
 km_update_result_t km_update_write(km_update_t *u, uint32_t block, const uint8_t data[KM_UPDATE_BLOCK],
                                    uint32_t crc);
-/* *crc: CRC-32 of image bytes [0, length) as read back (0 if not computed). */
+/* VERIFY. *crc: CRC-32 of image bytes [0, length) as read back (0 if not computed). */
 km_update_result_t km_update_verify(km_update_t *u, uint32_t *crc);
+/* COMMIT: programs the commit cell, then runs the boot check. */
 km_update_result_t km_update_commit(km_update_t *u);
 
+/* Whether `block` was received. */
 bool km_update_has(const km_update_t *u, uint32_t block);
 
 #endif

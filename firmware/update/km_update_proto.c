@@ -7,6 +7,7 @@
 static const uint8_t k_enter_magic[4] = {0xB1u, 0xB2u, 0xB3u, 0xB4u};
 static const uint8_t k_start_magic[4] = {0xE1u, 0xE2u, 0xE3u, 0xE4u};
 
+/* The little-endian value of n bytes. */
 static uint32_t prv_le(const uint8_t *p, uint32_t n)
 {
     uint32_t v = 0u;
@@ -16,12 +17,14 @@ static uint32_t prv_le(const uint8_t *p, uint32_t n)
     return v;
 }
 
+/* v's low 16 bits, little-endian. */
 static void prv_put16(uint8_t *p, uint32_t v)
 {
     p[0] = (uint8_t)v;
     p[1] = (uint8_t)(v >> 8);
 }
 
+/* The two-byte answer: sub, result. */
 static void prv_answer(km_update_answer_t *a, uint8_t sub, uint8_t result)
 {
     a->body[0] = sub;

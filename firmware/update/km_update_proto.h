@@ -1,8 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The 0x78 frames (docs/update.md §4): a frame's body (the sub-command in
- * the address byte, then its parameters) in, the answer's body out. Two
- * entries: the bootloader's, over the update state machine, and the
- * application's (ENTER and STATUS only). Pure: no bus, no flash of its own. */
+/* The 0x78 frames (docs/update.md §4): a body (sub-command first) in, the
+ * answer's body out, for the bootloader and the application. Pure. */
 #ifndef KM_UPDATE_PROTO_H
 #define KM_UPDATE_PROTO_H
 
@@ -38,13 +36,11 @@ typedef struct {
     uint8_t action;                  /* km_update_action_t */
 } km_update_answer_t;
 
-/* Bootloader: runs the frame on the state machine. The answer is filled
- * whatever the frame's ID; the caller sends it only to its own ID. */
+/* Bootloader: runs the frame; the answer is filled whatever the ID. */
 void km_update_frame(km_update_t *u, const uint8_t *body, uint8_t n, km_update_answer_t *a);
 
-/* Application: ENTER (action ENTER, no answer) and STATUS (state 0);
- * BEGIN..START are exceptions (bit 5) there, as is an unknown sub. A bad
- * ENTER magic answers BAD_MAGIC and does nothing. */
+/* Application: ENTER (action ENTER, no answer) and STATUS (state 0); any
+ * other sub, and ENTER with a bad magic, is bit 5. */
 void km_update_app_frame(const uint8_t *body, uint8_t n, km_update_answer_t *a);
 
 #endif
