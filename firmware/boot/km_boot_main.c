@@ -1,14 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The bootloader (docs/update.md §3): the first code after reset. Starts
- * the application on trial (§3a: the start counted, the watchdog armed) if
- * the boot and entry checks pass, no update was asked for and the image
- * has not failed its trial KM_BOOT_TRIAL_MAX times in a row; otherwise
- * stays in update mode and answers on the bus (km_boot_address.h: where
- * the application left it, or the stored ID and baud, or a fixed pair),
- * through the frame decoder
- * (km_boot_rx.c: the parser's frames in less code) and the update state
- * machine. Portable: the board is behind km_boot_board.h and its
- * boot_layout.h. */
+/* The bootloader (docs/update.md §3): starts the application on trial
+ * (§3a), else serves update mode. The board is behind km_boot_board.h. */
 #include <stdbool.h>
 #include <stdint.h>
 
@@ -24,10 +16,7 @@
 #define PRV_ANSWER_DELAY_US 200u /* the 0x12 default: the master turns its line around */
 #define PRV_KICK_US 50000u       /* watchdog reloads: 10 per 500 ms timeout */
 
-/* An emulated bus's least inter-byte gap, set by the simulated board's
- * build (boards/qemu-microbit: 20 ms, as QEMU hands bytes over when the
- * host schedules it); a real board sets nothing and keeps the parser's
- * rule (docs/architecture.md "Boards and the build"). */
+/* An emulated bus's least gap (docs/architecture.md "The hal is hardware only"). */
 #ifndef KM_BOOT_GAP_FLOOR_US
 #define KM_BOOT_GAP_FLOOR_US 0
 #endif
@@ -37,22 +26,19 @@ static km_boot_rx_t s_rx;
 static km_boot_reply_t s_reply;
 static uint32_t s_kicked_us; /* when the watchdog was last reloaded */
 
-/* The bootloader reads the store for its ID and baud (KM_BOOT_STORE_READER
- * 1, the default) or, where flash is short (the STM32G031F6's 4 KiB), does
- * without it (km_boot_address.h, docs/update.md §3). */
+/* 0: no store reader (docs/update.md §3). */
 #ifndef KM_BOOT_STORE_READER
 #define KM_BOOT_STORE_READER 1
 #endif
 
+/* Waits until `us` after `from`. */
 static void prv_wait_us(uint32_t from, uint32_t us)
 {
     while (km_bootb_now_us() - from < us) {
     }
 }
 
-/* Reloads a watchdog a soft reset left running (§3a) now and then: a
- * register write per loop pass would slow the polling (QEMU: an MMIO
- * access each). */
+/* Reloads the watchdog every PRV_KICK_US (§3a). */
 static void prv_kick(uint32_t now)
 {
     if (now - s_kicked_us >= PRV_KICK_US) {
@@ -61,6 +47,7 @@ static void prv_kick(uint32_t now)
     }
 }
 
+/* Serves a frame: its answer after the delay, then any restart. */
 static void prv_handle(const km_frame_view_t *v)
 {
     km_boot_serve(&s_serve, v, &s_reply);
@@ -73,9 +60,8 @@ static void prv_handle(const km_frame_view_t *v)
     }
 }
 
-/* The boot and entry checks (§3); starts the image if the trial decision
- * (§3a) says so, else returns whether the region holds a valid image and
- * (*asked) whether the application asked for update mode. */
+/* Starts the image if the checks (§3) and the trial (§3a) allow; else
+ * returns whether it is valid, *asked whether update mode was asked for. */
 static bool prv_boot(const km_image_target_t *t, km_image_header_t *h, bool *asked)
 {
     volatile km_boot_shared_t *sh = km_bootb_shared();
@@ -92,6 +78,7 @@ static bool prv_boot(const km_image_target_t *t, km_image_header_t *h, bool *ask
     return ok;
 }
 
+/* The boot decision, then update mode for ever. */
 int main(void)
 {
     km_bootb_init();
@@ -101,7 +88,6 @@ int main(void)
     bool asked = false;
     const bool valid = prv_boot(t, &h, &asked);
 
-    /* Update mode. */
     km_boot_address_t at;
     km_boot_address(km_bootb_shared(), asked, KM_BOOT_STORE_READER ? km_bootb_store() : 0,
                     KM_USERDATA_SCHEMA_VERSION, &at);
@@ -135,7 +121,7 @@ int main(void)
         }
 #ifdef BOOT_HAS_WAIT
         else if (!in) {
-            km_bootb_wait(); /* nothing received, no frame waiting: sleep until a byte */
+            km_bootb_wait();
         }
 #endif
     }
