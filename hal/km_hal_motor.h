@@ -1,6 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* HAL contract: the H-bridge. Signed PWM in thousandths of full duty; the
- * board owns the PWM frequency and dead time. */
+/* HAL contract: the H-bridge. */
 #ifndef KM_HAL_MOTOR_H
 #define KM_HAL_MOTOR_H
 
@@ -10,13 +9,13 @@
 
 void km_hal_motor_init(void);
 
-/* Drive with duty -1000..1000 (sign = direction; values outside are clamped). */
+/* Drives at -1000..1000 thousandths of full duty (sign: direction; clamped). */
 void km_hal_motor_drive(int16_t pwm);
 
-/* Coast: all bridge switches off (no damping). */
+/* Coast: all switches off. */
 void km_hal_motor_free(void);
 
-/* Brake: both low sides on (short-circuit damping). */
+/* Brake: both low sides on. */
 void km_hal_motor_brake(void);
 
 #endif
