@@ -1,7 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The control registers decoded into engineering units: what the
- * dispatcher hands control (km_servo_control_params()), decoded again only
- * when a register changed. Shared by protocol/ and control/. */
+/* The control registers, in engineering units. */
 #ifndef KM_PARAMS_H
 #define KM_PARAMS_H
 
@@ -11,34 +9,32 @@
 #include "km_product.h"
 #include "km_request.h"
 
-/* Which mode rotation commands may use (0x5A). Numbered as the register
- * holds it. */
+/* 0x5A's values. */
 typedef enum {
-    KM_MODE_AUTO = 0,       /* the mode follows the command */
-    KM_MODE_SERVO_ONLY = 1, /* motor commands refused; a running motor stops */
-    KM_MODE_MOTOR_ONLY = 2, /* servo-mode commands refused */
+    KM_MODE_AUTO = 0,       /* follows the command */
+    KM_MODE_SERVO_ONLY = 1, /* motor commands refused, a run stops */
+    KM_MODE_MOTOR_ONLY = 2, /* servo commands refused */
 } km_control_mode_t;
 
-/* Control registers in engineering units. Angles are 0.1 deg in the frame
- * the master sees (zero offsets and direction applied), like 0x46. */
+/* Angles: 0.1 deg in the master's frame, like 0x46. */
 typedef struct {
-    km_variant_t variant;    /* §6 product variant */
-    bool reverse;            /* 0x11 bit 2: counter-clockwise positive */
-    bool idle_brake;         /* 0x11 bit 1: idle output brake damping (else free) */
-    bool power_on_brake;     /* 0x11 bit 0: power-on output brake damping */
+    km_variant_t variant;    /* §6 */
+    bool reverse;            /* 0x11 bit 2: CCW positive */
+    bool idle_brake;         /* 0x11 bit 1: idle output braked */
+    bool power_on_brake;     /* 0x11 bit 0: braked at power-on */
     int16_t zero_offset1;    /* 0x16, 0.1 deg */
     int16_t zero_offset2;    /* 0x17, 0.1 deg */
-    uint16_t max_torque;     /* 0x13, PWM 0..1000 */
+    uint16_t max_torque;     /* 0x13, PWM */
     uint16_t max_current_ma; /* 0x14 */
     uint16_t max_speed_dps;  /* 0x15 */
     int16_t angle_min;       /* 0x19, 0.1 deg, 0 = no limit */
-    int16_t angle_max;       /* 0x1A, 0.1 deg, 0 = no limit */
-    int16_t travel_min;      /* product travel: targets never go outside it */
+    int16_t angle_max;       /* 0x1A */
+    int16_t travel_min;      /* product travel: bounds targets */
     int16_t travel_max;
-    int16_t pos_read_min; /* the readings a sound position sensor gives (km_product.h) */
+    int16_t pos_read_min;
     int16_t pos_read_max;
-    uint8_t prot_enable;    /* 0x32 bits: 3 stall, 2 temperature, 1 current, 0 voltage */
-    uint8_t prot_release;   /* 0x33 same bits: 1 = released only by command */
+    uint8_t prot_enable;    /* 0x32, KM_PROT_* bits */
+    uint8_t prot_release;   /* 0x33: 1 = released by command */
     uint8_t prot_state;     /* 0x34: 2 bits per protection */
     uint8_t voltage_high_v; /* 0x3C */
     uint8_t voltage_low_v;
@@ -49,11 +45,11 @@ typedef struct {
     uint16_t stall_pwm; /* 0x3F */
     uint8_t stall_time_100ms;
     uint8_t control_mode;      /* km_control_mode_t (0x5A) */
-    uint16_t torque_limit;     /* 0x5B, PWM 0..1000 (<= 0x13) */
+    uint16_t torque_limit;     /* 0x5B, PWM (<= 0x13) */
     uint16_t current_limit_ma; /* 0x5C (<= 0x14) */
     uint16_t speed_limit_dps;  /* 0x5D (<= 0x15) */
     uint8_t torque_switch;     /* km_torque_t (0x64) */
-    km_control_gains_t gains;  /* the product's loop gains (km_product.h) */
+    km_control_gains_t gains;
 } km_control_params_t;
 
 #endif

@@ -1,7 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The bits protocol and control both speak: the servo status byte
- * (docs/protocol.md §4), the protection bits (0x32, 0x33, 0x36 and status bits
- * 0..3, §5.2) and the hardware fault bits (0x35, §5.2). A leaf header. */
+/* The bits protocol and control share (docs/protocol.md §4, §5.2). */
 #ifndef KM_STATUS_H
 #define KM_STATUS_H
 
