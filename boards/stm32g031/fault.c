@@ -1,27 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Faults, reset cause and stack guard of the STM32G031 board.
- *
- * A HardFault (and any vector nothing should raise, which startup.c sends
- * here too) frees the H-bridge, writes a record to .noinit RAM and resets at
- * once with SYSRESETREQ. Why not park and let the IWDG bite: the bridge would
- * keep whatever PWM it had for up to the watchdog timeout (500 ms of a motor
- * driving into an end stop), and a fault before the watchdog is started
- * would hang for ever. Why free the bridge first, although the reset that
- * follows puts the pins back to analog (the driver's pull-downs then coast
- * it): the few register writes make the bridge safe within a microsecond
- * even if the reset were held off (a debugger attached, SYSRESETREQ masked by
- * a future change); everything after that is bookkeeping.
- *
- * The handler path must not fault again (a fault inside the HardFault
- * handler locks the core up, and only the IWDG ends a lockup): it uses no hal
- * calls and only register writes, and it moves SP to the top of the stack
- * region before any C runs, because the stack running out is one of the
- * faults it handles.
- *
- * The reset cause is captured once per boot from Reset_Handler, before
- * main(): RCC_CSR is read, its flags cleared with RMVF so the next reset
- * reads fresh, the fault record read and cleared, and reset_cause.c maps the
- * lot to km_reset_cause_t. */
+/* Faults, reset cause and stack guard of the STM32G031 board. Fault path:
+ * bridge free, .noinit record, SYSRESETREQ, with no hal calls and on a fresh
+ * stack (a fault in here would lock the core up); why: README.md "Faults,
+ * reset cause, stack". */
 #include "fault.h"
 
 #include "board_pins.h"
@@ -30,41 +11,36 @@
 #include "km_hal_system.h"
 #include "reset_cause.h"
 
-/* Linker script symbols (stm32g031.ld): the stack region at the bottom of
- * SRAM, its guard band the lowest KM_STACK_GUARD bytes of it. */
+/* stm32g031.ld: the stack region at the bottom of SRAM, guard band lowest. */
 extern uint32_t __stack_limit[], __stack_guard_end[], _estack[];
 
 #define PRV_FAULT_MAGIC 0xFA017EC0u
 #define PRV_ALIVE_MAGIC 0xA11FE5A5u
 #define PRV_STACK_PAINT 0x5AFE57ACu
-/* The reset handler's own frame (and g0_stack_paint's) sits at the top of
- * the stack while it paints: leave that much unpainted. */
+/* Left unpainted: the painting code's own frames at the top of the stack. */
 #define PRV_PAINT_SKIP_WORDS 64u
 
-/* Written by the fault path just before SYSRESETREQ, read and cleared at the
- * next boot. .noinit: neither loaded nor zeroed by Reset_Handler, and SRAM
- * keeps its contents across a system reset. check = ~(magic ^ kind ^ pc ^
- * lr), so random power-up contents pass with odds of 2^-64. */
+/* Written just before SYSRESETREQ, read and cleared at the next boot (.noinit
+ * survives a system reset); check = ~(magic ^ kind ^ pc ^ lr). */
 typedef struct {
     uint32_t magic;
-    uint32_t kind; /* IPSR exception number (3 = HardFault), or G0_FAULT_STACK_GUARD */
-    uint32_t pc;   /* stacked PC: the faulting instruction (0 for the guard) */
-    uint32_t lr;   /* stacked LR: its caller, in most cases */
+    uint32_t kind; /* IPSR number, or G0_FAULT_STACK_GUARD */
+    uint32_t pc;   /* stacked PC (0 for the guard) */
+    uint32_t lr;   /* stacked LR */
     uint32_t check;
 } g0_fault_record_t;
 
 static volatile g0_fault_record_t s_fault_record __attribute__((section(".noinit")));
 
-/* Set at every boot; intact at the next one only if SRAM was never lost in
- * between (tells a brown-out from a power-up, see reset_cause.c). */
+/* Set at every boot; intact at the next only if SRAM survived (brown-out). */
 static volatile uint32_t s_alive[2] __attribute__((section(".noinit")));
 
 static km_reset_cause_t s_cause;
 
-/* The previous run's fault record, kept after the capture for a debugger
- * (`print g0_last_fault`): magic 0 if the last reset was no fault. */
+/* The previous run's fault record, for a debugger (magic 0: no fault). */
 g0_fault_record_t g0_last_fault;
 
+/* Fills the stack below the caller's frame with the paint pattern. */
 void g0_stack_paint(void)
 {
     uintptr_t end = (uintptr_t)_estack - 4u * PRV_PAINT_SKIP_WORDS;
@@ -73,14 +49,11 @@ void g0_stack_paint(void)
     }
 }
 
-/* The guard band's words one call checks: a quarter of its 32, in turn. */
+/* Words of the guard band checked per call, in turn. */
 #define PRV_GUARD_SLICE_WORDS 8u
 static uint32_t s_guard_next; /* word offset of the slice checked next */
 
-/* From RAM: SysTick calls it every millisecond, flash erases included. One
- * slice a call, so the whole band every 4 ms (docs/benchmarks.md "Control
- * tick"): paint once overwritten stays overwritten, so a stack that
- * reached the band is still seen. */
+/* Checks the next slice of the guard band; in RAM (SysTick, flash erases). */
 G0_RAMFUNC(g0_stack_guard_intact) bool g0_stack_guard_intact(void)
 {
     const uint32_t band_words = (uint32_t)(__stack_guard_end - __stack_limit);
@@ -94,6 +67,7 @@ G0_RAMFUNC(g0_stack_guard_intact) bool g0_stack_guard_intact(void)
     return diff == 0u;
 }
 
+/* Reads and clears RCC_CSR and the .noinit record; decodes the cause. */
 void g0_reset_capture(void)
 {
     uint32_t csr = RCC_CSR;
@@ -118,18 +92,15 @@ void g0_reset_capture(void)
     s_cause = g0_reset_cause_decode(csr, fault, ram_kept);
 }
 
+/* The cause captured at boot. */
 km_reset_cause_t km_hal_reset_cause(void)
 {
     return s_cause;
 }
 
-/* Bridge to the free state (IN1 = IN2 = low: outputs high-Z, the motor
- * coasts) by taking both pins from TIM3 to plain GPIO outputs driven low:
- * ODR is cleared before MODER switches, so no pin ever goes high on the way.
- * The port clock is enabled in case the fault came before
- * km_hal_system_init() (the pins are then still analog, and this makes them
- * low outputs, which is the same state for the driver). TIM3's outputs are
- * disabled as well; with its clock still off those writes are ignored. */
+/* Bridge free (IN1 = IN2 = low, coast): pins from TIM3 to GPIO outputs, ODR
+ * cleared before MODER switches so no pin goes high; port clock enabled in
+ * case the fault came before km_hal_system_init(). */
 static void prv_bridge_free(void)
 {
     RCC_IOPENR |= RCC_IOPENR_GPIOA;
@@ -141,13 +112,11 @@ static void prv_bridge_free(void)
         (GPIO_MODER(PIN_IN2_PORT) & ~(3u << (2u * PIN_IN2_PIN))) | (1u << (2u * PIN_IN2_PIN));
     TIM_CCER(TIM3_BASE_R) = 0u;
 #ifdef KM_BOARD_RS485_DE
-    /* Let go of the bus too: a fault mid-answer must not hold the line. */
     GPIO_BRR(PIN_DE_PORT) = 1u << PIN_DE_PIN;
 #endif
 }
 
-/* Reached only through g0_fault_stop, with SP already at the top of the
- * stack region. `used`: the only reference is from the asm below. */
+/* Frees the bridge, writes the record, resets; reached from g0_fault_stop's asm. */
 __attribute__((used, noreturn)) static void prv_fault_stop_c(uint32_t kind, uint32_t pc, uint32_t lr)
 {
     prv_bridge_free();
@@ -156,7 +125,7 @@ __attribute__((used, noreturn)) static void prv_fault_stop_c(uint32_t kind, uint
     s_fault_record.lr = lr;
     s_fault_record.check = ~(PRV_FAULT_MAGIC ^ kind ^ pc ^ lr);
     s_fault_record.magic = PRV_FAULT_MAGIC;
-    /* The record must be in SRAM before the reset request leaves the core. */
+    /* Record in SRAM before the reset request. */
     __asm volatile("dsb" ::: "memory");
     SCB_AIRCR = SCB_AIRCR_VECTKEY | SCB_AIRCR_SYSRESETREQ;
     __asm volatile("dsb" ::: "memory");
@@ -164,9 +133,7 @@ __attribute__((used, noreturn)) static void prv_fault_stop_c(uint32_t kind, uint
     }
 }
 
-/* A fresh stack for the C part: the old SP may be at the very end of SRAM
- * (the stack guard, or the overflow fault itself). r0..r2 carry the
- * arguments through unchanged. */
+/* Moves SP to the top of the stack, then prv_fault_stop_c (r0..r2 unchanged). */
 __attribute__((naked, noreturn)) void g0_fault_stop(uint32_t kind __attribute__((unused)),
                                                     uint32_t pc __attribute__((unused)),
                                                     uint32_t lr __attribute__((unused)))
@@ -178,11 +145,8 @@ __attribute__((naked, noreturn)) void g0_fault_stop(uint32_t kind __attribute__(
                    ".ltorg                    \n");
 }
 
-/* The frame the core stacked is on MSP or PSP as EXC_RETURN bit 2 says (this
- * firmware only uses MSP; checked anyway). PC and LR are read out of it
- * before g0_fault_stop moves SP, which may land on top of the frame. The
- * exception number (IPSR) says which vector got us here: 3 for a real
- * HardFault, anything else for a vector nothing should raise. */
+/* Reads stacked PC and LR (MSP or PSP per EXC_RETURN bit 2) before SP moves,
+ * then g0_fault_stop(IPSR, pc, lr). */
 __attribute__((naked)) void HardFault_Handler(void)
 {
     __asm volatile("movs r0, #4              \n"

@@ -1,18 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Reset entry and vector table of the STM32G031 (RM0444 §12.3 table 61).
- * The reset handler copies .data from flash, zeroes .bss, paints the stack
- * and captures the reset cause (fault.c), then calls main(); no C library
- * start-up (no constructors are used, no heap exists). HardFault and every
- * vector nothing should raise end in fault.c's handler: bridge free, fault
- * record, immediate reset. The stack sits at the bottom of SRAM
- * (stm32g031.ld), below .data and .bss.
- *
- * Before anything else the reset handler copies .ramfunc (the code that
- * must run while flash is busy) and the vector table to RAM and points
- * VTOR at the copy: during a page erase (up to 40 ms) a vector fetch from
- * flash would stall the core as an instruction fetch does, and the bus
- * UART would overrun (docs/flash-busy.md). Handlers placed in .ramfunc
- * already have RAM addresses in the flash table, so the copy is verbatim. */
+/* Reset entry and vector table of the STM32G031 (RM0444 §12.3 table 61); the
+ * RAM copies of the table and .ramfunc: docs/flash-busy.md. */
 #include <stdint.h>
 
 #include "fault.h"
@@ -24,10 +12,7 @@ extern uint32_t _siramfunc, _sramfunc, _eramfunc;
 extern uint32_t __ram_vectors[];
 extern int main(void);
 
-/* A vector nothing should raise is handled like a HardFault (fault.c):
- * parking here would leave the bridge driving until the watchdog bites, or
- * for ever before it is started. A plain branch, no stack: IPSR still holds
- * this vector's number, and the fault record keeps it. */
+/* Unexpected vectors: a plain branch to the fault path (IPSR keeps the number). */
 __attribute__((naked)) static void prv_default_handler(void)
 {
     __asm volatile("ldr r0, =HardFault_Handler\n"
@@ -35,9 +20,7 @@ __attribute__((naked)) static void prv_default_handler(void)
                    ".ltorg                    \n");
 }
 
-/* Handlers a board file may define; otherwise they take the fault path.
- * HardFault_Handler is not weak: fault.c always defines it, and the strong
- * reference here is what pulls fault.o out of the archive. */
+/* Weak: a board file may define them. HardFault_Handler is strong (pulls fault.o). */
 #define KM_WEAK_ALIAS __attribute__((weak, alias("prv_default_handler")))
 void NMI_Handler(void) KM_WEAK_ALIAS;
 void SVC_Handler(void) KM_WEAK_ALIAS;
@@ -112,6 +95,7 @@ __attribute__((section(".isr_vector"), used)) static const prv_vector_table_t s_
         },
 };
 
+/* RAM vectors and .ramfunc, VTOR, .data, .bss, stack paint, reset cause, main(). */
 void Reset_Handler(void)
 {
     const uint32_t *vec = (const uint32_t *)&s_vectors;
@@ -122,8 +106,7 @@ void Reset_Handler(void)
     for (uint32_t *dst = &_sramfunc; dst < &_eramfunc;) {
         *dst++ = *src++;
     }
-    /* The table and code are in SRAM before the first interrupt can use
-     * them: DSB completes the stores, ISB refetches after the VTOR write. */
+    /* DSB completes the copies, ISB refetches after the VTOR write. */
     __asm volatile("dsb" ::: "memory");
     SCB_VTOR = (uint32_t)(uintptr_t)__ram_vectors;
     __asm volatile("dsb\n\tisb" ::: "memory");

@@ -1,8 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* km_hal_system for the STM32G031: 64 MHz clock tree, reset, independent
- * watchdog, PRIMASK lock, unique-ID entropy and WFI idle bounded by a 1 kHz
- * SysTick wake-up, which also checks the stack guard. The reset cause and
- * the fault path live in fault.c. */
+/* km_hal_system for the STM32G031: clock, reset, IWDG, PRIMASK lock, entropy,
+ * WFI idle with a 1 kHz SysTick wake-up (README.md "Drivers"). */
 #include "km_cortex_m.h"
 #include "km_hal_system.h"
 
@@ -13,16 +11,15 @@
 #include "g0_regs.h"
 #include "g0_vectors.h"
 
-/* HSI16 -> PLL (M=1, N=8: VCO 128 MHz, R=2) -> SYSCLK 64 MHz; AHB and APB
- * undivided (RM0444 §5.2.3, §5.4.4). Flash needs 2 wait states above 48 MHz
- * in range 1 (§3.3.4 table 12), set and read back before the switch. */
+/* HSI16 -> PLL -> SYSCLK 64 MHz (RM0444 §5.2.3, §5.4.4); 2 flash wait states
+ * (§3.3.4 table 12) set and read back before the switch. */
 static void prv_clock_64mhz(void)
 {
     FLASH_ACR = (FLASH_ACR & ~FLASH_ACR_LATENCY_MASK) | 2u | FLASH_ACR_PRFTEN | FLASH_ACR_ICEN;
     while ((FLASH_ACR & FLASH_ACR_LATENCY_MASK) != 2u) {
     }
 
-    RCC_CR |= RCC_CR_HSION; /* on after reset; made explicit */
+    RCC_CR |= RCC_CR_HSION;
     while ((RCC_CR & RCC_CR_HSIRDY) == 0u) {
     }
     RCC_PLLCFGR = RCC_PLLCFGR_SRC_HSI16 | (0u << RCC_PLLCFGR_M_SHIFT) | (8u << RCC_PLLCFGR_N_SHIFT) |
@@ -37,37 +34,27 @@ static void prv_clock_64mhz(void)
 
 #define WAKE_HZ 1000u
 
+/* Clock, GPIO clocks and the 1 kHz SysTick wake-up. */
 void km_hal_system_init(void)
 {
     prv_clock_64mhz();
     RCC_IOPENR |= RCC_IOPENR_GPIOA | RCC_IOPENR_GPIOB;
-    /* km_hal_idle() sleeps until the next interrupt; the bus may be silent
-     * and the ADC runs by DMA without interrupts, so SysTick guarantees one
-     * per millisecond and the main loop (control tick, watchdog kick) never
-     * sleeps longer than that. */
-    /* Lowest priority (system handlers reset to 0, the highest): the wake
-     * tick must never delay a bus byte's time stamp. */
+    /* Lowest priority: never delays a bus byte's time stamp. */
     SCB_SHPR3 = (SCB_SHPR3 & 0x00FFFFFFu) | (0xC0u << 24);
     SYST_RVR = BOARD_SYSCLK_HZ / WAKE_HZ - 1u;
     SYST_CVR = 0u;
     SYST_CSR = SYST_CSR_CLKSOURCE | SYST_CSR_TICKINT | SYST_CSR_ENABLE;
 }
 
-/* From RAM: it also fires while a flash erase stalls the flash (its fault
- * branch may stay in flash: it resets the MCU anyway). */
+/* Wakes the main loop and checks the stack guard; in RAM (runs during erases). */
 G0_RAMFUNC(SysTick_Handler) void SysTick_Handler(void)
 {
-    /* Waking the CPU from WFI is the main job. It also looks at a quarter
-     * of the stack guard band each millisecond (8 of 32 words): a stack
-     * that has reached it is within KM_STACK_GUARD bytes of running off
-     * SRAM, where the overflow fault would come with no room left to stack
-     * the HardFault frame (a lockup, ended only by the IWDG with the bridge
-     * still driving). Stopping here frees the bridge and records a FAULT. */
     if (!g0_stack_guard_intact()) {
         g0_fault_stop(G0_FAULT_STACK_GUARD, 0u, 0u);
     }
 }
 
+/* SYSRESETREQ. */
 _Noreturn void km_hal_system_reset(void)
 {
     __asm volatile("dsb" ::: "memory");
@@ -77,9 +64,7 @@ _Noreturn void km_hal_system_reset(void)
     }
 }
 
-/* IWDG on the ~32 kHz LSI (RM0444 §27.3): timeout = (RLR+1) * 4 * 2^PR / 32 kHz.
- * The smallest prescaler whose 12-bit reload covers the timeout gives the
- * finest resolution. LSI varies by tens of percent: callers leave margin. */
+/* IWDG (RM0444 §27.3): timeout = (RLR+1) * 4 * 2^PR / 32 kHz, smallest PR. */
 void km_hal_watchdog_start(uint32_t timeout_ms)
 {
     uint32_t pr = 0u;
@@ -97,33 +82,34 @@ void km_hal_watchdog_start(uint32_t timeout_ms)
     if (ticks == 0u) {
         ticks = 1u;
     }
-    IWDG_KR = IWDG_KEY_START; /* starts LSI and the counter (§27.3.2) */
+    IWDG_KR = IWDG_KEY_START; /* §27.3.2 */
     IWDG_KR = IWDG_KEY_UNLOCK;
     IWDG_PR = pr;
     IWDG_RLR = ticks - 1u;
-    while (IWDG_SR != 0u) { /* PVU/RVU: registers updated in the LSI domain */
+    while (IWDG_SR != 0u) { /* PVU/RVU */
     }
     IWDG_KR = IWDG_KEY_KICK;
 }
 
+/* Reloads the IWDG. */
 void km_hal_watchdog_kick(void)
 {
     IWDG_KR = IWDG_KEY_KICK;
 }
 
+/* Masks interrupts, returns the previous state. */
 uint32_t km_hal_irq_lock(void)
 {
     return km_cortex_irq_lock();
 }
 
+/* Restores the interrupt mask. */
 void km_hal_irq_restore(uint32_t state)
 {
     km_cortex_irq_restore(state);
 }
 
-/* The 96-bit unique ID (RM0444 §40.1) differs between parts; the free-running
- * µs counter adds boot-to-boot variation. Mixed with a multiply-xorshift
- * finaliser so every input bit reaches every output bit. */
+/* Multiply-xorshift finaliser: every input bit reaches every output bit. */
 static uint32_t prv_mix(uint32_t h)
 {
     h ^= h >> 16;
@@ -134,6 +120,7 @@ static uint32_t prv_mix(uint32_t h)
     return h;
 }
 
+/* Unique ID (RM0444 §40.1) and the µs counter, mixed. */
 uint32_t km_hal_entropy(void)
 {
     const volatile uint32_t *uid = (const volatile uint32_t *)(uintptr_t)UID_BASE_R;
@@ -144,6 +131,7 @@ uint32_t km_hal_entropy(void)
     return prv_mix(h ^ km_hal_time_now());
 }
 
+/* WFI. */
 void km_hal_idle(void)
 {
     km_cortex_wait_for_interrupt();
