@@ -1,27 +1,20 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Continuous scan of ADC_IN0..3 with 16x hardware oversampling, written by
- * DMA1 channel 1 in circular mode into s_samples (RM0444 §15.5, §15.9).
- *
- * Why continuous + DMA rather than a conversion per control tick: it costs no
- * CPU time and no interrupt, sensors_read() never waits, and it does not tie
- * the ADC to the control rate, which is the firmware's choice. Oversampling
- * averages noise; the board has an RC filter (corner well below 20 kHz) after
- * the shunt amplifier, so the PWM-chopped current reads as its average.
- * Timing: ADC clock PCLK/2 = 32 MHz, 160.5 + 12.5 cycles = 5.4 µs per sample,
- * x16 x4 channels = 0.35 ms per full set. */
+/* Continuous scan of ADC_IN0..3, 16x oversampled, by circular DMA1 channel 1
+ * into s_samples (RM0444 §15.5, §15.9); why and timing: README.md "Drivers". */
 #include "adc.h"
 
 #include "g0_gpio.h"
 
 static volatile uint16_t s_samples[ADC_CHANNELS];
 
+/* Busy wait, about 4 cycles per iteration at 64 MHz (before the timer runs). */
 static void prv_delay_us(uint32_t us)
 {
-    /* About 4 cycles per iteration at 64 MHz; only used before the timer. */
     for (volatile uint32_t i = 0u; i < us * 16u; i++) {
     }
 }
 
+/* Calibrates the ADC and starts the scan. */
 void km_adc_start(void)
 {
     for (uint32_t pin = 0u; pin < ADC_CHANNELS; pin++) {
@@ -30,8 +23,7 @@ void km_adc_start(void)
     RCC_APBENR2 |= RCC_APBENR2_ADC;
     RCC_AHBENR |= RCC_AHBENR_DMA1;
 
-    /* Clock mode only while ADEN = 0; then regulator start-up (20 µs) and
-     * self-calibration (§15.3.2, §15.3.3). */
+    /* CKMODE only while ADEN = 0; regulator 20 µs, calibration (§15.3.2, §15.3.3). */
     ADC_CFGR2 = ADC_CFGR2_CKMODE_PCLK2;
     ADC_CR = ADC_CR_ADVREGEN;
     prv_delay_us(20u);
@@ -43,8 +35,7 @@ void km_adc_start(void)
     ADC_CFGR1 = ADC_CFGR1_DMAEN | ADC_CFGR1_DMACFG | ADC_CFGR1_CONT | ADC_CFGR1_OVRMOD;
     ADC_CFGR2 = ADC_CFGR2_CKMODE_PCLK2 | ADC_CFGR2_OVSE | (3u << ADC_CFGR2_OVSR_SHIFT) | /* 16 samples */
                 (4u << ADC_CFGR2_OVSS_SHIFT); /* >> 4: back to 12 bits */
-    ADC_SMPR = ADC_SMPR_SMP1_160_5;           /* pot and NTC are high-impedance dividers */
-    /* DMAMUX channel 0 routes the ADC request to DMA1 channel 1. */
+    ADC_SMPR = ADC_SMPR_SMP1_160_5;           /* high-impedance dividers */
     DMAMUX_C0CR = DMAMUX_REQ_ADC;
     DMA1_CCR1 = 0u;
     DMA1_CPAR1 = (uint32_t)(uintptr_t)&ADC_DR;
@@ -56,8 +47,7 @@ void km_adc_start(void)
     ADC_CR |= ADC_CR_ADEN;
     while ((ADC_ISR & ADC_ISR_ADRDY) == 0u) {
     }
-    /* Channel selection is applied by the running ADC: wait for CCRDY
-     * before the first start (§15.3.7). Upward scan: index = channel. */
+    /* CCRDY before the first start (§15.3.7); upward scan: index = channel. */
     ADC_CHSELR = (1u << ADC_CH_POT) | (1u << ADC_CH_SHUNT) | (1u << ADC_CH_VSUPPLY) | (1u << ADC_CH_NTC);
     while ((ADC_ISR & ADC_ISR_CCRDY) == 0u) {
     }
@@ -65,10 +55,9 @@ void km_adc_start(void)
     ADC_CR |= ADC_CR_ADSTART;
 }
 
+/* Copies the latest set (may mix two scans 0.35 ms apart). */
 void km_adc_latest(uint16_t out[ADC_CHANNELS])
 {
-    /* Each halfword is written atomically by the DMA; a set may mix two
-     * consecutive scans 0.35 ms apart, which no consumer can tell. */
     for (uint32_t i = 0u; i < ADC_CHANNELS; i++) {
         out[i] = s_samples[i];
     }

@@ -4,6 +4,6 @@
 #define BOARD_CLOCK_H
 
 #define BOARD_SYSCLK_HZ 64000000u
-#define BOARD_PCLK_HZ 64000000u /* APB undivided: timers also see 64 MHz */
+#define BOARD_PCLK_HZ 64000000u /* APB undivided */
 
 #endif

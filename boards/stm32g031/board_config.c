@@ -1,11 +1,10 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Default product calibration: 270° pot over (almost) the full ADC range,
- * 50 mΩ shunt with a gain-20 amplifier (INA180A1-like: 1 V/A), a 100k/10k
- * supply divider and a 10 kΩ B3950 NTC under a 10 kΩ pull-up to VDDA. */
+/* Default calibration: 270° pot, 50 mΩ shunt x 20 (1 V/A), 100k/10k divider,
+ * 10 kΩ B3950 NTC under 10 kΩ to VDDA. */
 #include "board_config.h"
 
 const km_board_config_t km_board_config = {
-    .pot_raw_min = 205u, /* 5 % of range: pots rarely reach the rails */
+    .pot_raw_min = 205u, /* 5 % of range */
     .pot_raw_max = 3890u,
     .rail_margin = 16u,
     .vref_mv = 3300u,

@@ -1,7 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Product configuration of an STM32G031 servo: the calibration constants
- * that turn ADC counts into engineering units. One const instance per
- * product (board_config.c); factory calibration may later override it. */
+/* Calibration constants from ADC counts to units; one per product (board_config.c). */
 #ifndef BOARD_CONFIG_H
 #define BOARD_CONFIG_H
 
@@ -10,26 +8,24 @@
 #define KM_NTC_POINTS 20u
 
 typedef struct {
-    /* Potentiometer: raw counts (12 bit) at -135.0° and at +135.0°. Either
-     * order; a reversed pot just swaps them. */
+    /* Pot raw counts at -135.0° and +135.0° (either order). */
     uint16_t pot_raw_min;
     uint16_t pot_raw_max;
-    /* Readings this close to a rail mean a broken wiper or supply. */
+    /* Readings this close to a rail are a fault. */
     uint16_t rail_margin;
-    /* ADC reference (VDDA) in mV. */
+    /* VDDA, mV. */
     uint16_t vref_mv;
-    /* Current: shunt in milliohm and amplifier gain; the amplifier output at
-     * zero current in raw counts. */
+    /* Shunt mΩ, amplifier gain, zero-current raw reading. */
     uint16_t shunt_mohm;
     uint16_t shunt_gain;
     uint16_t shunt_offset_raw;
-    /* Supply divider (top + bottom) / bottom as a fraction. */
+    /* Supply divider (top + bottom) / bottom. */
     uint16_t vdiv_num;
     uint16_t vdiv_den;
-    /* NTC divider: raw counts at -40, -30 ... +150 °C (falling). */
+    /* NTC raw counts at -40, -30 ... +150 °C. */
     uint16_t ntc_raw[KM_NTC_POINTS];
-    int16_t ntc_first_c10; /* temperature of ntc_raw[0], 0.1 °C */
-    int16_t ntc_step_c10;  /* spacing of the table, 0.1 °C */
+    int16_t ntc_first_c10; /* 0.1 °C */
+    int16_t ntc_step_c10;  /* 0.1 °C */
 } km_board_config_t;
 
 extern const km_board_config_t km_board_config;

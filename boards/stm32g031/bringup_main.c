@@ -1,8 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Bring-up image for the STM32G031 board: initialises every driver and
- * echoes bus bytes back once the line has been quiet for 2 ms, so a USB-UART
- * on the servo bus checks clock, baud, half-duplex turnaround, the timer and
- * the interrupts. Motor stays coasting. The watchdog runs (500 ms). */
+/* STM32G031 bring-up image: echoes bus bytes after 2 ms of quiet (docs/bringup.md). */
 #include <stdbool.h>
 #include <stdint.h>
 

@@ -1,18 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* km_flash_t over the store pages at the end of the G031's single flash bank
- * (RM0444 §3.3): 2 KiB pages, 64-bit double-word programming with ECC.
- *
- * The G031 has one bank, and the code runs from it: while a program (~85 µs)
- * or a page erase (~22 ms, 40 ms max) is under way, every instruction fetch
- * and vector fetch from flash stalls the CPU. So everything from the write
- * that starts an operation to the end of its busy wait is one RAM function
- * (prv_run), and the interrupts that serve the bus (USART1, the answer
- * timer, SysTick) run from RAM through a RAM vector table: a byte that
- * arrives during an erase is received and stamped, and an answer that falls
- * due is sent, on time (docs/flash-busy.md; tools/check/image-check proves the
- * placement after every link). Interrupts are masked only around the
- * two-word write of one double word, which must reach the controller back
- * to back. */
+/* km_flash_t over the store pages of the G031's single flash bank (RM0444
+ * §3.3): 2 KiB pages, 64-bit double words with ECC. Start-and-wait runs in
+ * RAM (prv_run): docs/flash-busy.md. */
 #include "km_board.h"
 
 #include <stdbool.h>
@@ -27,24 +16,25 @@ extern const uint8_t __km_store_start[];
 extern const uint8_t __km_store_size[]; /* linker symbol: its address is the size */
 
 #define PROG_SIZE 8u
-/* Generous bound on BSY polling: an erase takes at most 40 ms (datasheet
- * DS12992 table "Flash memory characteristics"); the CPU mostly stalls. */
+/* BSY polling bound, well above a 40 ms erase (DS12992 table "Flash memory
+ * characteristics"). */
 #define BUSY_SPINS 2000000u
 
 static volatile bool s_ecc_nmi;
 
+/* Store region start (linker script). */
 static uint32_t prv_region_base(void)
 {
     return (uint32_t)(uintptr_t)__km_store_start;
 }
 
+/* Store region size. */
 static uint32_t prv_region_size(void)
 {
     return (uint32_t)(uintptr_t)__km_store_size;
 }
 
-/* Inlined into prv_begin (flash) and prv_run (RAM) alike: it only reads
- * FLASH_SR, a register, which stays readable while the array is busy. */
+/* Polls BSY1/CFGBSY; always inlined, so it runs in RAM inside prv_run. */
 static inline __attribute__((always_inline)) bool prv_wait_idle(void)
 {
     for (uint32_t i = 0u; i < BUSY_SPINS; i++) {
@@ -55,11 +45,8 @@ static inline __attribute__((always_inline)) bool prv_wait_idle(void)
     return false;
 }
 
-/* Starts one operation and waits for its end, all from RAM (see the top of
- * the file). Erase (dst == 0): CR = cr, then STRT (§3.3.7). Program: CR =
- * cr (PG), then the two words, the second of which starts it (§3.3.8);
- * masked between them so no interrupt separates the pair. Returns whether
- * BSY cleared within the bound. */
+/* Starts one operation and waits, from RAM. Erase (dst == 0): STRT (§3.3.7);
+ * program: the two words back to back, masked (§3.3.8). False: still busy. */
 G0_RAMFUNC(prv_run) static bool prv_run(uint32_t cr, volatile uint32_t *dst, uint32_t w0, uint32_t w1)
 {
     FLASH_CR = cr;
@@ -88,8 +75,7 @@ static bool prv_begin(void)
     return (FLASH_CR & FLASH_CR_LOCK) == 0u;
 }
 
-/* After prv_run: check EOP and the error flags, drop the operation bits and
- * lock again. */
+/* Checks EOP and the error flags, then locks. */
 static bool prv_end(bool idle)
 {
     uint32_t sr = FLASH_SR;
@@ -98,6 +84,7 @@ static bool prv_end(bool idle)
     return idle && (sr & FLASH_SR_ERRORS) == 0u && (sr & FLASH_SR_EOP) != 0u;
 }
 
+/* Erases one store page. */
 static km_flash_result_t prv_erase(void *ctx, uint32_t page)
 {
     (void)ctx;
@@ -109,18 +96,20 @@ static km_flash_result_t prv_erase(void *ctx, uint32_t page)
         FLASH_CR = FLASH_CR_LOCK;
         return KM_FLASH_ERR_ERASE;
     }
-    /* §3.3.7 page erase: PER + PNB, then STRT. */
+    /* §3.3.7 */
     bool idle =
         prv_run(FLASH_CR_EOPIE | FLASH_CR_PER | ((pnb << FLASH_CR_PNB_SHIFT) & FLASH_CR_PNB_MASK), 0, 0u, 0u);
     return prv_end(idle) ? KM_FLASH_OK : KM_FLASH_ERR_ERASE;
 }
 
+/* Whether [offset, offset + len) lies in the store region. */
 static bool prv_range_ok(uint32_t offset, uint32_t len)
 {
     uint32_t size = prv_region_size();
     return offset <= size && len <= size - offset;
 }
 
+/* Programs whole double words onto erased cells, read back. */
 static km_flash_result_t prv_program(void *ctx, uint32_t offset, const void *data, uint32_t len)
 {
     (void)ctx;
@@ -132,13 +121,7 @@ static km_flash_result_t prv_program(void *ctx, uint32_t offset, const void *dat
         volatile uint32_t *dst = (volatile uint32_t *)(uintptr_t)(prv_region_base() + offset + done);
         uint32_t word[2];
         memcpy(word, src + done, sizeof word);
-        /* Only onto erased cells (NOR rule of the contract; the controller
-         * would also refuse with PROGERR). This check reads content, so it
-         * cannot see a double word whose program a power cut started with
-         * no data bit moved yet: the store never asks for one (it never
-         * programs a cell a past session may have touched, see
-         * docs/store.md). A double ECC error on the read (ECC bits partly
-         * written) does show such a word: refuse it too. */
+        /* Erased and ECC-clean only (README.md "Drivers", Flash). */
         FLASH_ECCR = FLASH_ECCR_ECCC | FLASH_ECCR_ECCD;
         s_ecc_nmi = false;
         const bool ones = dst[0] == 0xFFFFFFFFu && dst[1] == 0xFFFFFFFFu;
@@ -151,8 +134,6 @@ static km_flash_result_t prv_program(void *ctx, uint32_t offset, const void *dat
             return KM_FLASH_ERR_PROGRAM;
         }
         bool idle = prv_run(FLASH_CR_EOPIE | FLASH_CR_PG, dst, word[0], word[1]);
-        /* Read back: a cell that does not hold what we wrote (supply dip,
-         * worn page) is a program error, not a silent corruption. */
         if (!prv_end(idle) || dst[0] != word[0] || dst[1] != word[1]) {
             return KM_FLASH_ERR_PROGRAM;
         }
@@ -160,9 +141,7 @@ static km_flash_result_t prv_program(void *ctx, uint32_t offset, const void *dat
     return KM_FLASH_OK;
 }
 
-/* A double ECC error on a flash read raises the NMI on the G0 (§3.3.10). The
- * NMI records it and clears ECCD, so the read below can report the cell as
- * untrustworthy instead of the CPU hanging in a default handler. */
+/* Records and clears a double ECC error (§3.3.10); other NMIs park. */
 void NMI_Handler(void)
 {
     if ((FLASH_ECCR & FLASH_ECCR_ECCD) != 0u) {
@@ -170,10 +149,11 @@ void NMI_Handler(void)
         s_ecc_nmi = true;
         return;
     }
-    for (;;) { /* any other NMI source: park; the watchdog resets */
+    for (;;) { /* the watchdog resets */
     }
 }
 
+/* Reads store bytes; KM_FLASH_ERR_ECC on a double ECC error. */
 static km_flash_result_t prv_read(void *ctx, uint32_t offset, void *data, uint32_t len)
 {
     (void)ctx;
@@ -204,6 +184,7 @@ static const km_flash_t s_flash_template = {
 
 static km_flash_t s_flash;
 
+/* The store's flash, page count from the linker symbols. */
 const km_flash_t *km_board_flash(void)
 {
     if (s_flash.erase == 0) {

@@ -1,7 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Cortex-M0+ core registers this board touches (SCB, NVIC), from the ARMv6-M
- * Architecture Reference Manual (B3.2, B3.4) as summarised in PM0223. Only
- * what the board uses; no vendor headers. */
+/* Cortex-M0+ core registers the board uses (ARMv6-M ARM B3.2, B3.4; PM0223). */
 #ifndef G0_CORE_H
 #define G0_CORE_H
 
@@ -14,12 +12,10 @@
 #define SCB_AIRCR_VECTKEY (0x05FAu << 16)
 #define SCB_AIRCR_SYSRESETREQ (1u << 2)
 #define SCB_SHPR3 G0_REG(0xE000ED20u) /* bits 31:24 SysTick priority */
-#define SCB_VTOR G0_REG(0xE000ED08u)  /* vector table offset (M0+ has it, M0 does not) */
+#define SCB_VTOR G0_REG(0xE000ED08u)  /* M0+ only */
 
-/* A function that must run from RAM because it runs while flash is busy
- * (docs/flash-busy.md): its own section .ramfunc.<name>, which the linker
- * script places in RAM and --gc-sections can still drop. noinline: a RAM
- * function inlined into a flash caller would run from flash. */
+/* Runs from RAM while flash is busy (docs/flash-busy.md); noinline, or it
+ * would run inlined from flash. */
 #define G0_RAMFUNC(name) __attribute__((section(".ramfunc." #name), noinline))
 
 /* SysTick (ARMv6-M B3.3): 24-bit down counter on the core clock. */
@@ -30,13 +26,13 @@
 #define SYST_CSR_TICKINT (1u << 1)
 #define SYST_CSR_CLKSOURCE (1u << 2) /* processor clock */
 
-/* NVIC (ARMv6-M B3.4.2): 32 interrupts, 2 priority bits per 8-bit field
- * (bits 7:6), priority registers word-access only on M0+. */
+/* NVIC (ARMv6-M B3.4.2): 2 priority bits (7:6), IPR word access only. */
 #define NVIC_ISER G0_REG(0xE000E100u)
 #define NVIC_ICER G0_REG(0xE000E180u)
 #define NVIC_ICPR G0_REG(0xE000E280u)
 #define NVIC_IPR(n) G0_REG(0xE000E400u + 4u * (uint32_t)(n))
 
+/* Sets the priority, clears pending, enables. */
 static inline void g0_nvic_enable(uint32_t irq, uint32_t prio)
 {
     uint32_t shift = (irq & 3u) * 8u;
@@ -48,12 +44,13 @@ static inline void g0_nvic_enable(uint32_t irq, uint32_t prio)
     NVIC_ISER = 1u << irq;
 }
 
+/* Disables an interrupt. */
 static inline void g0_nvic_disable(uint32_t irq)
 {
     NVIC_ICER = 1u << irq;
 }
 
-/* STM32G031 vector positions (RM0444 §12.3 table 61, "Vector table"). */
+/* STM32G031 vector positions (RM0444 §12.3 table 61). */
 #define G0_IRQ_TIM2 15u
 #define G0_IRQ_USART1 27u
 

@@ -1,7 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* STM32G031 peripheral registers this board touches, written from RM0444
- * (STM32G0x1 reference manual) rev. 5; each block names its RM section.
- * Only the registers and bits the board uses. No vendor headers. */
+/* STM32G031 registers and bits the board uses, from RM0444 rev. 5 (no vendor
+ * headers); each block names its section. */
 /* clang-format off: register maps aligned by hand, one address per line */
 #ifndef G0_REGS_H
 #define G0_REGS_H
@@ -77,10 +76,8 @@
 #define RCC_APBENR1_TIM3 (1u << 1)
 #define RCC_APBENR2_USART1 (1u << 14) /* §5.4.16 */
 #define RCC_APBENR2_ADC (1u << 20)
-/* RCC_CSR (§5.4, offset 0x60) reset flags: sticky across resets until RMVF
- * is written, so several accumulate unless each boot clears them. Every
- * internal reset also drives NRST low (§5.1.2 "System reset"), so PINRSTF
- * comes with all of them. */
+/* RCC_CSR (§5.4) reset flags: sticky until RMVF; every internal reset also
+ * sets PINRSTF (§5.1.2). */
 #define RCC_CSR_RMVF (1u << 23)     /* write 1: clear every flag below */
 #define RCC_CSR_OBLRSTF (1u << 25)  /* option byte loader (OBL_LAUNCH) */
 #define RCC_CSR_PINRSTF (1u << 26)  /* NRST low (and every internal reset) */

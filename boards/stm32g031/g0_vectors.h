@@ -1,7 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Names of the exception and interrupt handlers in the vector table
- * (startup.c). Drivers include this so their handler definitions are checked
- * against the same declarations the table uses. */
+/* Handler declarations shared by the vector table (startup.c) and the drivers. */
 #ifndef G0_VECTORS_H
 #define G0_VECTORS_H
 

@@ -1,6 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Board-specific entry points of the STM32G031 board beyond hal/: the
- * flash region of the user-data store, the bridge's drive direction. */
+/* STM32G031 entry points beyond hal/. */
 #ifndef KM_BOARD_H
 #define KM_BOARD_H
 
@@ -8,11 +7,10 @@
 
 #include "km_hal_flash.h"
 
-/* The user-data store region (the last pages of flash, see stm32g031.ld). */
+/* The user-data store's flash (stm32g031.ld). */
 const km_flash_t *km_board_flash(void);
 
-/* +1 / -1 while driving forward / backward, 0 when coasting or braking. The
- * shunt only sees magnitude; this gives the current its sign. */
+/* +1 / -1 driving forward / backward, else 0: the current's sign. */
 int8_t km_board_motor_direction(void);
 
 #endif

@@ -1,10 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* km_hal_time on TIM2, the G031's 32-bit timer (RM0444 §22): prescaler 63
- * turns the 64 MHz timer clock into a 1 MHz free-running count that wraps at
- * 2^32 like the contract's tick. Compare channel 1 is the one-shot timer.
- * Its interrupt and the tick read (the UART interrupt stamps each byte
- * with it) run from RAM: the answer goes out on time while flash is busy
- * (docs/flash-busy.md). */
+/* km_hal_time on TIM2 (RM0444 §22): 1 MHz free-running 32-bit count, one-shot
+ * on compare channel 1; ISR and tick read in RAM (docs/flash-busy.md). */
 #include "km_hal_time.h"
 
 #include "board_clock.h"
@@ -19,48 +15,51 @@
 static km_timer_handler_t s_handler;
 static void *s_ctx;
 
+/* 1 MHz. */
 uint32_t km_hal_time_tick_hz(void)
 {
     return TICK_HZ;
 }
 
+/* Starts TIM2 at 1 MHz. */
 void km_hal_time_init(void)
 {
     RCC_APBENR1 |= RCC_APBENR1_TIM2;
     TIM_CR1(TIM2_BASE_R) = 0u;
     TIM_PSC(TIM2_BASE_R) = BOARD_PCLK_HZ / TICK_HZ - 1u;
     TIM_ARR(TIM2_BASE_R) = 0xFFFFFFFFu;
-    TIM_CCMR1(TIM2_BASE_R) = 0u;       /* channel 1: frozen output compare, flag only */
-    TIM_EGR(TIM2_BASE_R) = TIM_EGR_UG; /* load PSC now, not at the first wrap */
+    TIM_CCMR1(TIM2_BASE_R) = 0u;       /* frozen: flag only */
+    TIM_EGR(TIM2_BASE_R) = TIM_EGR_UG; /* load PSC now */
     TIM_SR(TIM2_BASE_R) = 0u;
     TIM_DIER(TIM2_BASE_R) = 0u;
     TIM_CR1(TIM2_BASE_R) = TIM_CR1_CEN;
     g0_nvic_enable(G0_IRQ_TIM2, 1u);
 }
 
+/* The µs count. */
 G0_RAMFUNC(km_hal_time_now) uint32_t km_hal_time_now(void)
 {
     return TIM_CNT(TIM2_BASE_R);
 }
 
+/* Arms the one-shot; locked, the UART interrupt may re-arm. */
 void km_hal_timer_at(uint32_t at, km_timer_handler_t handler, void *ctx)
 {
-    /* Locked: the UART interrupt may re-arm while TIM2's handler runs. */
     uint32_t key = km_hal_irq_lock();
     TIM_DIER(TIM2_BASE_R) &= ~TIM_DIER_CC1IE;
     s_handler = handler;
     s_ctx = ctx;
     TIM_CCR1(TIM2_BASE_R) = at;
-    TIM_SR(TIM2_BASE_R) = ~TIM_SR_CC1IF; /* rc_w0: writing 0 clears only CC1IF */
+    TIM_SR(TIM2_BASE_R) = ~TIM_SR_CC1IF; /* rc_w0 */
     TIM_DIER(TIM2_BASE_R) |= TIM_DIER_CC1IE;
-    /* A match only happens when CNT equals CCR1: if `at` is already past (or
-     * passed while we wrote it) force the event instead of waiting a wrap. */
+    /* Already past: force the event rather than wait for a wrap. */
     if ((int32_t)(at - km_hal_time_now()) <= 0) {
         TIM_EGR(TIM2_BASE_R) = TIM_EGR_CC1G;
     }
     km_hal_irq_restore(key);
 }
 
+/* Disarms the one-shot. */
 void km_hal_timer_cancel(void)
 {
     uint32_t key = km_hal_irq_lock();
@@ -70,10 +69,9 @@ void km_hal_timer_cancel(void)
     km_hal_irq_restore(key);
 }
 
+/* Takes and disarms under the lock, calls outside it (so it may re-arm). */
 G0_RAMFUNC(TIM2_IRQHandler) void TIM2_IRQHandler(void)
 {
-    /* One shot: take and disarm under the lock, call outside it, so the
-     * handler (or the UART interrupt) may re-arm. */
     uint32_t key = km_cortex_irq_lock();
     km_timer_handler_t handler = 0;
     void *ctx = s_ctx;
