@@ -29,6 +29,7 @@ static void prv_rebase_axis_speeds(km_control_t *c, const km_axis_t *was, const 
         c->fast.pos[k] = km_axis_map(was, now, c->fast.pos[k]);
     }
     c->fast.ddps *= sign;
+    km_speed_obs_reset(&c->obs, km_axis_map(was, now, c->obs.base), c->fast.ddps);
     c->speed.last_position = km_axis_map(was, now, c->speed.last_position);
     c->speed.acc *= sign;
     c->speed.dps *= sign;
@@ -57,7 +58,7 @@ static void prv_rebase_axis(km_control_t *c, const km_axis_t *now)
         c->servo.running = moving;
         c->servo.reset_loop = false;
         c->loop.i_acc *= sign;
-        c->loop.last_sp_ddps = 0;
+        c->loop.last_sp_ups = 0;
     }
 }
 
@@ -232,11 +233,13 @@ static int32_t prv_hold_position(km_control_t *c, int32_t pos)
 /* 1. sensing: the position `pos` (master's frame), its speeds, the clock.
  * Returns the fast speed (0.1 deg/s) the loops damp with; *speed_dps the
  * 20 ms window's (0x47). */
-static int32_t prv_sense(km_control_t *c, int32_t pos, uint32_t dt_us, int32_t *speed_dps)
+static int32_t prv_sense(km_control_t *c, int32_t raw, int32_t pos, uint32_t dt_us, int32_t *speed_dps)
 {
     if (!c->have_position) {
         km_speed_fast_init(&c->fast, pos);
+        km_speed_obs_reset(&c->obs, raw, 0);
     }
+    c->obs_ddps = km_speed_obs_step(&c->obs, raw, dt_us);
     *speed_dps = km_speed_window_step(&c->speed, pos, dt_us);
     const int32_t speed_ddps = c->have_position ? km_speed_fast_step(&c->fast, pos, dt_us) : 0;
     c->position = pos;
@@ -326,15 +329,19 @@ static void prv_drive_servo(km_control_t *c, const km_control_params_t *p, int32
         if (sm.reset_loop) {
             km_position_loop_init(&c->loop);
         }
+        const bool stream = c->servo.streaming && !c->servo.profile.done;
         const km_position_loop_in_t li = {
-            .setpoint_u = sm.setpoint_u,
+            .setpoint_u = stream ? sm.setpoint_u - km_speed_obs_frac_u(&c->obs) : sm.setpoint_u,
             .setpoint_ddps = sm.setpoint_ddps,
-            .position = km_pos_diff(pos, c->servo.profile.origin), /* from the set-point's origin */
-            .speed_ddps = speed_ddps,
+            .setpoint_sub = stream ? c->servo.profile.vel - sm.setpoint_ddps * 1000 : 0,
+            .position = km_pos_diff(stream ? c->obs.base : pos,
+                                    c->servo.profile.origin), /* from the set-point's origin */
+            .speed_ddps = stream ? c->obs_ddps : speed_ddps,
             .pwm_max = limit,
             /* not under a protection's hold or a closing current limit */
             .integrate = sm.holding && c->action == KM_PROT_ACT_NONE && c->ilim.cap >= KM_CURRENT_LIMIT_OPEN,
             .still = c->hold.on && c->action == KM_PROT_ACT_NONE,
+            .stream = stream,
         };
         pwm = prv_speed_governor(p, km_position_loop_step(&c->loop, &p->gains, &li, dt_us), speed_ddps);
     }
@@ -384,9 +391,10 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
                      km_live_t *live, km_bridge_t *bridge)
 {
     prv_follow_axis(c, p);
-    const int32_t pos = prv_hold_position(c, prv_position(c, in));
+    const int32_t raw = prv_position(c, in);
+    const int32_t pos = prv_hold_position(c, raw);
     int32_t speed_dps;
-    const int32_t speed_ddps = prv_sense(c, pos, dt_us, &speed_dps);
+    const int32_t speed_ddps = prv_sense(c, raw, pos, dt_us, &speed_dps);
     const bool was_acting = c->action != KM_PROT_ACT_NONE;
     const uint8_t hw_found = prv_supervise(c, in, p, pos, dt_us, live);
     const int32_t limit = prv_limit(c, in, p);

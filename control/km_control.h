@@ -45,6 +45,8 @@ typedef struct {
     km_position_loop_t loop;
     km_speed_window_t speed; /* 0x47 */
     km_speed_fast_t fast;    /* the loop's damping input */
+    km_speed_obs_t obs;      /* position and speed between counts (a 0x68 stream's loop input) */
+    int32_t obs_ddps;        /* its speed this tick */
     km_hold_filter_t hold;   /* the position while holding still */
     km_current_limit_t ilim; /* 0x5C / 0x14 */
     km_protect_t prot;       /* the protection supervisor */

@@ -14,7 +14,7 @@ void km_position_loop_init(km_position_loop_t *l)
     l->i_acc = 0;
     l->still_ms = 0;
     l->rest_pos = 0;
-    l->last_sp_ddps = 0;
+    l->last_sp_ups = 0;
 }
 
 /* The integrator gain while holding still, or -1 when it waits this tick. */
@@ -97,25 +97,30 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     int32_t e_u = prv_clamp(sp_u - pos_u, -2000000, 2000000);
     const int32_t vs = prv_clamp(in->setpoint_ddps, -20000, 20000);
     int32_t ev = prv_clamp(vs - prv_clamp(in->speed_ddps, -20000, 20000), -20000, 20000);
-    int32_t kp = (int32_t)g->kp_q8;
+    int32_t kp = (int32_t)g->kp_q8, kd = (int32_t)g->kd_q8;
     bool in_band = false;
     if (in->still) {
         kp = prv_hold_terms(l, g, in, &e_u, &ev, dt_us, &in_band);
     } else {
         l->still_ms = 0;
     }
+    if (in->stream) {
+        kp >>= KM_STREAM_KP_SHIFT;
+        kd >>= KM_STREAM_KD_SHIFT;
+    }
     /* kp: PWM per 0.1 deg Q8 */
     int32_t out = km_sdiv2560(kp * km_sdiv100(e_u));
-    out += km_sdiv2560((int32_t)g->kd_q8 * ev); /* kd: PWM per deg/s Q8, ev 0.1 deg/s */
-    /* acceleration feedforward: tau x dv/dt as a speed, 0.1 deg/s */
-    const int32_t dvs = prv_clamp(vs - l->last_sp_ddps, -20000, 20000);
+    out += km_sdiv2560(kd * ev); /* kd: PWM per deg/s Q8, ev 0.1 deg/s */
+    /* acceleration feedforward: tau x dv/dt as a speed, 0.1 deg/s, from the speed in 0.001 x 0.1 deg/s */
+    const int32_t vs_u = vs * 1000 + prv_clamp(in->setpoint_sub, -999, 999);
+    const int32_t dvs_u = prv_clamp(vs_u - l->last_sp_ups, -2000000, 2000000);
     const int32_t tau = g->tau_ms > 1000u ? 1000 : (int32_t)g->tau_ms;
-    int32_t va = dvs * tau; /* over dt in ms, at least 1 */
+    int32_t va = km_sdiv1000(dvs_u * tau); /* over dt in ms, at least 1 */
     if (dt_us >= 2000u) {
         va /= (int32_t)km_udiv1000(dt_us);
     }
     va = prv_clamp(va, -20000, 20000);
-    l->last_sp_ddps = vs;
+    l->last_sp_ups = vs_u;
     out += km_sdiv2560((int32_t)g->kv_q8 * prv_clamp(vs + va, -20000, 20000)); /* kv: PWM per deg/s Q8 */
     if (vs != 0) {
         out += vs > 0 ? (int32_t)g->friction_pwm : -(int32_t)g->friction_pwm;

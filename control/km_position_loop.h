@@ -15,21 +15,27 @@
 #define KM_HOLD_SETTLED_MS 200 /* held position unchanged this long: kp_hold */
 #define KM_HOLD_PUSH_DDEG 2    /* pushed this far from rest: ki_hold */
 
+/* kp and kd shifted down while a 0x68 stream runs (docs/tuning.md "0x68 streams"). */
+#define KM_STREAM_KP_SHIFT 1
+#define KM_STREAM_KD_SHIFT 3
+
 typedef struct {
-    int32_t i_acc;        /* integrator, PWM x 256000 */
-    int32_t last_sp_ddps; /* set-point speed of the last tick, for its acceleration */
-    int32_t still_ms;     /* ticks the hold has lasted, up to KM_HOLD_SETTLED_MS */
-    int32_t rest_pos;     /* where the shaft rested when the hold settled, 0.1 deg */
+    int32_t i_acc;       /* integrator, PWM x 256000 */
+    int32_t last_sp_ups; /* set-point speed of the last tick (0.001 x 0.1 deg/s), for its acceleration */
+    int32_t still_ms;    /* ticks the hold has lasted, up to KM_HOLD_SETTLED_MS */
+    int32_t rest_pos;    /* where the shaft rested when the hold settled, 0.1 deg */
 } km_position_loop_t;
 
 typedef struct {
     int32_t setpoint_u;    /* profile set-point, 0.001 x 0.1 deg from its origin (km_profile.h) */
     int32_t setpoint_ddps; /* profile speed, 0.1 deg/s */
+    int32_t setpoint_sub;  /* and its part below 0.1 deg/s, 0.001 x 0.1 deg/s (-999..999) */
     int32_t position;      /* measured, 0.1 deg from the same origin */
     int32_t speed_ddps;    /* measured, 0.1 deg/s */
     int32_t pwm_max;       /* output bound, 0..1000 */
     bool integrate;        /* the integrator runs (holding: the set-point is at rest) */
     bool still;            /* the move has ended: the hold band and kp_hold apply */
+    bool stream;           /* a 0x68 stream runs: kp and kd lowered (KM_STREAM_KP_SHIFT, _KD_) */
 } km_position_loop_in_t;
 
 void km_position_loop_init(km_position_loop_t *l);

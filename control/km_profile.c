@@ -290,6 +290,21 @@ static int32_t prv_stream_periods(const km_profile_t *p, int32_t d)
     return n < 1 ? 1 : (n > 8 ? 8 : n);
 }
 
+/* The stream's clock (phase and period) on a target `n` periods after the
+ * previous one: a least-squares line through the arrivals
+ * (docs/control-design.md "Streams"). */
+static void prv_stream_clock(km_profile_t *p, int32_t n)
+{
+    const int32_t late = p->s_since - n * p->s_period;
+    const int32_t k = p->s_frames, kk = (k + 1) * (k + 2);
+    const int32_t q = k < KM_PROFILE_STREAM_FRAMES ? 1000000 : p->s_period / 4;
+    const int32_t lp = late > q ? q : (late < -q ? -q : late);
+    p->s_since = late - late * (2 * (2 * k + 1)) / kk; /* alpha = 2(2k+1)/((k+1)(k+2)) */
+    p->s_period += lp * 6 / (kk * n);                  /* beta = 6/((k+1)(k+2)) */
+    p->s_period = p->s_period < 1000 ? 1000 : p->s_period;
+    p->s_frames = k < KM_PROFILE_STREAM_FRAMES ? k + 1 : k;
+}
+
 void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_us, int32_t vlimit_ups,
                        int32_t accel)
 {
@@ -299,18 +314,11 @@ void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_u
     if (p->s_period <= 0) {
         p->s_period = iv;
         p->s_since = 0;
-        p->s_frames = 0;
+        p->s_frames = 2; /* two arrivals fitted: this one and the move's */
         p->s_step = 0;
     } else {
         n = prv_stream_periods(p, tgt - p->target);
-        const int32_t late = p->s_since - n * p->s_period;
-        /* the filtered period (docs/control-design.md "Streams") */
-        int32_t each = iv / n;
-        const int32_t q = p->s_period / 4;
-        each = each < p->s_period - q ? p->s_period - q : (each > p->s_period + q ? p->s_period + q : each);
-        p->s_period += (each - p->s_period) / (p->s_frames + 2);
-        p->s_frames = p->s_frames < 62 ? p->s_frames + 1 : 62;
-        p->s_since = late - late / 8;
+        prv_stream_clock(p, n);
     }
     p->vmax = vlimit_ups > 0 ? (vlimit_ups < VMAX_MAX ? vlimit_ups : VMAX_MAX) : 1;
     p->accel = accel > 0 ? (accel < ACCEL_MAX ? accel : ACCEL_MAX) : 1;
@@ -319,6 +327,10 @@ void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_u
     p->s_lag = 2 * p->s_period +
                (p->s_period / 2 > KM_PROFILE_STREAM_SLACK_US ? p->s_period / 2 : KM_PROFILE_STREAM_SLACK_US);
     p->target = tgt;
+    if (!p->stream) {
+        p->s_vr = p->vel;
+        p->s_vf = p->vel;
+    }
     p->stream = true;
     p->done = false;
 }
@@ -373,14 +385,31 @@ static int32_t prv_dv(km_profile_t *p, uint32_t dt_us)
     return dvq;
 }
 
+/* One step of a stream speed's low pass from `v` toward `to` (exactly there once within a step). */
+static int32_t prv_smooth(int32_t v, int32_t to)
+{
+    const int32_t d = to - v, n = 1 << KM_PROFILE_STREAM_SMOOTH_SHIFT;
+    return v + (d >= n || d <= -n ? d / n : d);
+}
+
 /* A stream piece: follow the reference s_lag behind the newest target, or
  * brake onto it once no newer target came. */
 static void prv_step_stream(km_profile_t *p, uint32_t dt_us)
 {
     const int32_t ahead = p->s_lag - p->s_since; /* us the reference is behind the target */
     if (ahead <= 0) {
+        const int32_t left = p->target - p->pos;
+        if (left == 0 || (left > 0) != (p->vel > 0)) { /* there, or past it */
+            p->pos = p->target;
+            p->pos_rem = 0;
+            p->vel = 0;
+            p->vel_rem = 0;
+            p->done = true;
+            return;
+        }
         p->stream = false;
-        p->accel = p->accel < ACCEL_MAX / 8 ? p->accel * 8 : ACCEL_MAX;
+        p->accel = p->accel < ACCEL_MAX / KM_PROFILE_STREAM_ACCEL_DIV ? p->accel * KM_PROFILE_STREAM_ACCEL_DIV
+                                                                      : ACCEL_MAX;
         p->vsq_hi = km_umulhi((uint32_t)p->vmax, (uint32_t)p->vmax);
         p->vsq_lo = (uint32_t)p->vmax * (uint32_t)p->vmax;
         return;
@@ -390,14 +419,24 @@ static void prv_step_stream(km_profile_t *p, uint32_t dt_us)
     int32_t err = ref - p->pos;
     const int32_t emax = p->vmax / 32 + 1;
     err = err > emax ? emax : (err < -emax ? -emax : err);
-    int32_t want = vff + err * 32;
+    /* 1/128 ms of the distance within KM_PROFILE_STREAM_NEAR_U, 1/64 ms beyond */
+    const int32_t near = KM_PROFILE_STREAM_NEAR_U;
+    int32_t corr = err * 8;
+    if (err > near) {
+        corr = near * 8 + (err - near) * 16;
+    } else if (err < -near) {
+        corr = -near * 8 + (err + near) * 16;
+    }
+    int32_t want = vff + corr;
     want = want > p->vmax ? p->vmax : (want < -p->vmax ? -p->vmax : want);
     const int32_t dv = prv_dv(p, dt_us);
-    if (p->vel < want) {
-        p->vel = p->vel + dv < want ? p->vel + dv : want;
-    } else if (p->vel > want) {
-        p->vel = p->vel - dv > want ? p->vel - dv : want;
+    if (p->s_vr < want) {
+        p->s_vr = p->s_vr + dv < want ? p->s_vr + dv : want;
+    } else if (p->s_vr > want) {
+        p->s_vr = p->s_vr - dv > want ? p->s_vr - dv : want;
     }
+    p->s_vf = prv_smooth(p->s_vf, p->s_vr);
+    p->vel = prv_smooth(p->vel, p->s_vf);
     (void)prv_advance(p, dt_us);
     const int32_t left = p->target - p->pos;
     if (left == 0 && p->vel == 0) {

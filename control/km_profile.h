@@ -31,8 +31,10 @@ typedef struct {
     int32_t s_period; /* stream: the filtered frame period, us (0 = none yet) */
     int32_t s_since;  /* stream: us since the filtered arrival of the newest target */
     int32_t s_lag;    /* stream: how far behind the newest target the set-point runs, us */
-    int32_t s_frames; /* stream: intervals averaged into s_period (at most 62) */
+    int32_t s_frames; /* stream: frames fitted into the clock (2..KM_PROFILE_STREAM_FRAMES) */
     int32_t s_step;   /* stream: the targets' step per period, u */
+    int32_t s_vr;     /* stream: the speed the set-point heads for, rate-limited, u/s */
+    int32_t s_vf;     /* stream: s_vr through the first of two low passes (vel the second), u/s */
     bool stream;      /* following a stream of targets (0x68) */
     bool done;        /* at the target, at rest */
 } km_profile_t;
@@ -46,7 +48,13 @@ void km_profile_move(km_profile_t *p, int32_t target_ddeg, int32_t vmax_ups, int
 /* Move to target in `time_ms` (> 0), no faster than `vlimit_ups`. */
 void km_profile_move_time(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, int32_t vlimit_ups);
 
-#define KM_PROFILE_STREAM_SLACK_US 8000 /* the reference runs 2 periods + max(period / 2, this) behind */
+/* 0x68 stream constants (docs/control-design.md "Streams"): speed low passes 1/2^SMOOTH_SHIFT a
+ * tick, NEAR_U (u) corrected at 1/128 ms, FRAMES fitted arrivals, speed change at accel / ACCEL_DIV. */
+#define KM_PROFILE_STREAM_SMOOTH_SHIFT 4
+#define KM_PROFILE_STREAM_NEAR_U 5000
+#define KM_PROFILE_STREAM_FRAMES 30
+#define KM_PROFILE_STREAM_ACCEL_DIV 2
+#define KM_PROFILE_STREAM_SLACK_US 12000 /* the reference runs 2 periods + max(period / 2, this) behind */
 
 /* A move in time from the profile's current speed (a retarget or a
  * reversal), at rest on the target after `time_ms` when the limits allow. */

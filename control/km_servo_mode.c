@@ -122,7 +122,7 @@ static void prv_plan(km_servo_mode_t *m, const km_move_t *mv, const km_control_p
     default: /* KM_MOVE_STREAM */
         if (was_on && m->streaming && m->stream_us <= KM_STREAM_GAP_US) {
             km_profile_stream(&m->profile, target, m->stream_us, vlim,
-                              prv_accel(p) / 8); /* braking at the end: x 8 */
+                              prv_accel(p) / KM_PROFILE_STREAM_ACCEL_DIV);
         } else {
             km_profile_move(&m->profile, target, vlim, prv_accel(p)); /* no rate to pace by yet: fastest */
         }

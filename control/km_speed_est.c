@@ -108,3 +108,42 @@ int32_t km_hold_filter_step(km_hold_filter_t *h, int32_t position)
     }
     return h->out;
 }
+
+void km_speed_obs_reset(km_speed_obs_t *o, int32_t position, int32_t speed_ddps)
+{
+    o->base = position;
+    o->frac = 0;
+    /* 0.1 deg/s -> Q16 count per ms: x 65536 / 1000 */
+    const int32_t v = speed_ddps > 16000 ? 16000 : (speed_ddps < -16000 ? -16000 : speed_ddps);
+    o->vel = km_sdiv1000(v * 65536);
+}
+
+int32_t km_speed_obs_step(km_speed_obs_t *o, int32_t position, uint32_t dt_us)
+{
+    const int32_t vmax = 1 << 20; /* 16 counts per ms (1,600 deg/s): keeps vel x dt in 32 bits */
+    o->vel = o->vel > vmax ? vmax : (o->vel < -vmax ? -vmax : o->vel);
+    if (dt_us == 1000u) {
+        o->frac += o->vel;
+    } else {
+        o->frac += km_sdiv1000(o->vel * (int32_t)(dt_us > 2000u ? 2000u : dt_us));
+    }
+    const int32_t d = km_pos_diff(position, o->base);
+    if (d > KM_SPEED_OBS_RESET || d < -KM_SPEED_OBS_RESET) { /* a jump: restart there, at rest */
+        o->base = position;
+        o->frac = 0;
+        o->vel = 0;
+        return 0;
+    }
+    const int32_t r = d * 65536 - o->frac; /* a reading is its angle rounded to a count */
+    o->frac += r / (1 << KM_SPEED_OBS_ALPHA_SHIFT);
+    o->vel += r / (1 << KM_SPEED_OBS_BETA_SHIFT);
+    const int32_t n = (o->frac >= 0 ? o->frac : o->frac - 65535) / 65536; /* floor */
+    o->base = km_pos_add(o->base, n);
+    o->frac -= n * 65536;
+    return (o->vel * 125) / 8192; /* Q16 count per ms -> 0.1 deg/s */
+}
+
+int32_t km_speed_obs_frac_u(const km_speed_obs_t *o)
+{
+    return (o->frac * 125) / 8192;
+}

@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Speed estimation from the tick's positions: 0x47 over a 20 ms window,
- * the loops' damping speed over KM_SPEED_FAST_N samples, and the hold
- * filter for the position a still hold works on and reports (0x46).
+ * the loops' damping speed over KM_SPEED_FAST_N samples, the hold
+ * filter for the position a still hold works on and reports (0x46), and
+ * the observer of position and speed between counts a 0x68 stream runs on.
  * docs/control-design.md "Speed estimates", docs/tuning.md. */
 #ifndef KM_SPEED_EST_H
 #define KM_SPEED_EST_H
@@ -37,6 +38,24 @@ typedef struct {
     int32_t ticks; /* since it started, up to KM_HOLD_FILTER_SETTLE */
     bool on;
 } km_hold_filter_t;
+
+/* The observer: an alpha-beta filter, estimate base + frac. */
+#define KM_SPEED_OBS_ALPHA_SHIFT 3 /* alpha = 1/8 a tick */
+#define KM_SPEED_OBS_BETA_SHIFT 8  /* beta = 1/256 a tick */
+#define KM_SPEED_OBS_RESET 100     /* counts: a reading this far off restarts it */
+
+typedef struct {
+    int32_t base; /* 0.1 deg (modular) */
+    int32_t frac; /* Q16 count above base, 0..65535 */
+    int32_t vel;  /* Q16 count per ms */
+} km_speed_obs_t;
+
+/* Restarts the observer at `position` (0.1 deg), moving at `speed_ddps`. */
+void km_speed_obs_reset(km_speed_obs_t *o, int32_t position, int32_t speed_ddps);
+/* Takes this tick's reading; returns the speed estimate, 0.1 deg/s. */
+int32_t km_speed_obs_step(km_speed_obs_t *o, int32_t position, uint32_t dt_us);
+/* The estimate's part above base in 0.001 x 0.1 deg (0..999). */
+int32_t km_speed_obs_frac_u(const km_speed_obs_t *o);
 
 void km_speed_window_init(km_speed_window_t *w);
 /* Returns the current estimate, deg/s (held until a window completes). */

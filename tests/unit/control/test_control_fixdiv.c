@@ -151,12 +151,29 @@ static void ref_advance(km_profile_t *p, uint32_t dt_us)
 }
 
 /* The stream interpolator's piece (km_profile.h) with C's divisions. */
+/* One step of a stream speed's two low passes (km_profile.c's prv_smooth). */
+static int32_t ref_smooth(int32_t v, int32_t to)
+{
+    const int32_t n = 1 << KM_PROFILE_STREAM_SMOOTH_SHIFT;
+    return v + ((to - v) / n != 0 ? (to - v) / n : to - v);
+}
+
 static void ref_stream_piece(km_profile_t *p, uint32_t dt_us)
 {
     const int32_t ahead = p->s_lag - p->s_since;
     if (ahead <= 0) {
+        const int32_t left = p->target - p->pos;
+        if (left == 0 || (left > 0) != (p->vel > 0)) {
+            p->pos = p->target;
+            p->pos_rem = 0;
+            p->vel = 0;
+            p->vel_rem = 0;
+            p->done = true;
+            return;
+        }
         p->stream = false;
-        p->accel = p->accel < 1000000 / 8 ? p->accel * 8 : 1000000;
+        p->accel = p->accel < 1000000 / KM_PROFILE_STREAM_ACCEL_DIV ? p->accel * KM_PROFILE_STREAM_ACCEL_DIV
+                                                                    : 1000000;
         const uint64_t vsq = (uint64_t)(uint32_t)p->vmax * (uint32_t)p->vmax;
         p->vsq_hi = (uint32_t)(vsq >> 32);
         p->vsq_lo = (uint32_t)vsq;
@@ -170,16 +187,23 @@ static void ref_stream_piece(km_profile_t *p, uint32_t dt_us)
     const int32_t emax = p->vmax / 32 + 1;
     int32_t err = ref - p->pos;
     err = err > emax ? emax : (err < -emax ? -emax : err);
-    int32_t want = vff + err * 32;
+    const int32_t near = KM_PROFILE_STREAM_NEAR_U;
+    int32_t corr = err * 8;
+    if (err > near || err < -near) {
+        corr = (err > 0 ? near : -near) * 8 + (err > 0 ? err - near : err + near) * 16;
+    }
+    int32_t want = vff + corr;
     want = want > p->vmax ? p->vmax : (want < -p->vmax ? -p->vmax : want);
     int32_t dv = p->accel * (int32_t)dt_us + p->vel_rem;
     p->vel_rem = dv % 1000;
     dv /= 1000;
-    if (p->vel < want) {
-        p->vel = p->vel + dv < want ? p->vel + dv : want;
-    } else if (p->vel > want) {
-        p->vel = p->vel - dv > want ? p->vel - dv : want;
+    if (p->s_vr < want) {
+        p->s_vr = p->s_vr + dv < want ? p->s_vr + dv : want;
+    } else if (p->s_vr > want) {
+        p->s_vr = p->s_vr - dv > want ? p->s_vr - dv : want;
     }
+    p->s_vf = ref_smooth(p->s_vf, p->s_vr);
+    p->vel = ref_smooth(p->vel, p->s_vf);
     ref_advance(p, dt_us);
     const int32_t left = p->target - p->pos;
     if (left == 0 && p->vel == 0) {
