@@ -20,12 +20,14 @@
  * 6, or control refusing it), a plant configuration that will not start, a
  * move that never starts or never ends, an output it cannot write.
  *
- * Usage: bench_control [--hours H] [out-dir]   (else $KM_BENCH_CONTROL_DIR,
+ * Usage: bench_control [--hours H] [--only LIST] [--seed S] [out-dir]   (else $KM_BENCH_CONTROL_DIR,
  * else "."). Writes <dir>/control_traces.csv (tools/bench/plot-control draws one
  * PNG per criterion) and <dir>/control_quality.md (the generated section of
  * docs/control-quality.md; tools/bench/bench-control --doc puts it there).
  * --hours: how long the multi-turn closed loop of criterion 7 runs (1 by
- * default; 24 for the full day, ~25x longer).
+ * default; 24 for the full day, ~25x longer). --only: the criteria to run
+ * ("4", "1,4"; the section then has their rows only, no bus figures).
+ * --seed: the arrival-jitter generator's start for criterion 4 (12345).
  * bench_control --cost: host CPU time of one 1 ms km_plant_step, ideal and
  * realistic (wall-clock, so it varies with the machine; not a figure of
  * the criteria, and CTest does not run it). */
@@ -103,6 +105,7 @@ static int32_t s_stall_ma; /* measured on the plant at full PWM */
 static int32_t s_stall_unm;
 static char s_defects[2048]; /* the issue's defect figures, for the summary */
 static unsigned s_hours = 1;
+static unsigned s_only; /* --only: criteria as bits 1..8, 0 = all */
 
 /* Marks the run broken (exit 1) and says why. */
 static void prv_broken(const char *fmt, ...)
@@ -1440,6 +1443,61 @@ static void prv_cost(void)
     }
 }
 
+/* The criteria of a --only list ("4", "1,4"), as bits 1..8; 0 = all. */
+static unsigned prv_criteria(const char *list)
+{
+    unsigned bits = 0;
+    for (const char *c = list; *c != '\0'; c++) {
+        if (*c >= '1' && *c <= '8') {
+            bits |= 1u << (unsigned)(*c - '0');
+        }
+    }
+    return bits;
+}
+
+/* Whether criterion `k` runs (all without --only). */
+static bool prv_wanted(unsigned k)
+{
+    return s_only == 0u || (s_only & (1u << k)) != 0u;
+}
+
+/* The criteria in order (those of --only), then the bus figures (all only). */
+static void prv_run_criteria(void)
+{
+    if (prv_wanted(1)) {
+        prv_c1();
+    }
+    if (prv_wanted(2)) {
+        prv_c2_steady();
+        prv_c2_step();
+    }
+    if (prv_wanted(3)) {
+        prv_c3_overshoot();
+        prv_c3_retarget();
+    }
+    if (prv_wanted(4)) {
+        prv_c4();
+    }
+    if (prv_wanted(5)) {
+        prv_c5();
+    }
+    if (prv_wanted(6)) {
+        prv_c6();
+    }
+    if (prv_wanted(7)) {
+        prv_c7_loop();
+        prv_c7_day();
+        prv_c7_same_hold();
+        prv_c7_wrap();
+    }
+    if (prv_wanted(8)) {
+        prv_c8();
+    }
+    if (s_only == 0u) {
+        prv_bus_supply();
+    }
+}
+
 /* Runs every criterion in order; exit 1 only on a broken run. */
 int main(int argc, char **argv)
 {
@@ -1451,6 +1509,10 @@ int main(int argc, char **argv)
         }
         if (strcmp(argv[i], "--hours") == 0 && i + 1 < argc) {
             s_hours = (unsigned)strtoul(argv[++i], NULL, 10);
+        } else if (strcmp(argv[i], "--only") == 0 && i + 1 < argc) {
+            s_only = prv_criteria(argv[++i]);
+        } else if (strcmp(argv[i], "--seed") == 0 && i + 1 < argc) {
+            s_lcg = (uint32_t)strtoul(argv[++i], NULL, 10);
         } else {
             dir = argv[i];
         }
@@ -1469,26 +1531,14 @@ int main(int argc, char **argv)
         s_csv,
         "criterion,series,t_ms,target_deg,shaft_deg,report_deg,speed_dps,pwm,current_ma,peak_ma,running\n");
     printf("Control quality (issue 20): the real control code and dispatcher on the realistic plant,\n"
-           "1 kHz tick, virtual time. Reproduce: %s [--hours H] [out-dir]  (tools/bench/bench-control)\n\n",
+           "1 kHz tick, virtual time. Reproduce: %s [--hours H] [--only LIST] [--seed S] [out-dir]  "
+           "(tools/bench/bench-control)\n\n",
            argv[0]);
     prv_measure_stall();
     printf("plant: stall %d mA, %.2f N.m (full PWM, 7.4 V, its 4-servo bus)\n\n", s_stall_ma,
            s_stall_unm / 1e6);
     prv_csv_point(0, "stall", 0, s_stall_ma, s_stall_unm / 1e6);
-    prv_c1();
-    prv_c2_steady();
-    prv_c2_step();
-    prv_c3_overshoot();
-    prv_c3_retarget();
-    prv_c4();
-    prv_c5();
-    prv_c6();
-    prv_c7_loop();
-    prv_c7_day();
-    prv_c7_same_hold();
-    prv_c7_wrap();
-    prv_c8();
-    prv_bus_supply();
+    prv_run_criteria();
     prv_print();
     if (fclose(s_csv) != 0 || !prv_markdown(dir)) {
         printf("BROKEN RUN: cannot finish the outputs in %s\n", dir);
