@@ -392,43 +392,62 @@ static int32_t prv_smooth(int32_t v, int32_t to)
     return v + (d >= n || d <= -n ? d / n : d);
 }
 
-/* A stream piece: follow the reference s_lag behind the newest target, or
- * brake onto it once no newer target came. */
-static void prv_step_stream(km_profile_t *p, uint32_t dt_us)
+/* At rest on the target: the move or stream is over. */
+static void prv_arrive(km_profile_t *p)
 {
-    const int32_t ahead = p->s_lag - p->s_since; /* us the reference is behind the target */
-    if (ahead <= 0) {
-        const int32_t left = p->target - p->pos;
-        if (left == 0 || (left > 0) != (p->vel > 0)) { /* there, or past it */
-            p->pos = p->target;
-            p->pos_rem = 0;
-            p->vel = 0;
-            p->vel_rem = 0;
-            p->done = true;
-            return;
-        }
-        p->stream = false;
-        p->accel = p->accel < ACCEL_MAX / KM_PROFILE_STREAM_ACCEL_DIV ? p->accel * KM_PROFILE_STREAM_ACCEL_DIV
-                                                                      : ACCEL_MAX;
-        p->vsq_hi = km_umulhi((uint32_t)p->vmax, (uint32_t)p->vmax);
-        p->vsq_lo = (uint32_t)p->vmax * (uint32_t)p->vmax;
+    p->pos = p->target;
+    p->pos_rem = 0;
+    p->vel = 0;
+    p->vel_rem = 0;
+    p->done = true;
+}
+
+/* The stream is over (no newer target within the lag): a set-point there
+ * or past it stops on the target, else it brakes onto it as a move. */
+static void prv_stream_end(km_profile_t *p)
+{
+    const int32_t left = p->target - p->pos;
+    if (left == 0 || (left > 0) != (p->vel > 0)) {
+        prv_arrive(p);
         return;
     }
+    p->stream = false;
+    p->accel = p->accel < ACCEL_MAX / KM_PROFILE_STREAM_ACCEL_DIV ? p->accel * KM_PROFILE_STREAM_ACCEL_DIV
+                                                                  : ACCEL_MAX;
+    p->vsq_hi = km_umulhi((uint32_t)p->vmax, (uint32_t)p->vmax);
+    p->vsq_lo = (uint32_t)p->vmax * (uint32_t)p->vmax;
+}
+
+/* The speed a stream heads for: the targets' speed plus 1/128 ms of the
+ * distance to the reference within KM_PROFILE_STREAM_NEAR_U, 1/64 ms
+ * beyond; at most vmax. */
+static int32_t prv_stream_want(const km_profile_t *p, int32_t ahead)
+{
     const int32_t vff = p->s_vel;
     const int32_t ref = p->target - km_sdiv1000(vff) * km_sdiv1000(ahead);
     int32_t err = ref - p->pos;
-    const int32_t emax = p->vmax / 32 + 1;
+    const int32_t emax = p->vmax / 32 + 1, near = KM_PROFILE_STREAM_NEAR_U;
     err = err > emax ? emax : (err < -emax ? -emax : err);
-    /* 1/128 ms of the distance within KM_PROFILE_STREAM_NEAR_U, 1/64 ms beyond */
-    const int32_t near = KM_PROFILE_STREAM_NEAR_U;
     int32_t corr = err * 8;
     if (err > near) {
         corr = near * 8 + (err - near) * 16;
     } else if (err < -near) {
         corr = -near * 8 + (err + near) * 16;
     }
-    int32_t want = vff + corr;
-    want = want > p->vmax ? p->vmax : (want < -p->vmax ? -p->vmax : want);
+    const int32_t want = vff + corr;
+    return want > p->vmax ? p->vmax : (want < -p->vmax ? -p->vmax : want);
+}
+
+/* A stream piece: follow the reference s_lag behind the newest target, or
+ * brake onto it once no newer target came. */
+static void prv_step_stream(km_profile_t *p, uint32_t dt_us)
+{
+    const int32_t ahead = p->s_lag - p->s_since; /* us the reference is behind the target */
+    if (ahead <= 0) {
+        prv_stream_end(p);
+        return;
+    }
+    const int32_t want = prv_stream_want(p, ahead);
     const int32_t dv = prv_dv(p, dt_us);
     if (p->s_vr < want) {
         p->s_vr = p->s_vr + dv < want ? p->s_vr + dv : want;
@@ -438,13 +457,8 @@ static void prv_step_stream(km_profile_t *p, uint32_t dt_us)
     p->s_vf = prv_smooth(p->s_vf, p->s_vr);
     p->vel = prv_smooth(p->vel, p->s_vf);
     (void)prv_advance(p, dt_us);
-    const int32_t left = p->target - p->pos;
-    if (left == 0 && p->vel == 0) {
-        p->pos = p->target;
-        p->pos_rem = 0;
-        p->vel = 0;
-        p->vel_rem = 0;
-        p->done = true;
+    if (p->target == p->pos && p->vel == 0) {
+        prv_arrive(p);
     }
 }
 
@@ -474,11 +488,7 @@ static void prv_step(km_profile_t *p, uint32_t dt_us)
     const int32_t left = p->target - p->pos;
     /* arrived or crossed: stop on the target */
     if (left == 0 || ((left > 0) != (e > 0) && e != 0) || (prv_abs(left) <= q + 1 && prv_abs(p->vel) <= dv)) {
-        p->pos = p->target;
-        p->pos_rem = 0;
-        p->vel = 0;
-        p->vel_rem = 0;
-        p->done = true;
+        prv_arrive(p);
     }
 }
 
