@@ -58,7 +58,8 @@ static void prv_rebase_axis(km_control_t *c, const km_axis_t *now)
         c->servo.running = moving;
         c->servo.reset_loop = false;
         c->loop.i_acc *= sign;
-        c->loop.last_sp_ups = 0;
+        c->loop.last_sp_ddps = 0;
+        c->loop.last_sp_sub = 0;
     }
 }
 
@@ -230,6 +231,21 @@ static int32_t prv_hold_position(km_control_t *c, int32_t pos)
     return km_hold_filter_step(&c->hold, pos);
 }
 
+/* The sub-count observer on the raw reading, while a 0x68 stream runs
+ * (started where the shaft is when the stream starts). */
+static void prv_observe(km_control_t *c, int32_t raw, uint32_t dt_us)
+{
+    if (!c->servo.streaming) {
+        c->obs_on = false;
+        return;
+    }
+    if (!c->obs_on) {
+        km_speed_obs_reset(&c->obs, raw, c->fast.ddps);
+        c->obs_on = true;
+    }
+    c->obs_ddps = km_speed_obs_step(&c->obs, raw, dt_us);
+}
+
 /* 1. sensing: the position `pos` (master's frame), its speeds, the clock.
  * Returns the fast speed (0.1 deg/s) the loops damp with; *speed_dps the
  * 20 ms window's (0x47). */
@@ -237,9 +253,8 @@ static int32_t prv_sense(km_control_t *c, int32_t raw, int32_t pos, uint32_t dt_
 {
     if (!c->have_position) {
         km_speed_fast_init(&c->fast, pos);
-        km_speed_obs_reset(&c->obs, raw, 0);
     }
-    c->obs_ddps = km_speed_obs_step(&c->obs, raw, dt_us);
+    prv_observe(c, raw, dt_us);
     *speed_dps = km_speed_window_step(&c->speed, pos, dt_us);
     const int32_t speed_ddps = c->have_position ? km_speed_fast_step(&c->fast, pos, dt_us) : 0;
     c->position = pos;

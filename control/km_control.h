@@ -47,6 +47,7 @@ typedef struct {
     km_speed_fast_t fast;    /* the loop's damping input */
     km_speed_obs_t obs;      /* position and speed between counts (a 0x68 stream's loop input) */
     int32_t obs_ddps;        /* its speed this tick */
+    bool obs_on;             /* it runs (a stream) */
     km_hold_filter_t hold;   /* the position while holding still */
     km_current_limit_t ilim; /* 0x5C / 0x14 */
     km_protect_t prot;       /* the protection supervisor */

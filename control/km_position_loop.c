@@ -14,7 +14,8 @@ void km_position_loop_init(km_position_loop_t *l)
     l->i_acc = 0;
     l->still_ms = 0;
     l->rest_pos = 0;
-    l->last_sp_ups = 0;
+    l->last_sp_ddps = 0;
+    l->last_sp_sub = 0;
 }
 
 /* The integrator gain while holding still, or -1 when it waits this tick. */
@@ -88,6 +89,25 @@ static int32_t prv_hold_terms(km_position_loop_t *l, const km_control_gains_t *g
     return settled ? (int32_t)g->kp_hold_q8 : (int32_t)g->kp_q8;
 }
 
+/* tau x the set-point speed's change this tick (0.1 deg/s x ms); a
+ * stream's from its speed in 0.001 x 0.1 deg/s. */
+static int32_t prv_accel_ff(km_position_loop_t *l, const km_position_loop_in_t *in, int32_t vs, int32_t tau)
+{
+    int32_t va;
+    if (in->stream) {
+        const int32_t sub = prv_clamp(in->setpoint_sub, -999, 999);
+        const int32_t dvs_u =
+            prv_clamp((vs - l->last_sp_ddps) * 1000 + sub - l->last_sp_sub, -2000000, 2000000);
+        va = km_sdiv1000(dvs_u * tau);
+        l->last_sp_sub = sub;
+    } else {
+        va = prv_clamp(vs - l->last_sp_ddps, -20000, 20000) * tau;
+        l->last_sp_sub = 0;
+    }
+    l->last_sp_ddps = vs;
+    return va;
+}
+
 int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g,
                               const km_position_loop_in_t *in, uint32_t dt_us)
 {
@@ -111,16 +131,12 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     /* kp: PWM per 0.1 deg Q8 */
     int32_t out = km_sdiv2560(kp * km_sdiv100(e_u));
     out += km_sdiv2560(kd * ev); /* kd: PWM per deg/s Q8, ev 0.1 deg/s */
-    /* acceleration feedforward: tau x dv/dt as a speed, 0.1 deg/s, from the speed in 0.001 x 0.1 deg/s */
-    const int32_t vs_u = vs * 1000 + prv_clamp(in->setpoint_sub, -999, 999);
-    const int32_t dvs_u = prv_clamp(vs_u - l->last_sp_ups, -2000000, 2000000);
-    const int32_t tau = g->tau_ms > 1000u ? 1000 : (int32_t)g->tau_ms;
-    int32_t va = km_sdiv1000(dvs_u * tau); /* over dt in ms, at least 1 */
-    if (dt_us >= 2000u) {
+    /* acceleration feedforward: tau x dv/dt as a speed, 0.1 deg/s */
+    int32_t va = prv_accel_ff(l, in, vs, g->tau_ms > 1000u ? 1000 : (int32_t)g->tau_ms);
+    if (dt_us >= 2000u) { /* over dt in ms, at least 1 */
         va /= (int32_t)km_udiv1000(dt_us);
     }
     va = prv_clamp(va, -20000, 20000);
-    l->last_sp_ups = vs_u;
     out += km_sdiv2560((int32_t)g->kv_q8 * prv_clamp(vs + va, -20000, 20000)); /* kv: PWM per deg/s Q8 */
     if (vs != 0) {
         out += vs > 0 ? (int32_t)g->friction_pwm : -(int32_t)g->friction_pwm;

@@ -20,10 +20,11 @@
 #define KM_STREAM_KD_SHIFT 3
 
 typedef struct {
-    int32_t i_acc;       /* integrator, PWM x 256000 */
-    int32_t last_sp_ups; /* set-point speed of the last tick (0.001 x 0.1 deg/s), for its acceleration */
-    int32_t still_ms;    /* ticks the hold has lasted, up to KM_HOLD_SETTLED_MS */
-    int32_t rest_pos;    /* where the shaft rested when the hold settled, 0.1 deg */
+    int32_t i_acc;        /* integrator, PWM x 256000 */
+    int32_t last_sp_ddps; /* set-point speed of the last tick, for its acceleration */
+    int32_t last_sp_sub;  /* and its part below 0.1 deg/s (a stream's), 0.001 x 0.1 deg/s */
+    int32_t still_ms;     /* ticks the hold has lasted, up to KM_HOLD_SETTLED_MS */
+    int32_t rest_pos;     /* where the shaft rested when the hold settled, 0.1 deg */
 } km_position_loop_t;
 
 typedef struct {
