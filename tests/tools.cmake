@@ -23,7 +23,8 @@
 # products.json current, about 4 s; test_kmx_web_api.py: kmx web's JSON API
 # without a browser (needs python3-aiohttp), the bench of servo-bus
 # --inject-dir (a supply sag trips and releases the voltage protection),
-# about 10-20 s; test_servo_bus_sched.py: SCHED_FIFO by default where allowed,
+# about 10-20 s; test_kmx_bench.py: the bench reaches a servo at the ID it
+# answers at after set-id, refuses a shared ID, about 12 s; test_servo_bus_sched.py: SCHED_FIFO by default where allowed,
 # --no-realtime, the fallback, policies read back from the kernel, three
 # QEMU servos in the polling update bootloader put back to plain scheduling
 # and answering, a busy-looping process made plain within 0.5 s, a bootloader

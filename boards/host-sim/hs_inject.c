@@ -3,7 +3,9 @@
  * a user changes by hand (a supply sag, a heat gun, a load) while the servo
  * runs, as sim/bus/servo-bus --inject-dir and kmx web offer it
  * (docs/web.md "Bench"). The socket is bound again by every image: a
- * restart closes it (close-on-exec) and the next image replaces it. */
+ * restart closes it (close-on-exec) and the next image replaces it. Its
+ * name keeps the ID the servo was launched with; the datagram "id" asks
+ * the ID it answers at now, which kmx.bench resolves an ID by. */
 #define _GNU_SOURCE /* SOCK_NONBLOCK, SOCK_CLOEXEC */
 #include <errno.h>
 #include <stdio.h>
@@ -13,6 +15,8 @@
 #include <unistd.h>
 
 #include "hs_io.h"
+#include "km_app.h"
+#include "km_servo.h"
 #include "km_sim_board.h"
 
 static int s_inject_fd = -1;
@@ -51,7 +55,25 @@ int hs_inject_poll_fd(void)
     return s_inject_fd;
 }
 
-/* One datagram: the event applied to the plant, the answer to its sender. */
+/* The answer to one datagram's text: "ok id N" to "id" (0x0F in force), else
+ * the event applied to the plant ("ok KEY VALUE") or why not ("error: ..."). */
+static void prv_answer(const char *text, char *answer, size_t size)
+{
+    uint32_t key = 0;
+    int32_t value = 0;
+    const char *why = "longer than a scenario line";
+    if (strcmp(text, "id") == 0) {
+        snprintf(answer, size, "ok id %u", (unsigned)km_servo_id(km_app_servo()));
+    } else if (hs_scenario_parse_now(text, &key, &value, &why)) {
+        km_sim_board_inject(key, value);
+        snprintf(answer, size, "ok %s", text);
+        fprintf(stderr, "host-sim: injected %s\n", text);
+    } else {
+        snprintf(answer, size, "error: %s", why);
+    }
+}
+
+/* One datagram: its answer (prv_answer) to a bound sender. */
 void hs_inject_on_readable(void)
 {
     char text[128];
@@ -63,19 +85,12 @@ void hs_inject_on_readable(void)
         return;
     }
     char answer[160];
-    uint32_t key = 0;
-    int32_t value = 0;
-    const char *why = "longer than a scenario line";
     if ((size_t)got < sizeof text) {
         text[got] = '\0';
         text[strcspn(text, "\r\n")] = '\0';
-    }
-    if ((size_t)got < sizeof text && hs_scenario_parse_now(text, &key, &value, &why)) {
-        km_sim_board_inject(key, value);
-        snprintf(answer, sizeof answer, "ok %s", text);
-        fprintf(stderr, "host-sim: injected %s\n", text);
+        prv_answer(text, answer, sizeof answer);
     } else {
-        snprintf(answer, sizeof answer, "error: %s", why);
+        snprintf(answer, sizeof answer, "error: longer than a scenario line");
     }
     if (from_len > sizeof(sa_family_t)) { /* a bound sender: it waits for the answer */
         (void)sendto(s_inject_fd, answer, strlen(answer), MSG_DONTWAIT, (const struct sockaddr *)&from,

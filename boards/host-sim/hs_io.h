@@ -27,7 +27,8 @@ bool hs_scenario_load(const char *path);
 bool hs_scenario_parse_now(const char *text, uint32_t *key, int32_t *value, const char **why);
 /* --inject PATH (hs_inject.c): a Unix datagram socket at PATH taking one
  * "KEY VALUE" scenario event per datagram, applied to the plant at once
- * and answered "ok KEY VALUE" or "error: reason" to a bound sender. */
+ * and answered "ok KEY VALUE" or "error: reason" to a bound sender; the
+ * datagram "id" is answered "ok id N", the ID the servo answers at now. */
 bool hs_inject_open(const char *path);
 int hs_inject_poll_fd(void);
 void hs_inject_on_readable(void);

@@ -8,7 +8,8 @@ collision check), live samples by 0x82 on a 50 ms schedule, the page and
 Debian's Chart.js served locally, a request for a bad ID answered in
 words; the bench of an emulated bus (servo-bus --inject-dir, kmx web
 --inject-dir): a supply sag trips the voltage protection and "back to
-normal" releases it, every bad bench request refused in words, and without
+normal" releases it, a servo moved by set-id keeps its bench at its new ID,
+every bad bench request refused in words, and without
 --inject-dir the bench says why it is off. Needs python3-aiohttp (Debian's
 python3 runs tools/kmx). About 20 s."""
 import json
@@ -150,11 +151,11 @@ class WebBench(WebOnBus):
     thresholds of docs/protocol.md §5.2: 0x3C low 6 V, detection 3 s)."""
     bench = True
 
-    def protection_until(self, what, check, seconds=30):
-        """Polls /api/servo/2/protection until check(answer) holds: the answer."""
+    def protection_until(self, what, check, seconds=30, dev_id=2):
+        """Polls /api/servo/DEV_ID/protection until check(answer) holds: the answer."""
         end = time.monotonic() + seconds
         while time.monotonic() < end:
-            r = call(self.url, "/api/servo/2/protection")
+            r = call(self.url, "/api/servo/%d/protection" % dev_id)
             self.assertTrue(r["ok"], r)
             if check(r):
                 return r
@@ -182,8 +183,24 @@ class WebBench(WebOnBus):
                                                 "-400..2000 0.1 °C, not 99999"})
         self.assertEqual(call(self.url, "/api/servo/1/bench", {"key": "humidity", "value": 1})["error"],
                          "bench: no key 'humidity' (supply_mv, ambient_dc, load_mnm, faults, temp_dc)")
-        self.assertIn("bench: ID 7 has no inject socket", call(self.url, "/api/servo/7/bench",
-                                                              {"preset": "sag"})["error"])
+        self.assertEqual(call(self.url, "/api/servo/7/bench", {"preset": "sag"})["error"],
+                         "bench: no servo with a bench answers at ID 7 now (the bench's servos are at ID 1, 2, 3)")
+
+    def test_bench_follows_set_id(self):
+        """A servo moved by set-id keeps its bench: the page's ID is the one it answers at now."""
+        self.assertTrue(call(self.url, "/api/servo/3/set-id", {"new": 4})["ok"])
+        try:
+            self.assertEqual(call(self.url, "/api/state")["bench"]["servos"], [1, 2, 4])
+            self.assertEqual(call(self.url, "/api/servo/4/bench", {"key": "supply_mv", "value": 5000}),
+                             {"ok": True, "applied": ["supply_mv 5000"]})
+            self.protection_until("ID 4's supply at 5.0 V", lambda r: r["voltage"] == "5.000 V", dev_id=4)
+            self.assertEqual(call(self.url, "/api/servo/4/bench", {"preset": "normal"})["ok"], True)
+            self.protection_until("ID 4 back to normal", lambda r: r["status_byte"] == 0, dev_id=4)
+            self.assertIn("bench: no servo with a bench answers at ID 3 now",
+                          call(self.url, "/api/servo/3/bench", {"preset": "sag"})["error"])
+        finally:
+            self.assertTrue(call(self.url, "/api/servo/4/set-id", {"new": 3})["ok"])
+        self.assertEqual(call(self.url, "/api/state")["bench"]["servos"], [1, 2, 3])
 
     def test_host_sim_refuses_what_kmx_would_not_send(self):
         """host-sim --inject checks each datagram itself (hs_scenario.c) and answers in words."""

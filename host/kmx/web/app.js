@@ -260,6 +260,10 @@ async function readFaults() {
 async function setup(what, body) {
   const r = await api("/api/servo/" + currentId() + "/" + what, body);
   $("setup-out").textContent = r.ok ? r.lines.join("\n") : r.error;
+  if (r.ok && what === "set-id") { // the bench names its servos by the ID they answer at now
+    const st = await api("/api/state");
+    if (st.ok && st.bench) showBench(st.bench);
+  }
 }
 
 async function rescue() {
