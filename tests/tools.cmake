@@ -68,7 +68,8 @@ if(KM_PYTHON3)
 endif()
 
 # kmx web in Debian's Chromium, headless, through Selenium: scan, an edit read
-# back, a refused value's limit, a move on the live plot, set-id refused on a
+# back, a refused value's limit, a move on the live plot (its rate keeping the
+# 20 Hz schedule or what one sample's time allows), set-id refused on a
 # taken ID, set-baud then the page's rescue finding the servo at its new baud,
 # the bench tripping and releasing a temperature protection (three host-sim
 # servos), an update to its end state (two QEMU bootloader servos) and a rescue

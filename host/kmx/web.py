@@ -19,6 +19,8 @@ JSON API (all POST bodies JSON; every answer {"ok": true, ...} or
     POST /api/servo/ID/torque {state}      on, off, brake
     POST /api/servo/ID/move {angle, time_ms}  0x65;  POST /api/servo/ID/jog {angle}  0x68
     GET  /api/live?ids=1,2,3         one sample by 0x82: position, speed, current, pwm, temperature, voltage, status
+    POST /api/live/start {ids, period_ms}, /api/live/stop; GET /api/live/data?since=SEQ: samples taken
+                                     by the server on that schedule, the rate reached and what one sample takes
     GET  /api/servo/ID/faults        the fault log
     POST /api/servo/ID/set-id {new}  POST /api/servo/ID/set-baud {baud}   POST /api/rescue (job)
     POST /api/update {ids, image}    job: the firmware update (kmx/update.py), per-servo progress
@@ -277,7 +279,7 @@ class Wizard:
             *values, status = sample[i]
             out[i] = dict(zip(LIVE[:-1], (v.value for v in values)))
             out[i]["status"] = ", ".join(fr.status_words(status.raw[0]))
-        return {"t": t, "servos": out}
+        return {"t": t, "took": time.monotonic() - self.t0 - t, "servos": out}
 
     def faults(self, dev_id):
         """The fault log with the last reset's cause."""
@@ -396,6 +398,7 @@ class Server:
         self.wizard = wizard
         self.pool = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="kmx-bus")
         self.live_ids, self.live_samples, self.live_seq, self.live_error = None, [], 0, None
+        self.live_asked = None  # samples per second asked by /api/live/start
 
     async def call(self, fn, *args):
         """fn(*args) in the bus thread: {"ok": true, ...result} or {"ok": false, "error"}."""
@@ -505,7 +508,7 @@ class Server:
             period = max(0.01, float(body.get("period_ms", 50)) / 1000.0)
         except (KeyError, ValueError, TypeError):
             return self.web.json_response({"ok": False, "error": "live: give ids and period_ms"})
-        self.live_ids, self.live_error = ids, None
+        self.live_ids, self.live_error, self.live_asked = ids, None, 1.0 / period
         self.live_task = asyncio.get_running_loop().create_task(self.sampler(ids, period))
         return self.web.json_response({"ok": True, "ids": ids, "period_ms": period * 1000})
 
@@ -514,13 +517,19 @@ class Server:
         return self.web.json_response({"ok": True})
 
     async def h_live_data(self, request):
-        """The samples after ?since=SEQ, with the measured sample rate."""
+        """The samples after ?since=SEQ, with the measured sample rate, the
+        rate asked and the median time one sample takes (the last 20): below
+        the rate asked, a sample that takes longer than the period says the
+        bus or the host is the limit, not the schedule."""
         since = int(request.query.get("since", "0") or 0)
         new = [x for x in self.live_samples if x["seq"] > since]
         recent = self.live_samples[-20:]
-        rate = (len(recent) - 1) / (recent[-1]["t"] - recent[0]["t"]) if len(recent) > 2 else None
+        rate = took = None
+        if len(recent) > 2:
+            rate = (len(recent) - 1) / (recent[-1]["t"] - recent[0]["t"])
+            took = sorted(x["took"] for x in recent)[len(recent) // 2]
         return self.web.json_response({"ok": self.live_error is None, "error": self.live_error,
-                                       "samples": new, "rate": rate})
+                                       "samples": new, "rate": rate, "took": took, "asked": self.live_asked})
 
     def servo_id(self, request):
         dev_id = int(request.match_info["id"])

@@ -24,6 +24,7 @@ Exit 77 (CTest SKIP_RETURN_CODE) with the reason when Chromium, its driver
 or Selenium is missing (tools/install-deps installs them). CTest kmx_web;
 about 2 to 3 minutes.
     kmx_web_check.py [-v] [--no-screenshots]"""
+import ctypes
 import os
 import shutil
 import signal
@@ -40,6 +41,7 @@ from kmx.bus import Bus
 from kmx.errors import MissingPackage
 
 SKIP = 77
+PR_CAPBSET_DROP, CAP_SYS_NICE = 24, 23  # <linux/prctl.h>, <linux/capability.h>
 SHOTS = os.path.join(REPO, "docs", "web")
 QEMU_BUILD = os.path.join(os.environ.get("KM_BUILD_QEMU") or os.path.join(REPO, "build", "qemu"),
                           "boards", "qemu-microbit")
@@ -66,7 +68,18 @@ def browser_or_skip():
     for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
                 "--window-size=1200,1400"):
         opts.add_argument(arg)
-    return webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=opts)
+    return webdriver.Chrome(service=Service("/usr/bin/chromedriver", popen_kw={"preexec_fn": user_priority}),
+                            options=opts)
+
+
+def user_priority():
+    """In the driver's process before it runs: no CAP_SYS_NICE for it and
+    the browser it starts. Run as root, Chromium puts its compositor and IO
+    threads at nice -8; a user's browser cannot, and those threads redrawing
+    six charts would take the CPU kmx web samples the bus with on a loaded
+    machine (docs/web.md "Tested in a real browser")."""
+    if os.geteuid() == 0:  # best effort: a container without CAP_SETPCAP keeps the browser as it is
+        ctypes.CDLL(None).prctl(PR_CAPBSET_DROP, CAP_SYS_NICE, 0, 0, 0)
 
 
 class Web:
@@ -231,10 +244,26 @@ class InTheBrowser(unittest.TestCase):
         self.driver.execute_script("document.getElementById('table').scrollIntoView()")
         self.shot("control-table.png")
 
+    def live_rate_kept(self):
+        """(rate, took) once the page's rate is at least 80 % of what the
+        schedule allows, min(20, 1 / took), took the median time one sample
+        takes (the server's own measure, the last 20 samples); else None."""
+        rate, took = self.driver.execute_script("return [kmx.rate, kmx.took]")
+        if not rate or not took:
+            return None
+        return (rate, took) if rate >= 0.8 * min(20.0, 1.0 / took) else None
+
     def test_3_move_shows_on_the_plot(self):
         self.el("torque-on").click()
         self.wait_for("torque on", lambda: "torque_switch = 2" in self.el("servo-msg").text)
         self.el("live-btn").click()
+        try:
+            self.move_and_plot()
+        finally:
+            self.el("live-btn").click()  # plots off: a failure here must not leave the bus sampled for the next tests
+
+    def move_and_plot(self):
+        """Moves ID 1 to 60°: the plot shows it, at the rate the schedule allows."""
         self.driver.execute_script("const s = document.getElementById('move-slider'); s.value = 60;"
                                    "s.dispatchEvent(new Event('input'));")
         self.el("move-btn").click()
@@ -243,12 +272,12 @@ class InTheBrowser(unittest.TestCase):
                             lambda: (lambda y: y if y is not None and y > 55 else None)(
                                 self.driver.execute_script(last)))
         self.assertLess(top, 65)
-        # 20 asked; over 10 within 60 s: a loaded machine may starve the emulated servos for a while
-        rate = self.wait_for("the live rate over 10 samples/s", lambda: (lambda r: r if r and r > 10 else None)(
-            self.driver.execute_script("return kmx.rate")), 60)
-        print("kmx_web: live plot of 3 servos at %.1f samples/s (asked: 20)" % rate)
+        # 20 asked: the page keeps the schedule, so the rate is 20 or what samples lasting `took` allow
+        # (a loaded machine starves kmx web and the rate falls with it: not the schedule's fault)
+        rate, took = self.wait_for("the live rate keeping its schedule", self.live_rate_kept, 60)
+        print("kmx_web: live plot of 3 servos at %.1f samples/s (asked: 20; one sample takes %.0f ms)"
+              % (rate, 1000 * took))
         self.shot("plots.png")
-        self.el("live-btn").click()
 
     def test_4_update_reaches_its_end_state(self):
         qemu = QemuBus()

@@ -71,6 +71,7 @@ async function watchProtection() {
 async function connect(ev) {
   ev.preventDefault();
   kmx.benchWatch = false; // the servo watched was on the bus before
+  if (kmx.live) toggleLive(); // so were the servos plotted: their sampling stops
   const r = await api("/api/connect", { bus: $("bus").value.trim() });
   if (r.ok) showState(r); else $("busline").textContent = "not connected: " + r.error;
 }
@@ -130,14 +131,31 @@ function makeCharts() {
   }
 }
 
-// Draws the charts at the next animation frame, once however many samples came.
+// Draws the charts on screen at the next animation frame, once however many
+// samples came; one scrolled out of view is drawn when it comes back
+// (watchCharts), so a phone or a loaded machine spends no CPU on hidden ones.
 function redraw() {
   if (kmx.drawPending) return;
   kmx.drawPending = true;
   requestAnimationFrame(() => {
     kmx.drawPending = false;
-    for (const [q] of QUANTITIES) if (kmx.charts[q]) kmx.charts[q].update("none");
+    for (const [q] of QUANTITIES) if (kmx.charts[q] && kmx.onScreen.has(q)) kmx.charts[q].update("none");
   });
+}
+
+// Keeps kmx.onScreen: the quantities whose chart is in view (all of them without IntersectionObserver).
+function watchCharts() {
+  kmx.onScreen = new Set(QUANTITIES.map(([q]) => q));
+  if (typeof IntersectionObserver === "undefined") return;
+  const seen = new IntersectionObserver((entries) => {
+    for (const e of entries) {
+      const q = e.target.id.slice("chart-".length);
+      if (!e.isIntersecting) { kmx.onScreen.delete(q); continue; }
+      kmx.onScreen.add(q);
+      if (kmx.charts[q]) kmx.charts[q].update("none");
+    }
+  });
+  for (const [q] of QUANTITIES) seen.observe($("chart-" + q));
 }
 
 // The live loop: the server samples every servo at 20 Hz (0x82 reads); the
@@ -148,6 +166,7 @@ async function liveLoop() {
   while (kmx.live) {
     const r = await api("/api/live/data?since=" + since);
     if (!r.ok) $("live-rate").textContent = r.error;
+    const fresh = (r.samples || []).length > 0;
     for (const sample of r.samples || []) {
       since = sample.seq;
       kmx.samples++;
@@ -164,9 +183,13 @@ async function liveLoop() {
     }
     if (r.rate) {
       kmx.rate = r.rate;
-      $("live-rate").textContent = r.rate.toFixed(1) + " samples/s of " + kmx.servos.length + " servos (0x82)";
+      kmx.took = r.took;
+      let text = r.rate.toFixed(1) + " samples/s of " + kmx.servos.length + " servos (0x82)";
+      if (r.rate < 0.9 * r.asked) text += "; " + r.asked.toFixed(0) + " asked, one sample takes " +
+        (1000 * r.took).toFixed(0) + " ms here (a busy bus or computer)";
+      $("live-rate").textContent = text;
     }
-    redraw();
+    if (fresh) redraw();
     await new Promise((res) => setTimeout(res, 200));
   }
   await api("/api/live/stop", {});
@@ -299,6 +322,7 @@ async function update(ev) {
 }
 
 function wire() {
+  watchCharts();
   $("connect-form").addEventListener("submit", connect);
   $("scan-btn").addEventListener("click", scan);
   document.querySelectorAll("[data-torque]").forEach((b) =>
