@@ -260,7 +260,13 @@ class Wizard:
         return {"name": reg.name, "value": back}
 
     def torque(self, dev_id, body):
-        return self.set(dev_id, {"name": "torque_switch", "value": cli.TORQUE[body["state"]]})
+        """Torque on, off or brake (0x64); the state read back in words."""
+        state = body.get("state")
+        if state not in cli.TORQUE:
+            raise KmxError("torque: %r is not a state; give one of %s" % (state, ", ".join(cli.TORQUE)))
+        r = self.set(dev_id, {"name": "torque_switch", "value": cli.TORQUE[state]})
+        words = cli.TORQUE_WORDS.get(int(r["value"])) if r["value"].isdigit() else None
+        return dict(r, value="%s (%s)" % (r["value"], words) if words else r["value"])
 
     def move(self, dev_id, body):
         value = [body["angle"]] + ([body["time_ms"]] if body.get("time_ms") else [])

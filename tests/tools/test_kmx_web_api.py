@@ -4,11 +4,12 @@ kmx_web_check.py): on three host-sim servos on sim/bus/servo-bus, a scan job
 with its progress, the control table with this servo's product bounds in
 place of "product" and coded values in words, a write refused naming its
 limit and one read back, set-id refused when the new ID is taken (the
-collision check), live samples by 0x82 on a 50 ms schedule, the page and
+collision check), torque in words and a 0x68 jog (one outside the travel
+refused), the fault log, live samples by 0x82 on a 50 ms schedule, the page and
 Debian's Chart.js served locally, a request for a bad ID answered in
 words; the bench of an emulated bus (servo-bus --inject-dir, kmx web
 --inject-dir): a supply sag trips the voltage protection and "back to
-normal" releases it, a servo moved by set-id keeps its bench at its new ID,
+normal" releases it (both in the fault log), a servo moved by set-id keeps its bench at its new ID,
 every bad bench request refused in words, and without
 --inject-dir the bench says why it is off. Needs python3-aiohttp (Debian's
 python3 runs tools/kmx). About 20 s."""
@@ -108,6 +109,26 @@ class WebApi(WebOnBus):
         self.assertEqual(r, {"ok": True, "name": "response_delay", "value": "300 µs"})
         self.call("/api/servo/2/set", {"name": "response_delay", "value": "200"})
 
+    def test_torque_and_jog(self):
+        """0x64 in words, a 0x68 jog sent and one outside the travel refused before sending."""
+        self.assertEqual(self.call("/api/servo/3/torque", {"state": "on"}),
+                         {"ok": True, "name": "torque_switch", "value": "2 (on, holding)"})
+        try:
+            self.assertEqual(self.call("/api/servo/3/jog", {"angle": 10}),
+                             {"ok": True, "name": "interpolate", "value": "10.0 °"})
+            self.assertEqual(self.call("/api/servo/3/jog", {"angle": 500})["error"],
+                             "interpolate: 500.0 ° is outside ID 3's travel -135.0..135.0 ° (KM-SIM-P135); "
+                             "nothing sent")
+            self.assertEqual(self.call("/api/servo/3/torque", {"state": "sideways"}),
+                             {"ok": False, "error": "torque: 'sideways' is not a state; give one of off, brake, on"})
+        finally:
+            self.assertEqual(self.call("/api/servo/3/torque", {"state": "off"})["value"], "0 (off, free)")
+
+    def test_fault_log_of_a_fresh_servo(self):
+        self.assertEqual(self.call("/api/servo/1/faults"),
+                         {"ok": True, "events": 0, "held": 0, "kept": 0, "reset": "power-on",
+                          "userdata": "product defaults: flash erased (first boot)", "entries": []})
+
     def test_set_id_collision(self):
         r = self.call("/api/servo/3/set-id", {"new": 1})
         self.assertEqual(r, {"ok": False, "error": "ID 1 is taken: another servo answers there"})
@@ -180,6 +201,9 @@ class WebBench(WebOnBus):
                          ["supply_mv 7400", "ambient_dc 250", "temp_dc 250", "load_mnm 0"])
         r = self.protection_until("the voltage protection releases", lambda r: r["status_byte"] == 0)
         self.assertEqual((r["status"], r["protecting"], r["voltage"]), ("ok", "none", "7.400 V"))
+        log = call(self.url, "/api/servo/2/faults")  # the trip and its release in the fault log, newest first
+        self.assertEqual([(e["event"], e["what"], e["supply"]) for e in log["entries"][:2]],
+                         [("released by itself", "voltage", "7.400 V"), ("tripped", "voltage", "5.000 V")])
 
     def test_bad_bench_requests_in_words(self):
         self.assertEqual(call(self.url, "/api/servo/1/bench", {"preset": "flood"}),
