@@ -35,6 +35,7 @@ import contextlib
 import io
 import os
 import re
+import signal
 import struct
 import sys
 import time
@@ -597,6 +598,11 @@ def serve(spec, host, port, ready=None, inject_dir=None):
         server.tmpdir = tmp
 
         async def main():
+            stop = asyncio.Event()
+            # Ctrl-C sets stop between callbacks: raised inside one (aiohttp accepting or
+            # closing a connection), KeyboardInterrupt came out as a traceback
+            with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):  # no loop signals here
+                asyncio.get_running_loop().add_signal_handler(signal.SIGINT, stop.set)
             runner = web.AppRunner(server.routes(), access_log=None)
             await runner.setup()
             site = web.TCPSite(runner, host, port)
@@ -605,7 +611,7 @@ def serve(spec, host, port, ready=None, inject_dir=None):
             url = "http://%s:%d/" % (host, bound)
             (ready or print)(url)
             try:
-                await asyncio.Event().wait()
+                await stop.wait()
             finally:
                 await runner.cleanup()
         try:
@@ -627,11 +633,11 @@ def cmd_web(args):
         print("kmx web: open %s in a browser (Ctrl-C stops it)" % url, flush=True)
     try:
         serve(spec, args.host, args.port, ready, getattr(args, "inject_dir", None))
-    except KeyboardInterrupt:  # the way to stop it
-        print("kmx web: stopped", flush=True)
-        return 0
+    except KeyboardInterrupt:  # Ctrl-C before the page's loop took it over
+        pass
     except OSError as e:
         raise KmxError("cannot serve on %s:%d: %s" % (args.host, args.port, e.strerror or e)) from None
+    print("kmx web: stopped", flush=True)  # the way to stop it: Ctrl-C
     return 0
 
 
