@@ -23,7 +23,7 @@
 # products.json current, about 4 s; test_kmx_web_api.py: kmx web's JSON API
 # without a browser (needs python3-aiohttp), the bench of servo-bus
 # --inject-dir (a supply sag trips and releases the voltage protection),
-# about 10-20 s; test_kmx_bench.py: the bench reaches a servo at the ID it
+# Ctrl-C at 10 random moments with requests in flight, about 30-60 s; test_kmx_bench.py: the bench reaches a servo at the ID it
 # answers at after set-id, refuses a shared ID, about 12 s; test_servo_bus_sched.py: SCHED_FIFO by default where allowed,
 # --no-realtime, the fallback, policies read back from the kernel, three
 # QEMU servos in the polling update bootloader put back to plain scheduling
