@@ -29,14 +29,14 @@ static int32_t prv_hold_ki(km_position_loop_t *l, const km_control_gains_t *g,
         }
         return -1;
     }
+    if ((e_u > 0 && in->speed_ddps > KM_HOLD_RETURN_DDPS) ||
+        (e_u < 0 && in->speed_ddps < -KM_HOLD_RETURN_DDPS)) {
+        return -1;
+    }
     const int32_t pushed = in->position - l->rest_pos; /* from where the settled hold rested */
     if (l->still_ms < KM_HOLD_SETTLED_MS || g->ki_hold_q4 == 0u ||
         (pushed <= KM_HOLD_PUSH_DDEG && pushed >= -KM_HOLD_PUSH_DDEG)) {
         return (int32_t)g->ki_q8;
-    }
-    if ((e_u > 0 && in->speed_ddps > KM_HOLD_RETURN_DDPS) ||
-        (e_u < 0 && in->speed_ddps < -KM_HOLD_RETURN_DDPS)) {
-        return -1;
     }
     return (int32_t)g->ki_hold_q4 * 16; /* Q4 -> Q8 */
 }
