@@ -20,7 +20,7 @@ void km_position_loop_init(km_position_loop_t *l)
 
 /* The integrator gain while holding still, or -1 when it waits this tick. */
 static int32_t prv_hold_ki(km_position_loop_t *l, const km_control_gains_t *g,
-                           const km_position_loop_in_t *in, int32_t e_u, bool in_band)
+                           const km_position_loop_in_t *in, int32_t e_u, int32_t e_d, bool in_band)
 {
     if (in_band) {
         const int32_t small = 2 * (int32_t)g->friction_pwm, i_pwm = km_sdiv256000(l->i_acc);
@@ -29,16 +29,21 @@ static int32_t prv_hold_ki(km_position_loop_t *l, const km_control_gains_t *g,
         }
         return -1;
     }
+    const int32_t pushed = in->position - l->rest_pos; /* from where the settled hold rested */
+    const bool push = l->still_ms >= KM_HOLD_SETTLED_MS && g->ki_hold_q4 != 0u &&
+                      (pushed > KM_HOLD_PUSH_DDEG || pushed < -KM_HOLD_PUSH_DDEG);
     if ((e_u > 0 && in->speed_ddps > KM_HOLD_RETURN_DDPS) ||
         (e_u < 0 && in->speed_ddps < -KM_HOLD_RETURN_DDPS)) {
+        if (push && e_d <= KM_HOLD_BLEED_DDEG && e_d >= -KM_HOLD_BLEED_DDEG) {
+            l->i_acc -= l->i_acc / KM_HOLD_RETURN_BLEED;
+        }
         return -1;
     }
-    const int32_t pushed = in->position - l->rest_pos; /* from where the settled hold rested */
-    if (l->still_ms < KM_HOLD_SETTLED_MS || g->ki_hold_q4 == 0u ||
-        (pushed <= KM_HOLD_PUSH_DDEG && pushed >= -KM_HOLD_PUSH_DDEG)) {
+    if (!push) {
         return (int32_t)g->ki_q8;
     }
-    return (int32_t)g->ki_hold_q4 * 16; /* Q4 -> Q8 */
+    const int32_t ki = (int32_t)g->ki_hold_q4 * 16; /* Q4 -> Q8 */
+    return ki + ((ki * (e_d < 0 ? -e_d : e_d) * KM_HOLD_KI_GROW_Q6) >> 6);
 }
 
 /* The integrator's PWM after this tick: ki x the error (u), frozen while
@@ -48,16 +53,16 @@ static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
                              uint32_t dt_us)
 {
     int32_t i_pwm = km_sdiv256000(l->i_acc);
+    /* 10 deg: the integrator is for small errors */
+    const int32_t e_d = prv_clamp(km_sdiv1000(e_u), -100, 100);
     int32_t ki = (int32_t)g->ki_q8;
     if (in->still) {
-        ki = prv_hold_ki(l, g, in, e_u, in_band);
+        ki = prv_hold_ki(l, g, in, e_u, e_d, in_band);
         if (ki < 0) {
             return km_sdiv256000(l->i_acc);
         }
     }
     const int32_t i_max = (g->i_max_pwm > 1000u ? 1000 : (int32_t)g->i_max_pwm) * 256000;
-    /* 10 deg: the integrator is for small errors */
-    const int32_t e_d = prv_clamp(km_sdiv1000(e_u), -100, 100);
     const int32_t di = km_sdiv100(km_sdiv10(ki * e_d) * (int32_t)(dt_us > 2000u ? 2000u : dt_us));
     before += i_pwm;
     if (!((before >= in->pwm_max && di > 0) || (before <= -in->pwm_max && di < 0))) {

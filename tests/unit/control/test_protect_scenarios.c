@@ -865,24 +865,24 @@ static const row_t k_rows[] = {
      .trip_lo = NO_TRIP,
      .act = ACT_NONE},
     {.name = "stall_load_above_500ms_trips_brake",
-     /* d = 882 ms: the loop's integral pulls the loaded shaft back (it
+     /* d = 798 ms: the loop's integral pulls the loaded shaft back (it
       * moves more than 0.1 deg, which restarts the timing) until it
-      * settles, 882 ms after the load comes (the settled hold's push
-      * integrator waits while the shaft returns: docs/tuning.md); trip at
-      * d + 500 (+1). Holding this load takes ~1.9 A, 95 % of 0x5C (2 A
-      * here): on the way back the current goes over 0x5C again and
-      * again, and the integrator does not push harder while the current
-      * limiter holds the output back (docs/tuning.md "Current limit"),
-      * so the return takes ~90 ms longer than the 794 ms it took while
-      * it did */
+      * settles, 798 ms after the load comes (the settled hold's push
+      * integrator grows with the error and waits while the shaft
+      * returns: docs/tuning.md); trip at d + 500 (+1). Holding this load
+      * takes ~1.9 A, 95 % of 0x5C (2 A here): on the way back the current
+      * goes over 0x5C again and again, and the integrator does not push
+      * harder while the current limiter holds the output back
+      * (docs/tuning.md "Current limit"; 882 ms with a push integrator
+      * that did not grow with the error) */
      .cmd = CMD_HOLD,
      .pre_ms = 300,
      SET(0x0D, 0x00, 0x54, 1500, 20, 600, 5),
      .stim = {PUSH(LOAD, 0, 1500), NONE},
      .run_ms = 3000,
      .clear = NOCLEAR,
-     .trip_lo = 1382,
-     .trip_hi = 1383,
+     .trip_lo = 1298,
+     .trip_hi = 1299,
      .bits = KM_PROT_STALL,
      .act = ACT_BRAKE,
      .rel = REL_AUTO,
@@ -897,8 +897,8 @@ static const row_t k_rows[] = {
      .stim = {PUSH(LOAD, 0, 3000), NONE},
      .run_ms = 6000,
      .clear = NOCLEAR,
-     .trip_lo = 2882, /* d = 882 ms as above, T = 2 s */
-     .trip_hi = 2883,
+     .trip_lo = 2798, /* d = 798 ms as above, T = 2 s */
+     .trip_hi = 2799,
      .bits = KM_PROT_STALL,
      .act = ACT_FREE,
      .rel = REL_AUTO,
@@ -913,8 +913,8 @@ static const row_t k_rows[] = {
      .stim = {PUSH(LOAD, 0, 2000), NONE},
      .run_ms = 4000,
      .clear = NOCLEAR,
-     .trip_lo = 1382,
-     .trip_hi = 1383,
+     .trip_lo = 1298,
+     .trip_hi = 1299,
      .bits = KM_PROT_STALL,
      .act = ACT_HOLD,
      .rel = REL_AUTO,
@@ -928,8 +928,8 @@ static const row_t k_rows[] = {
      .stim = {PUSH(LOAD, 0, 2000), NONE},
      .run_ms = 4000,
      .clear = {{1500, KM_PROT_STALL, false}, {2500, KM_PROT_STALL, true}},
-     .trip_lo = 1382,
-     .trip_hi = 1383,
+     .trip_lo = 1298,
+     .trip_hi = 1299,
      .bits = KM_PROT_STALL,
      .act = ACT_HOLD,
      .rel = REL_CMD,
