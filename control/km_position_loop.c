@@ -35,7 +35,7 @@ static int32_t prv_hold_ki(km_position_loop_t *l, const km_control_gains_t *g,
     if ((e_u > 0 && in->speed_ddps > KM_HOLD_RETURN_DDPS) ||
         (e_u < 0 && in->speed_ddps < -KM_HOLD_RETURN_DDPS)) {
         if (push && e_d <= KM_HOLD_BLEED_DDEG && e_d >= -KM_HOLD_BLEED_DDEG) {
-            l->i_acc -= l->i_acc / KM_HOLD_RETURN_BLEED;
+            l->i_acc -= l->i_acc / 512 * KM_HOLD_RETURN_BLEED_Q9;
         }
         return -1;
     }

@@ -11,12 +11,12 @@
 #include "km_product.h"
 
 /* The hold's gain switches (docs/tuning.md "Three phases of one move"). */
-#define KM_HOLD_RETURN_DDPS 20   /* integrator waits while the shaft returns faster */
-#define KM_HOLD_SETTLED_MS 200   /* held position unchanged this long: kp_hold */
-#define KM_HOLD_PUSH_DDEG 2      /* pushed this far from rest: ki_hold */
-#define KM_HOLD_KI_GROW_Q6 5     /* ki_hold grows by 5/64 of itself per 0.1 deg of error */
-#define KM_HOLD_BLEED_DDEG 4     /* a push returning this close: its integrator bleeds */
-#define KM_HOLD_RETURN_BLEED 128 /* ... by 1/128 a tick */
+#define KM_HOLD_RETURN_DDPS 20    /* integrator waits while the shaft returns faster */
+#define KM_HOLD_SETTLED_MS 200    /* held position unchanged this long: kp_hold */
+#define KM_HOLD_PUSH_DDEG 2       /* pushed this far from rest: ki_hold */
+#define KM_HOLD_KI_GROW_Q6 5      /* ki_hold grows by 5/64 of itself per 0.1 deg of error */
+#define KM_HOLD_BLEED_DDEG 4      /* a push returning this close: its integrator bleeds */
+#define KM_HOLD_RETURN_BLEED_Q9 5 /* ... by 5/512 a tick */
 
 /* kp and kd shifted down while a 0x68 stream runs (docs/tuning.md "0x68 streams"). */
 #define KM_STREAM_KP_SHIFT 1
