@@ -18,6 +18,15 @@ void km_position_loop_init(km_position_loop_t *l)
     l->last_sp_sub = 0;
 }
 
+/* Whether a settled hold was pushed away from where it rested (ki_hold's case). */
+static bool prv_pushed(const km_position_loop_t *l, const km_control_gains_t *g,
+                       const km_position_loop_in_t *in)
+{
+    const int32_t pushed = in->position - l->rest_pos; /* from where the settled hold rested */
+    return l->still_ms >= KM_HOLD_SETTLED_MS && g->ki_hold_q4 != 0u &&
+           (pushed > KM_HOLD_PUSH_DDEG || pushed < -KM_HOLD_PUSH_DDEG);
+}
+
 /* The integrator gain while holding still, or -1 when it waits this tick. */
 static int32_t prv_hold_ki(km_position_loop_t *l, const km_control_gains_t *g,
                            const km_position_loop_in_t *in, int32_t e_u, int32_t e_d, bool in_band)
@@ -29,9 +38,7 @@ static int32_t prv_hold_ki(km_position_loop_t *l, const km_control_gains_t *g,
         }
         return -1;
     }
-    const int32_t pushed = in->position - l->rest_pos; /* from where the settled hold rested */
-    const bool push = l->still_ms >= KM_HOLD_SETTLED_MS && g->ki_hold_q4 != 0u &&
-                      (pushed > KM_HOLD_PUSH_DDEG || pushed < -KM_HOLD_PUSH_DDEG);
+    const bool push = prv_pushed(l, g, in);
     if ((e_u > 0 && in->speed_ddps > KM_HOLD_RETURN_DDPS) ||
         (e_u < 0 && in->speed_ddps < -KM_HOLD_RETURN_DDPS)) {
         if (push && e_d <= KM_HOLD_BLEED_DDEG && e_d >= -KM_HOLD_BLEED_DDEG) {
