@@ -88,53 +88,60 @@ static uint8_t prv_action_bits(const km_control_params_t *p, uint8_t bit)
     return (uint8_t)((p->prot_state >> (2u * prv_index(bit))) & 3u);
 }
 
+/* The bit number of a single protection bit (1, 2, 4 or 8 -> 0..3). */
+static uint8_t prv_bit_number(uint8_t bit)
+{
+    return (uint8_t)((bit >> 1) - (bit >> 3));
+}
+
 /* The up/down timer of each protection that is over, active or being
  * timed (a disabled one's timer dropped): trips at the detection time,
  * releases automatically when it counted back to 0 (0x33 bit clear). */
 static void prv_time(km_protect_t *s, uint8_t over, uint8_t enabled, const km_control_params_t *p,
                      uint32_t dt_us, km_protect_events_t *ev)
 {
-    for (uint8_t i = 0; i < PRV_N; i++) {
-        if ((s->timing & ~enabled & (1u << i)) != 0u) {
-            s->timer_us[i] = 0u;
-        }
+    for (uint8_t dropped = (uint8_t)(s->timing & ~enabled); dropped != 0u;
+         dropped &= (uint8_t)(dropped - 1u)) {
+        s->timer_us[prv_bit_number((uint8_t)(dropped & (0u - dropped)))] = 0u;
     }
-    uint8_t todo = (uint8_t)((over | s->active | s->timing) & enabled);
-    s->timing = 0;
-    for (uint8_t i = 0, bit = 1u; todo != 0u; i++, bit = (uint8_t)(bit << 1)) {
-        if ((todo & bit) == 0u) {
-            continue;
-        }
-        todo &= (uint8_t)~bit;
-        uint32_t timer = s->timer_us[i];
+    uint8_t timing = 0;
+    for (uint8_t todo = (uint8_t)((over | s->active | s->timing) & enabled); todo != 0u;
+         todo &= (uint8_t)(todo - 1u)) {
+        const uint8_t bit = (uint8_t)(todo & (0u - todo));
+        uint32_t *const timer = &s->timer_us[prv_bit_number(bit)];
+        uint32_t t = *timer;
         if ((over & bit) != 0u) {
             const uint32_t t_detect = km_protect_detect_us(p, bit);
-            timer += dt_us;
-            if (timer >= t_detect) {
-                timer = t_detect;
+            t += dt_us;
+            if (t >= t_detect) {
+                t = t_detect;
                 if ((s->active & bit) == 0u) {
                     s->active |= bit;
                     ev->tripped |= bit;
                 }
             }
         } else {
-            timer = timer > dt_us ? timer - dt_us : 0u;
-            if (timer == 0u && (s->active & bit) != 0u && (p->prot_release & bit) == 0u) {
+            t = t > dt_us ? t - dt_us : 0u;
+            if (t == 0u && (s->active & bit) != 0u && (p->prot_release & bit) == 0u) {
                 s->active &= (uint8_t)~bit; /* automatic release: absent for T */
                 ev->released |= bit;
             }
         }
-        s->timer_us[i] = timer;
-        if (timer != 0u) {
-            s->timing |= bit;
+        *timer = t;
+        if (t != 0u) {
+            timing |= bit;
         }
     }
+    s->timing = timing;
 }
 
 /* The action of the highest active protection (§5.2 priority): 0x34's
  * two bits; hold only in servo mode and only for current and stall. */
 static km_prot_action_t prv_action(const km_protect_t *s, const km_control_params_t *p, bool servo_mode)
 {
+    if (s->active == 0u) {
+        return KM_PROT_ACT_NONE; /* timing only: no protection acts yet */
+    }
     for (uint8_t k = 0; k < PRV_N; k++) {
         const uint8_t bit = s_priority[k];
         if ((s->active & bit) == 0u) {
