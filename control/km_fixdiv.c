@@ -5,6 +5,9 @@
 /* (n x m) >> (32 + s): one copy of the multiply for every divisor (flash). */
 static __attribute__((noinline)) uint32_t prv_mulhi_shr(uint32_t n, uint32_t m, uint32_t s)
 {
+    if (n <= 0xFFFFu) { /* the tick's usual operand: two of the four products */
+        return ((n * (m >> 16) + ((n * (m & 0xFFFFu)) >> 16)) >> 16) >> s;
+    }
     return km_umulhi(n, m) >> s;
 }
 
@@ -60,3 +63,46 @@ PRV_DIVS(100)
 PRV_DIVS(1000)
 PRV_DIVS(2560)
 PRV_DIVS(256000)
+
+/* A reciprocal at most floor(2^32 / d), d >= 2, and more than half of it:
+ * near d0 the tangent r0 (1 - (d - d0) / d0) less one (below the
+ * reciprocal, whose curve lies above its tangent), else 2^31 / 2^k for
+ * 2^k <= d < 2^(k+1). */
+static uint32_t prv_recip_seed(uint32_t d, const km_recip_near_t *c)
+{
+    const uint32_t lo = c->d0 - c->d0 / 4u;
+    if (d - lo < lo) { /* d0 x 3/4 <= d < d0 x 3/2 */
+        const int32_t delta = (int32_t)d - (int32_t)c->d0;
+        return c->r0 - (uint32_t)((delta * (int32_t)c->slope) >> 8) - 1u;
+    }
+    uint32_t seed = 0x80000000u;
+    for (uint32_t top = d >> 1; top != 0u; top >>= 1) {
+        seed >>= 1;
+    }
+    return seed;
+}
+
+__attribute__((noinline)) uint32_t km_udiv_near(uint32_t n, uint32_t d, const km_recip_near_t *c)
+{
+    if (n < d) {
+        return 0u; /* a shaft holding still: no reciprocal */
+    }
+    if (d < 2u) {
+        return d == 1u ? n : 0u;
+    }
+    uint32_t r = prv_recip_seed(d, c);
+    uint32_t e = 0u - d * r; /* 2^32 - d r: r never passes 2^32 / d */
+    for (unsigned k = 0; k < 6u && e >= 4u * d; k++) {
+        r += prv_mulhi_shr(r, e, 0u); /* Newton: the error squared */
+        e = 0u - d * r;
+    }
+    while (e >= d) { /* r = floor(2^32 / d) */
+        r++;
+        e -= d;
+    }
+    uint32_t q = km_umulhi(n, r); /* floor(n / d) or one less: n r / 2^32 > n / d - 1 */
+    if (n - q * d >= d) {
+        q++;
+    }
+    return q;
+}

@@ -37,4 +37,23 @@ int32_t km_sdiv1000(int32_t n);
 int32_t km_sdiv2560(int32_t n);
 int32_t km_sdiv256000(int32_t n);
 
+/* floor(n / d) for d < 2^30 (0 for d = 0) by multiplies only, for a
+ * divisor that wanders around a nominal d0 (the speed estimators' span and
+ * window): the reciprocal floor(2^32 / d) from the tangent at d0 when d is
+ * within d0 x [3/4, 3/2) (a few microseconds off: a few adds), by Newton's
+ * iteration r' = r (2 - d r / 2^32) further away, then one correction of
+ * the quotient; tests/unit/control/test_control_fixdiv.c checks it against
+ * C's `/`. */
+typedef struct {
+    uint32_t d0;    /* the nominal divisor, 256 .. 65536 (the tangent stays below the curve) */
+    uint32_t r0;    /* floor(2^32 / d0) */
+    uint32_t slope; /* ceil(2^40 / d0^2): r0 / d0 in 1/256 */
+} km_recip_near_t;
+#define KM_RECIP_NEAR(d0)                                                                       \
+    {                                                                                           \
+        (d0), (uint32_t)(0x100000000ull / (d0)),                                                \
+            (uint32_t)((0x10000000000ull + (uint64_t)(d0) * (d0)-1u) / ((uint64_t)(d0) * (d0))) \
+    }
+uint32_t km_udiv_near(uint32_t n, uint32_t d, const km_recip_near_t *c);
+
 #endif

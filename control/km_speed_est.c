@@ -9,6 +9,19 @@
 
 _Static_assert(100000u % KM_SPEED_WINDOW_US == 0u, "the window's exact fast path");
 
+#define PRV_FAST_SPAN_US ((KM_SPEED_FAST_N - 1u) * 1000u) /* the ring's span at the 1 kHz tick */
+
+static const km_recip_near_t s_span_recip = KM_RECIP_NEAR(PRV_FAST_SPAN_US);
+static const km_recip_near_t s_window_recip = KM_RECIP_NEAR(KM_SPEED_WINDOW_US);
+
+/* n / d truncated toward zero, as C's `/`, without a library division
+ * (km_udiv_near: a divisor near its nominal value costs a few adds); 0 for d = 0. */
+static int32_t prv_sdiv_near(int32_t n, uint32_t d, const km_recip_near_t *c)
+{
+    const uint32_t q = km_udiv_near(n < 0 ? 0u - (uint32_t)n : (uint32_t)n, d, c);
+    return n < 0 ? -(int32_t)q : (int32_t)q;
+}
+
 void km_speed_window_init(km_speed_window_t *w)
 {
     memset(w, 0, sizeof *w);
@@ -23,7 +36,7 @@ int32_t km_speed_window_step(km_speed_window_t *w, int32_t position, uint32_t dt
             /* 0.1 deg per us -> deg/s; clamped so the product stays in 32 bits */
             const int32_t acc = w->acc > 20000 ? 20000 : (w->acc < -20000 ? -20000 : w->acc);
             w->dps = w->us == KM_SPEED_WINDOW_US ? acc * (100000 / (int32_t)KM_SPEED_WINDOW_US)
-                                                 : (acc * 100000) / (int32_t)w->us;
+                                                 : prv_sdiv_near(acc * 100000, w->us, &s_window_recip);
             w->acc = 0;
             w->us = 0;
         }
@@ -62,12 +75,12 @@ int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
     const uint8_t i = (uint8_t)((f->head + KM_SPEED_FAST_N + 1u - f->count) % KM_SPEED_FAST_N);
     int32_t d = km_pos_diff(position, f->pos[i]);
     d = d > 2000 ? 2000 : (d < -2000 ? -2000 : d); /* keeps d x 1e6 in 32 bits */
-    if (span == (KM_SPEED_FAST_N - 1u) * 1000u) {
+    if (span == PRV_FAST_SPAN_US) {
         /* the steady 1 kHz tick: d x 1000 / 7, exact for n <= 2e6 */
         const uint32_t q = km_umulhi((uint32_t)(d < 0 ? -d : d) * 1000u, KM_FIXDIV_M7);
         f->ddps = d < 0 ? -(int32_t)q : (int32_t)q;
     } else {
-        f->ddps = span ? (d * 1000000) / (int32_t)span : 0;
+        f->ddps = prv_sdiv_near(d * 1000000, span, &s_span_recip);
     }
     return f->ddps;
 }

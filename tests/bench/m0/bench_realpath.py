@@ -407,7 +407,8 @@ def main():
     ap.add_argument("--step", type=int, default=1, help="list lengths: every N-th (default 1: all)")
     ap.add_argument("--only", default="byte,lists,tick")
     ap.add_argument("--check", action="store_true",
-                    help="fail if a byte inside a frame ran the parser (docs/benchmarks.md \"Per byte\")")
+                    help="fail if a byte inside a frame ran the parser or a control tick called a library"
+                         " division (docs/benchmarks.md \"Per byte\", \"Control tick\")")
     a = ap.parse_args()
     elf = os.path.join(a.build, "km-servo-stm32g031.elf")
     if not os.path.exists(elf):
@@ -423,6 +424,10 @@ def main():
             json.dump(figs, f, indent=1, sort_keys=True)
     if a.check and figs.get("byte_parsed", 0):
         print("bench_realpath: %d bytes inside a frame ran the parser" % figs["byte_parsed"], file=sys.stderr)
+        return 1
+    divs = {k: v["library_divisions"] for k, v in figs.items() if k.startswith("tick_")}
+    if a.check and any(divs.values()):
+        print("bench_realpath: a control tick called a library division (%s)" % divs, file=sys.stderr)
         return 1
     return 0
 

@@ -327,6 +327,52 @@ static void test_profile_equals_division_reference(void **state)
     }
 }
 
+/* floor(n / d) for the divisor that wanders (the speed estimators' span
+ * and window): equal to C's `/` for every d up to 40,000 (both nominal
+ * bands of 7,000 and 20,000 us, their edges and the power-of-two
+ * brackets between), at the largest n and at n = q x d +- 1, and for
+ * random n and d over the whole domain (d < 2^30), for the nominal values
+ * the estimators use and the smallest and largest allowed; d = 0 gives 0. */
+static const km_recip_near_t s_near[] = {KM_RECIP_NEAR(7000u), KM_RECIP_NEAR(20000u), KM_RECIP_NEAR(256u),
+                                         KM_RECIP_NEAR(65536u)};
+
+static void check_udiv_near(uint32_t n, uint32_t d, unsigned c)
+{
+    const uint32_t want = n / d;
+    const uint32_t got = km_udiv_near(n, d, &s_near[c]);
+    if (got != want) {
+        fail_msg("km_udiv_near(%u, %u, d0 %u) = %u, C says %u", n, d, s_near[c].d0, got, want);
+    }
+}
+
+static void test_udiv_near_matches_c(void **state)
+{
+    (void)state;
+    for (unsigned d0 = 0; d0 < sizeof s_near / sizeof s_near[0]; d0++) {
+        for (uint32_t d = 1u; d <= 40000u; d++) {
+            const uint32_t n = rnd();
+            check_udiv_near(0xFFFFFFFFu, d, d0);
+            check_udiv_near(2000000000u, d, d0);
+            check_udiv_near(n, d, d0);
+            check_udiv_near(d - 1u, d, d0);
+            check_udiv_near((n / d) * d, d, d0);
+            if ((n / d) * d != 0u) {
+                check_udiv_near((n / d) * d - 1u, d, d0);
+            }
+        }
+        for (uint32_t d = s_near[d0].d0 / 2u; d <= s_near[d0].d0 * 2u; d += 1u + s_near[d0].d0 / 65536u) {
+            check_udiv_near(0xFFFFFFFFu, d, d0);
+            check_udiv_near(rnd(), d, d0);
+        }
+        assert_int_equal(km_udiv_near(12345u, 0u, &s_near[d0]), 0u);
+    }
+    for (unsigned i = 0; i < 1000000u; i++) {
+        const uint32_t d = (rnd() >> (2u + rnd() % 30u)) | 1u; /* every magnitude below 2^30 */
+        check_udiv_near(rnd(), d, i % 4u);
+        check_udiv_near(rnd() >> (rnd() % 32u), d, (i + 1u) % 4u);
+    }
+}
+
 /* ---- the fast speed estimate as it was (the span summed every tick) ---- */
 
 static int32_t ref_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
@@ -439,6 +485,7 @@ int main(void)
         cmocka_unit_test(test_unsigned_quotients_match_c),
         cmocka_unit_test(test_signed_quotients_match_c),
         cmocka_unit_test(test_profile_equals_division_reference),
+        cmocka_unit_test(test_udiv_near_matches_c),
         cmocka_unit_test(test_speed_fast_steady_tick_every_displacement),
         cmocka_unit_test(test_speed_fast_running_span_equals_sum),
         cmocka_unit_test(test_speed_window_equals_division),
