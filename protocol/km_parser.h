@@ -70,6 +70,12 @@ unsigned km_parser_poll(km_parser_t *p, uint32_t now, km_frame_t *out);
 /* km_parser_poll() handing the frame out as a view, like km_parser_feed_bytes. */
 unsigned km_parser_poll_view(km_parser_t *p, uint32_t now, km_parser_out_t *out);
 
+/* True when the parser holds no byte: km_parser_poll*() would return 0 at any time. */
+static inline bool km_parser_empty(const km_parser_t *p)
+{
+    return p->fill == 0u;
+}
+
 /* Frame-end tracker for the receive interrupt (docs/benchmarks.md "Per
  * byte"): follows the parser's framing a byte at a time (F9, FF|F5, ID,
  * length, then `length` more bytes) so that the main loop runs the parser

@@ -193,7 +193,7 @@ static void prv_drain_rx(void)
         km_rx_queue_release(&s_rxq, used);
         budget -= used;
     }
-    if (!prv_rx_blocked()) {
+    if (!prv_rx_blocked() && !km_parser_empty(&s_parser)) { /* empty: no time read, no call */
         const unsigned events = km_parser_poll_view(&s_parser, km_hal_time_now(), &s_out);
         if (events != 0u) {
             prv_on_events(events);
