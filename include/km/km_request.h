@@ -68,8 +68,10 @@ typedef enum {
     KM_REQ_PROTECTION_CLEAR, /* .clear: KM_PROT_* bits */
 } km_request_kind_t;
 
+/* Word-aligned: built, zeroed and copied as three words, not by newlib's
+ * byte loops (docs/benchmarks.md "Lists"). */
 typedef struct {
-    uint8_t kind; /* km_request_kind_t */
+    _Alignas(4) uint8_t kind; /* km_request_kind_t */
     union {
         uint8_t torque;
         km_move_t move;
