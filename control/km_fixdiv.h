@@ -49,10 +49,11 @@ typedef struct {
     uint32_t r0;    /* floor(2^32 / d0) */
     uint32_t slope; /* ceil(2^40 / d0^2): r0 / d0 in 1/256 */
 } km_recip_near_t;
-#define KM_RECIP_NEAR(d0)                                                                       \
-    {                                                                                           \
-        (d0), (uint32_t)(0x100000000ull / (d0)),                                                \
-            (uint32_t)((0x10000000000ull + (uint64_t)(d0) * (d0)-1u) / ((uint64_t)(d0) * (d0))) \
+#define KM_RECIP_NEAR(d0)                                                        \
+    {                                                                            \
+        (uint32_t)(d0), (uint32_t)(0x100000000ull / (uint64_t)(d0)),             \
+            (uint32_t)((0x10000000000ull + (uint64_t)(d0) * (uint64_t)(d0)-1u) / \
+                       ((uint64_t)(d0) * (uint64_t)(d0)))                        \
     }
 uint32_t km_udiv_near(uint32_t n, uint32_t d, const km_recip_near_t *c);
 
