@@ -5,7 +5,7 @@
 /* (n x m) >> (32 + s): one copy of the multiply for every divisor (flash). */
 static __attribute__((noinline)) uint32_t prv_mulhi_shr(uint32_t n, uint32_t m, uint32_t s)
 {
-    if (n <= 0xFFFFu) { /* the tick's usual operand: two of the four products */
+    if (n <= 0xFFFFu) { /* two of the four products */
         return ((n * (m >> 16) + ((n * (m & 0xFFFFu)) >> 16)) >> 16) >> s;
     }
     return km_umulhi(n, m) >> s;
@@ -64,10 +64,8 @@ PRV_DIVS(1000)
 PRV_DIVS(2560)
 PRV_DIVS(256000)
 
-/* A reciprocal at most floor(2^32 / d), d >= 2, and more than half of it:
- * near d0 the tangent r0 (1 - (d - d0) / d0) less one (below the
- * reciprocal, whose curve lies above its tangent), else 2^31 / 2^k for
- * 2^k <= d < 2^(k+1). */
+/* A reciprocal in (floor(2^32 / d) / 2, floor(2^32 / d)], d >= 2: the
+ * tangent at d0 less one near d0, else 2^31 >> k for 2^k <= d < 2^(k+1). */
 static uint32_t prv_recip_seed(uint32_t d, const km_recip_near_t *c)
 {
     const uint32_t lo = c->d0 - c->d0 / 4u;
@@ -82,6 +80,7 @@ static uint32_t prv_recip_seed(uint32_t d, const km_recip_near_t *c)
     return seed;
 }
 
+/* floor(n / d): Newton's iteration to floor(2^32 / d), then one correction. */
 __attribute__((noinline)) uint32_t km_udiv_near(uint32_t n, uint32_t d, const km_recip_near_t *c)
 {
     if (n < d) {

@@ -37,15 +37,10 @@ int32_t km_sdiv1000(int32_t n);
 int32_t km_sdiv2560(int32_t n);
 int32_t km_sdiv256000(int32_t n);
 
-/* floor(n / d) for d < 2^30 (0 for d = 0) by multiplies only, for a
- * divisor that wanders around a nominal d0 (the speed estimators' span and
- * window): the reciprocal floor(2^32 / d) from the tangent at d0 when d is
- * within d0 x [3/4, 3/2) (a few microseconds off: a few adds), by Newton's
- * iteration r' = r (2 - d r / 2^32) further away, then one correction of
- * the quotient; tests/unit/control/test_control_fixdiv.c checks it against
- * C's `/`. */
+/* floor(n / d) for d < 2^30 (0 for d = 0) by multiplies only, d wandering
+ * around a nominal d0 (docs/control-design.md "Division without a divide"). */
 typedef struct {
-    uint32_t d0;    /* the nominal divisor, 256 .. 65536 (the tangent stays below the curve) */
+    uint32_t d0;    /* the nominal divisor, 256 .. 65536 */
     uint32_t r0;    /* floor(2^32 / d0) */
     uint32_t slope; /* ceil(2^40 / d0^2): r0 / d0 in 1/256 */
 } km_recip_near_t;
