@@ -20,7 +20,6 @@ static inline __attribute__((always_inline)) uint32_t km_umulhi(uint32_t a, uint
 
 /* The reciprocals: M = ceil(2^(32+s) / d). */
 #define KM_FIXDIV_M10 0xCCCCCCCDu   /* d = 10, s = 3 */
-#define KM_FIXDIV_M7 0x24924925u    /* d = 7, s = 0: exact only for n < 2^32 / 3 (km_speed_est.c) */
 #define KM_FIXDIV_M1000 0x10624DD3u /* d = 1000, s = 6 */
 #define KM_FIXDIV_M5 0xCCCCCCCDu    /* d = 5, s = 2 */
 #define KM_FIXDIV_M100 0xA3D70A3Eu  /* d = 100, s = 6 */

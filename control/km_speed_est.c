@@ -74,14 +74,8 @@ int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
     const uint32_t span = f->span_us;
     const uint8_t i = (uint8_t)((f->head + KM_SPEED_FAST_N + 1u - f->count) % KM_SPEED_FAST_N);
     int32_t d = km_pos_diff(position, f->pos[i]);
-    d = d > 2000 ? 2000 : (d < -2000 ? -2000 : d); /* keeps d x 1e6 in 32 bits */
-    if (span == PRV_FAST_SPAN_US) {
-        /* the steady 1 kHz tick: d x 1000 / 7, exact for n <= 2e6 */
-        const uint32_t q = km_umulhi((uint32_t)(d < 0 ? -d : d) * 1000u, KM_FIXDIV_M7);
-        f->ddps = d < 0 ? -(int32_t)q : (int32_t)q;
-    } else {
-        f->ddps = prv_sdiv_near(d * 1000000, span, &s_span_recip);
-    }
+    d = d > 2000 ? 2000 : (d < -2000 ? -2000 : d);             /* keeps d x 1e6 in 32 bits */
+    f->ddps = prv_sdiv_near(d * 1000000, span, &s_span_recip); /* 7,000 us: no Newton step */
     return f->ddps;
 }
 
