@@ -24,6 +24,7 @@ import sys
 import time
 
 STALL_S = 60.0   # the clock not moving for this long in real time: the bus is gone
+STOPPED = (1 << 64) - 1   # what a bus that stopped leaves in its clock file (stop())
 
 real_monotonic = time.monotonic
 real_sleep = time.sleep
@@ -35,14 +36,27 @@ class Clock:
     def __init__(self, path):
         with open(path, "rb") as f:
             self.map = mmap.mmap(f.fileno(), 8, access=mmap.ACCESS_READ)
+        self.seen, self.stopped_at = 0, None
         self.last = (self.ns(), real_monotonic())
 
-    def ns(self):
-        """Virtual nanoseconds (read twice: the bus may be writing)."""
+    def _raw(self):
+        """The clock file's value (read twice: the bus may be writing)."""
         while True:
             a = int.from_bytes(self.map[0:8], "little")
             if a == int.from_bytes(self.map[0:8], "little"):
                 return a
+
+    def ns(self):
+        """Virtual nanoseconds; once the bus has stopped (STOPPED), the last
+        virtual time seen goes on in real time, so that waiting for the bus
+        process to end (subprocess's wait sleeps) is real time again."""
+        raw = self._raw()
+        if raw != STOPPED:
+            self.seen = raw
+            return raw
+        if self.stopped_at is None:
+            self.stopped_at = (self.seen, real_monotonic())
+        return self.stopped_at[0] + int((real_monotonic() - self.stopped_at[1]) * 1e9)
 
     def monotonic(self):
         """Virtual seconds, for time.monotonic."""
@@ -92,6 +106,11 @@ def create(path):
 def publish(clock_map, ns):
     """The bus side: its virtual time now."""
     clock_map[0:8] = int(ns).to_bytes(8, "little")
+
+
+def stop(clock_map):
+    """The bus side: the bus stops; its masters' clocks go on in real time."""
+    clock_map[0:8] = STOPPED.to_bytes(8, "little")
 
 
 def main(argv):

@@ -499,7 +499,7 @@ def main(argv=None):
         return 2
     server.listen(1)
     server.setblocking(False)
-    servos = []
+    servos, bus = [], None
     try:
         for dev_id in ids:
             if STOP:
@@ -520,6 +520,8 @@ def main(argv=None):
         log("stopping: %.0f virtual us per real second over the run" % bus.speed())
         return 0
     finally:
+        if bus is not None and bus.clock is not None:
+            vclock.stop(bus.clock)
         for s in servos:
             s.save()
         server.close()

@@ -303,5 +303,29 @@ class MachineExceptionTests(unittest.TestCase):
         self.assertEqual(m.faults, [])
 
 
+class VclockTests(unittest.TestCase):
+    """sim/g031/vclock.py: the master's clock on the bus's virtual time."""
+
+    def test_stopped_bus_hands_the_clock_back_to_real_time(self):
+        """A master that waits for the bus process to end (subprocess's
+        wait sleeps on time.sleep) after the bus stopped: the clock goes on
+        in real time from the last virtual time seen, it does not stall."""
+        import os
+        import tempfile
+        import vclock
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "clock")
+            bus_side = vclock.create(path)
+            vclock.publish(bus_side, 5_000_000_000)
+            clock = vclock.Clock(path)
+            self.assertEqual(clock.ns(), 5_000_000_000)
+            vclock.stop(bus_side)
+            real = vclock.real_monotonic()
+            clock.sleep(0.05)   # before the fix: waits STALL_S (60 s) and raises
+            self.assertLess(vclock.real_monotonic() - real, 5.0)
+            self.assertGreaterEqual(clock.ns(), 5_050_000_000)
+            self.assertLess(clock.ns(), 5_000_000_000 + 60 * 10**9)
+
+
 if __name__ == "__main__":
     unittest.main(verbosity=1)
