@@ -94,6 +94,27 @@ class Images(unittest.TestCase):
         print("boot+app: main loop after %d instructions, %.3f ms virtual" % (instr, t / 1e6))
         self.assertEqual((m.faults, m.resets), ([], []))
 
+    def test_update_mode_bootloader_sleeps_between_bytes(self):
+        """The bootloader alone (no application: update mode at ID 0 and
+        115200, firmware/update/km_boot_address.h) sleeps in WFI between
+        bytes (km_bootb_wait, the 64 KiB build) and still answers: a quiet
+        100 ms runs a few of its 10 ms wake-ups, where a polling loop at
+        16 MHz runs 1.6 million instructions; a ping is answered after it."""
+        boot = os.path.join(IMAGES, "km-boot-stm32g031.elf")
+        m = vg031.make(argparse.Namespace(boot=boot, app=None, elf=None, app_elf=None))
+        m.run_until(50 * MS)
+        answer, _ = exchange(m, frame(0, 0x01))
+        self.assertEqual(answer[:3], bytes.fromhex("F9F500"), "update mode, ID 0: %s" % answer.hex(" "))
+        before = m.instructions
+        m.run_until(m.now + 100 * MS)
+        quiet = m.instructions - before
+        answer, delay = exchange(m, frame(0, 0x01))
+        print("bootloader in update mode: %d instructions in a quiet 100 ms; ping answered %s, "
+              "%.1f us after the stop bit" % (quiet, answer.hex(" "), delay or -1))
+        self.assertLess(quiet, 100_000)
+        self.assertEqual(answer[:3], bytes.fromhex("F9F500"), answer.hex(" "))
+        self.assertEqual((m.faults, m.resets), ([], []))
+
     def test_ping_and_register_read_answered(self):
         m, (poll,) = boot_and_app()
         self.assertTrue(to_main_loop(m, poll))

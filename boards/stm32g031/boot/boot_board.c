@@ -4,7 +4,8 @@
  * set up), TIM2 at 1 MHz, USART1 single-wire half-duplex on PB6 polled,
  * the flash controller over the application region (erase, double-word
  * program, reads that report a double ECC error), a read-only view of the
- * store, the IWDG, and the jump through VTOR. Runs from flash with no interrupt
+ * store, the IWDG, and the jump through VTOR; the 64 KiB build sleeps
+ * between bytes (km_bootb_wait). Runs from flash with no interrupt
  * enabled, so a page erase simply stalls it (docs/flash-busy.md concerns
  * the application's bus interrupts, which are off here). */
 #include <stdint.h>
@@ -232,6 +233,31 @@ bool km_bootb_uart_rx(uint8_t *byte)
     *byte = (uint8_t)USART1_RDR;
     return true;
 }
+
+#ifdef BOOT_HAS_WAIT
+#define PRV_WAKE_US 10000u
+#define PRV_WAKE_IRQS ((1u << G0_IRQ_TIM2) | (1u << G0_IRQ_USART1))
+
+/* WFI until USART1's RXNE or TIM2's CC1 (now + 10 ms) pends its
+ * interrupt: both are enabled at the peripheral and in the NVIC only
+ * around the WFI, with PRIMASK set, so the core wakes (ARMv6-M B1.5.19)
+ * but never takes them (the table has no handler for them). A byte
+ * already in RDR pends USART1 at once: the WFI then returns at once. */
+void km_bootb_wait(void)
+{
+    __asm__ volatile("cpsid i" ::: "memory");
+    TIM_CCR1(TIM2_BASE_R) = TIM_CNT(TIM2_BASE_R) + PRV_WAKE_US;
+    TIM_SR(TIM2_BASE_R) = 0u;
+    TIM_DIER(TIM2_BASE_R) = TIM_DIER_CC1IE;
+    USART1_CR1 = USART_CR1_UE | USART_CR1_TE | USART_CR1_RE | USART_CR1_RXNEIE;
+    NVIC_ISER = PRV_WAKE_IRQS;
+    __asm__ volatile("wfi" ::: "memory");
+    NVIC_ICER = PRV_WAKE_IRQS;
+    USART1_CR1 = USART_CR1_UE | USART_CR1_TE | USART_CR1_RE;
+    TIM_DIER(TIM2_BASE_R) = 0u;
+    NVIC_ICPR = PRV_WAKE_IRQS;
+}
+#endif
 
 void km_bootb_uart_tx(const uint8_t *p, uint32_t n)
 {

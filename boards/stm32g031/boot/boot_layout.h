@@ -23,5 +23,11 @@
 #define BOOT_REGION_SIZE (BOOT_STORE_BASE - BOOT_REGION_BASE)
 #define BOOT_RAM_BASE 0x20000000u
 #define BOOT_SHARED_ADDR 0x20001FE0u /* km_boot_shared_t: the top 32 bytes of RAM */
+/* Update mode sleeps between bytes (km_bootb_wait) where the bootloader's
+ * region has room: the 8 KiB one; the 32 KiB part's 4 KiB bootloader polls
+ * (docs/footprint.md). */
+#if KM_G031_BOOT_KB >= 8u
+#define BOOT_HAS_WAIT 1
+#endif
 
 #endif
