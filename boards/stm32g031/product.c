@@ -9,14 +9,19 @@
 #include "km_boot_board.h"
 #endif
 
+#ifndef KM_APP_SW_VERSION
+#define KM_APP_SW_VERSION 0x0100u
+#endif
+
 /* Position-loop gains and profile limits: the defaults were tuned on the
  * simulated plant of this servo class (docs/tuning.md says how). */
 static const km_control_gains_t s_gains = KM_CONTROL_GAINS_DEFAULT;
 
 static const km_product_t s_product = {
     .model = "KM-G031-P135",
-    /* 0x@@##&&&&: no bootloader, hardware v1.0, software v0.1.00 */
-    .firmware_version = 0x00100100u,
+    /* 0x@@##&&&&: no bootloader, hardware v1.0, software v0.1.00 (a
+     * second build for the update tests sets KM_APP_SW_VERSION) */
+    .firmware_version = 0x00100000u | (uint32_t)(KM_APP_SW_VERSION),
     .variant = KM_VARIANT_POTENTIOMETER,
     .max_current_ma = 2000,
     .max_speed_dps = 360,

@@ -8,9 +8,11 @@ tools/servo-update exactly as on QEMU (tests/qemu/update_e2e.py):
   2. an image for another model (the stm32g031 image with its header's
      model changed, header CRC redone) is refused by all three, nothing
      erased: after START they run the old image again;
-  3. the stm32g031 image as version + 1 (header only; the body and its CRC
-     are the shipped ones) to all three in one broadcast pass, through the
-     real bootloader's erase and program: 0x0C gives the new version;
+  3. the second application build (km-servo-app-v2-stm32g031.kmfw, software
+     version 0x0102: the application answers 0x0C from its own code, so
+     only a different build shows the update landed) to all three in one
+     broadcast pass, through the real bootloader's erase and program: 0x0C
+     gives 0x10100102;
   4. back to the shipped version with RESTARTS restart frames and RESETS
      NRST resets (the bus's monitor sockets, as QEMU's system_reset) at
      random points of the pass; the update completes on every servo.
@@ -35,13 +37,11 @@ from kmx import frame as fr  # noqa: E402
 HEADER = "<IIIIIIII"   # magic, model, length, version, vectors, base, body CRC, header CRC (docs/update.md §2)
 
 
-def variant(image, model_xor=0, version=None):
-    """The image with its header's model or version changed and the header
-    CRC redone; the body and its CRC stay the shipped ones."""
+def variant(image, model_xor):
+    """The image with its header's model changed and the header CRC redone;
+    the body and its CRC stay the shipped ones."""
     f = list(struct.unpack_from(HEADER, image))
     f[1] ^= model_xor
-    if version is not None:
-        f[3] = version
     head = struct.pack("<IIIIIII", *f[:7])
     head += struct.pack("<I", zlib.crc32(head) & 0xFFFFFFFF)
     return head + image[32:]
@@ -69,10 +69,9 @@ def run_update(update, path, extra=()):
     return r.returncode, r.stdout
 
 
-def checks(spec, mon, tmp, image, a):
+def checks(spec, mon, tmp, image, image_v2, a):
     """The four steps; the failures."""
     ids, failures = (1, 2, 3), []
-    shipped = struct.unpack_from(HEADER, image)[3]
     update = [sys.executable, vclock.__file__, os.path.join(tmp, "clock"), os.path.join(REPO, "tools/servo-update"),
               "--bus", spec, "--ids", "1,2,3"]
     v = versions(spec, ids)
@@ -80,8 +79,7 @@ def checks(spec, mon, tmp, image, a):
     if any(x is None for x in v.values()):
         failures.append("1: a servo does not answer 0x0C")
     paths = {}
-    for name, data in (("other", variant(image, model_xor=0x00FF0000)), ("next", variant(image, version=shipped + 1)),
-                       ("shipped", image)):
+    for name, data in (("other", variant(image, 0x00FF0000)), ("next", image_v2), ("shipped", image)):
         paths[name] = os.path.join(tmp, name + ".kmfw")
         with open(paths[name], "wb") as f:
             f.write(data)
@@ -95,8 +93,9 @@ def checks(spec, mon, tmp, image, a):
         failures.append("2: after the refusal the servos do not run the old image")
     rc, out = run_update(update, paths["next"])
     got = versions(spec, ids)
-    if rc != 0 or any(x is None or (x & 0xFFFFFF) != ((shipped + 1) & 0xFFFFFF) for x in got.values()):
-        failures.append("3: version + 1 not on all three: %r" % got)
+    want = struct.unpack_from(HEADER, image_v2)[3] | 0x10000000  # the bootloader's byte 0x10 on top
+    if rc != 0 or any(x != want for x in got.values()):
+        failures.append("3: v2 (0x%08X) not on all three: %r" % (want, got))
     rc, out = run_update(update, paths["shipped"], ["--restarts", str(a.restarts), "--seed", str(a.seed),
                                                     "--resets", str(a.resets), "--monitor-dir", mon])
     got = versions(spec, ids)
@@ -114,12 +113,15 @@ def main():
     ap.add_argument("--seed", type=int, default=3)
     ap.add_argument("--build-stm32", default=os.path.join(REPO, "build/stm32g031"))
     a = ap.parse_args()
-    kmfw = os.path.join(a.build_stm32, "boards/stm32g031/km-servo-app-stm32g031.kmfw")
-    if not os.path.isfile(kmfw):
-        print("missing %s: cmake --preset stm32g031 && cmake --build --preset stm32g031" % kmfw)
-        return 1
-    with open(kmfw, "rb") as f:
-        image = f.read()
+    images = []
+    for name in ("km-servo-app-stm32g031.kmfw", "km-servo-app-v2-stm32g031.kmfw"):
+        kmfw = os.path.join(a.build_stm32, "boards/stm32g031", name)
+        if not os.path.isfile(kmfw):
+            print("missing %s: cmake --preset stm32g031 && cmake --build --preset stm32g031" % kmfw)
+            return 1
+        with open(kmfw, "rb") as f:
+            images.append(f.read())
+    image, image_v2 = images
     tmp = tempfile.TemporaryDirectory(prefix="g031-update-")
     bus_proc = subprocess.Popen([os.path.join(REPO, "sim/bus/servo-bus"), "--backend", "g031", "--ids", "1,2,3",
                                  "--port", "0", "--build-dir", a.build_stm32, "--monitor-dir", tmp.name,
@@ -135,7 +137,7 @@ def main():
         print("bus: %s, up in %.1f s" % (spec, time.monotonic() - t0), flush=True)
         clock = vclock.install(os.path.join(tmp.name, "clock"))  # this process's waits too
         v0 = clock.ns()
-        failures = checks(spec, tmp.name, tmp.name, image, a)
+        failures = checks(spec, tmp.name, tmp.name, image, image_v2, a)
         print("virtual time %.1f s" % ((clock.ns() - v0) / 1e9))
     finally:
         bus_proc.send_signal(signal.SIGTERM)
