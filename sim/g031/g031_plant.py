@@ -11,7 +11,10 @@ The circuit is the board's as boards/stm32g031/board_config.c describes
 it (board_pins.h for the channels): a 270 deg pot whose wiper spans ADC
 codes 205..3890 over -135..+135 deg, a 50 mOhm shunt into a gain-20
 amplifier, a 100k/10k supply divider (1/11), a 10 kOhm B3950 NTC under a
-10 kOhm pull-up, VREF 3.3 V, 12-bit codes."""
+10 kOhm pull-up, VREF 3.3 V, 12-bit codes. That calibration puts the
+ADC's rails at +-150.0 deg, so the servo's hard stops sit inside them, at
+ENDSTOP_DDEG, within what boards/stm32g031/product.c says its mechanics
+can give (pos_read_min/max +-148.0 deg): docs/virtual-g031.md "The plant"."""
 import ctypes
 import hashlib
 import math
@@ -25,6 +28,7 @@ VREF_MV, FULL = 3300, 4095
 POT_MIN, POT_MAX = 205, 3890
 SHUNT_MOHM, SHUNT_GAIN, VDIV = 50, 20, 11
 NTC_R25, NTC_B, NTC_PULLUP = 10000.0, 3950.0, 10000.0
+ENDSTOP_DDEG = 1450   # the hard stops, 0.1 deg (sim/plant's own are at +-150.0, on this pot's rails)
 DRIVE, COAST, BRAKE = 0, 1, 2
 _LIB = []
 
@@ -48,7 +52,7 @@ def library():
         os.replace(tmp, path)
     lib = ctypes.CDLL(path)
     lib.g031_plant_size.restype = ctypes.c_size_t
-    lib.g031_plant_init.argtypes = [ctypes.c_void_p, ctypes.c_char_p]
+    lib.g031_plant_init.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int32]
     lib.g031_plant_step.argtypes = [ctypes.c_void_p, ctypes.c_int32, ctypes.c_int32, ctypes.c_int32,
                                     ctypes.c_uint32]
     lib.g031_plant_read.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_int32)]
@@ -77,7 +81,7 @@ class Plant:
     def __init__(self, config="realistic", scenario=()):
         self.lib = library()
         self.buf = ctypes.create_string_buffer(self.lib.g031_plant_size())
-        if self.lib.g031_plant_init(self.buf, config.encode()) != 0:
+        if self.lib.g031_plant_init(self.buf, config.encode(), ENDSTOP_DDEG) != 0:
             raise ValueError("no plant configuration %r" % config)
         self.t_ns = None
         self.bridge, self.pwm = COAST, 0

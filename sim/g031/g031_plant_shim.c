@@ -8,17 +8,30 @@
 
 #include "km_plant.h"
 
+/* One servo: its plant and the configuration it runs on (a copy of a
+ * named one, with this servo's end stops). */
+typedef struct {
+    km_plant_t plant;
+    km_plant_config_t cfg;
+} g031_servo_t;
+
 /* Bytes a plant takes (the caller allocates them). */
 size_t g031_plant_size(void)
 {
-    return sizeof(km_plant_t);
+    return sizeof(g031_servo_t);
 }
 
-/* A plant at rest with the named configuration; 0 on success. */
-int g031_plant_init(km_plant_t *p, const char *config_name)
+/* A plant at rest with the named configuration and its hard stops at
+ * +-endstop_ddeg (docs/virtual-g031.md "The plant"); 0 on success. */
+int g031_plant_init(g031_servo_t *s, const char *config_name, int32_t endstop_ddeg)
 {
     const km_plant_config_t *cfg = km_plant_config_named(config_name);
-    return cfg != NULL && km_plant_init(p, cfg) ? 0 : -1;
+    if (cfg == NULL || endstop_ddeg <= 0 || endstop_ddeg >= cfg->pot_travel_ddeg) {
+        return -1;
+    }
+    s->cfg = *cfg;
+    s->cfg.endstop_ddeg = (int16_t)endstop_ddeg;
+    return km_plant_init(&s->plant, &s->cfg) ? 0 : -1;
 }
 
 /* Advances the plant by dt_us with the bridge held (0 drive, 1 coast, 2 brake). */
