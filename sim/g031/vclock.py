@@ -4,7 +4,8 @@ the master's timeouts and pauses are counted in the servos' virtual time
 (docs/virtual-g031.md "Virtual time for the master").
 
 The bus (vg031_bus.py --clock-file PATH) keeps its virtual time in PATH:
-8 bytes, little-endian, nanoseconds, rewritten as the wire advances. A
+8 bytes, little-endian, nanoseconds, rewritten as the wire advances; the
+next 8 bytes are the master's hold, the end of its latest sleep(). A
 master process calls install(PATH) before it talks to the bus:
 time.monotonic() then reads the virtual time and time.sleep() waits until
 the virtual time has moved on by its argument. Because the bus never runs
@@ -25,6 +26,7 @@ import time
 
 STALL_S = 60.0   # the clock not moving for this long in real time: the bus is gone
 STOPPED = (1 << 64) - 1   # what a bus that stopped leaves in its clock file (stop())
+SIZE = 16                 # bytes 0-7: the bus's virtual time; 8-15: a master's hold (sleep())
 
 real_monotonic = time.monotonic
 real_sleep = time.sleep
@@ -34,8 +36,8 @@ class Clock:
     """Reads the bus's virtual time from its clock file."""
 
     def __init__(self, path):
-        with open(path, "rb") as f:
-            self.map = mmap.mmap(f.fileno(), 8, access=mmap.ACCESS_READ)
+        with open(path, "r+b") as f:
+            self.map = mmap.mmap(f.fileno(), SIZE)
         self.seen, self.stopped_at = 0, None
         self.last = (self.ns(), real_monotonic())
 
@@ -64,8 +66,14 @@ class Clock:
 
     def sleep(self, seconds):
         """Waits until the virtual time has advanced by `seconds`; a clock
-        that stops for STALL_S real seconds raises RuntimeError."""
+        that stops for STALL_S real seconds raises RuntimeError. The end is
+        published as the master's hold: the bus stops there until the
+        master's next bytes (or its next hold), so what the master sends on
+        waking goes on the wire at the virtual time it woke, however long
+        the host took to run it (docs/virtual-g031.md "Virtual time for the
+        master")."""
         end = self.ns() + int(max(0.0, seconds) * 1e9)
+        self.map[8:16] = end.to_bytes(8, "little")
         moved = (self.ns(), real_monotonic())
         while True:
             now = self.ns()
@@ -95,12 +103,17 @@ def install(path):
 def create(path):
     """The bus side: a zeroed clock file, mapped for writing; returns the map."""
     with open(path, "wb") as f:
-        f.write(bytes(8))
+        f.write(bytes(SIZE))
     fd = os.open(path, os.O_RDWR)
     try:
-        return mmap.mmap(fd, 8)
+        return mmap.mmap(fd, SIZE)
     finally:
         os.close(fd)
+
+
+def hold(clock_map):
+    """The bus side: the virtual time a master sleeps until (0: none yet)."""
+    return int.from_bytes(clock_map[8:16], "little")
 
 
 def publish(clock_map, ns):

@@ -42,7 +42,9 @@ answers like QEMU's human monitor to the one command tools/servo-update
 core and peripherals to their reset values, SRAM and flash kept, PINRSTF).
 
 --clock-file PATH: the bus's virtual time in PATH (8 bytes, little-endian
-ns), for a master that counts its timeouts in it (sim/g031/vclock.py).
+ns), for a master that counts its timeouts in it (sim/g031/vclock.py);
+the wire stops at the end of the master's sleep until its next bytes, so
+its pauses on the wire are exact however slowly the host runs it.
 
 --flash-dir DIR: each servo's whole 64 KiB flash in DIR/servo-ID.flash,
 read at start (a servo that already answers on its ID is not written
@@ -73,6 +75,7 @@ BUILD_DEFAULT = "build/stm32g031"
 HOST = "127.0.0.1"
 QUANTUM_NS = 50_000     # the servos advance together in steps of this much virtual time
 BACKLOG_NS = 20_000_000  # the master's bytes queued on the wire ahead of now, at most
+HOLD_REAL_S = 0.5       # a master's hold kept at most this long in real time without its bytes
 STOP = []
 TRACE = bool(os.environ.get("KM_G031_TRACE"))
 
@@ -254,6 +257,8 @@ class Bus:
             s.m.run_until(self.now)
             s.m.take_output()
         self.master_free = self.now      # end of the master's last byte on the wire
+        self.released = 0                # the master's latest hold that no longer stops the bus
+        self.held_since = None           # real time the bus reached the master's hold
         self.sel = selectors.DefaultSelector()
         self.sel.register(server, selectors.EVENT_READ, "server")
         self.anchor = (time.monotonic(), self.now)
@@ -416,13 +421,44 @@ class Bus:
                     self._drop_client()
                 else:
                     self._from_client(chunk)
+                    self._release_hold()
+
+    def _release_hold(self):
+        """The master spoke (or kept silent too long): a hold the wire has
+        reached no longer stops it (a later one, already published, does)."""
+        h = vclock.hold(self.clock) if self.clock is not None else 0
+        if h <= self.now:
+            self.released = max(self.released, h)
+        self.held_since = None
+
+    def _limit(self):
+        """How far the wire may advance now: the master's hold (the end of
+        its sleep) stops it until the master's next bytes, its next hold,
+        or HOLD_REAL_S of real time; None: no limit."""
+        h = vclock.hold(self.clock) if self.clock is not None else 0
+        if h <= self.released:
+            return None
+        if h < self.now:             # already behind us: nothing to keep
+            self.released = h
+            return None
+        if h > self.now:
+            return h
+        if self.held_since is None:
+            self.held_since = time.monotonic()
+        elif time.monotonic() - self.held_since > HOLD_REAL_S:
+            self._release_hold()
+            return None
+        return self.now
 
     def run(self):
         """Until SIGTERM or SIGINT."""
         while not STOP:
-            self._service(min(self._wait_s(), 0.05))
-            if self._wait_s() == 0.0:
-                self._advance(self.now + QUANTUM_NS)
+            limit = self._limit()
+            held = limit is not None and limit <= self.now
+            self._service(0.001 if held else min(self._wait_s(), 0.05))
+            if not held and self._wait_s() == 0.0:
+                step = self.now + QUANTUM_NS
+                self._advance(step if limit is None else min(step, limit))
 
     def speed(self):
         """Virtual us per real second since the bus started."""

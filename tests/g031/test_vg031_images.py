@@ -115,6 +115,59 @@ class Images(unittest.TestCase):
         self.assertEqual(answer[:3], bytes.fromhex("F9F500"), answer.hex(" "))
         self.assertEqual((m.faults, m.resets), ([], []))
 
+    def test_master_pause_exact_on_the_wire(self):
+        """A master on the bus's virtual time (vclock) that the host runs
+        late: it sleeps until frame A's time, is held up 0.3 s of real time
+        after waking, sends A, sleeps until A's end + 2 ms and sends B. On
+        the wire B must start 2 ms after A's last stop bit, as the master
+        asked (kmx update's pause after a broadcast block, docs/update.md
+        §4); with the wire running on while the master was held up, A went
+        out late and B closer behind it (down to gap 0: the bootloader,
+        programming A's block, loses B)."""
+        import socket
+        import subprocess
+        import tempfile
+        import time
+        import vclock
+        with tempfile.TemporaryDirectory() as tmp:
+            clock_path = os.path.join(tmp, "clock")
+            err = open(os.path.join(tmp, "stderr"), "w+")
+            bus = subprocess.Popen([sys.executable, os.path.join(HERE, "..", "..", "sim", "g031", "vg031_bus.py"),
+                                    "--ids", "1", "--port", "0", "--plant", "none", "--clock-file", clock_path,
+                                    "--image", os.path.join(IMAGES, "km-servo-stm32g031.elf")],
+                                   stdout=subprocess.PIPE, stderr=err, text=True,
+                                   env=dict(os.environ, KM_G031_TRACE="1"))
+            try:
+                host, port = bus.stdout.readline().split()[1].rsplit(":", 1)
+                clock = vclock.Clock(clock_path)
+                conn = socket.create_connection((host, int(port)))
+                a, b = frame(9, 0x01), frame(9, 0x02, 0x0B)   # to an ID nobody has: no answers
+                # kmx update's pace(): the next frame's time from the clock,
+                # a sleep until it, the frame; the pause counted from there.
+                wire_free = clock.ns() + 10 * MS
+                clock.sleep((wire_free - clock.ns()) / 1e9)
+                vclock.real_sleep(0.3)
+                conn.sendall(a)
+                wire_free += len(a) * 10 * 1e9 / BAUD + 2 * MS
+                clock.sleep(max(0, wire_free - clock.ns()) / 1e9)
+                conn.sendall(b)
+                clock.sleep(0.01)
+                conn.close()
+            finally:
+                bus.terminate()
+                bus.wait(30)
+            err.seek(0)
+            chunks = [(float(ln.split(" ms: master ")[0].split()[-1]), bytes.fromhex(ln.split(" ms: master ")[1].split()[0]))
+                      for ln in err if " ms: master " in ln]
+        starts = {}   # each frame's first start bit on the wire (several may share a chunk), us
+        for t_ms, data in chunks:
+            for f in (a, b):
+                if f in data:
+                    starts[f] = t_ms * 1000 + data.index(f) * 10 * 1e6 / BAUD
+        gap_us = starts[b] - starts[a] - len(a) * 10 * 1e6 / BAUD
+        print("master paused 2000 us after frame A; on the wire: %.1f us" % gap_us)
+        self.assertAlmostEqual(gap_us, 2000, delta=60)
+
     def test_ping_and_register_read_answered(self):
         m, (poll,) = boot_and_app()
         self.assertTrue(to_main_loop(m, poll))
