@@ -22,6 +22,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", "..", ".."))
 import bench_realpath  # beside this script; it needs sim/g031 on PYTHONPATH
 import g031_figures  # sim/g031
+import g031_cycles  # sim/g031
 
 DOC = os.path.join(ROOT, "docs", "figures.md")
 STEP = 8  # list lengths: 1, 9, 17, ... and the longest
@@ -32,6 +33,12 @@ def footprint(map_path):
     tool = os.path.join(ROOT, "tools", "check", "footprint")
     out = subprocess.run([sys.executable, tool, map_path], check=True, capture_output=True, text=True).stdout
     return [ln.rstrip() for ln in out.splitlines() if ln.strip()]
+
+
+def instruction_classes(elf):
+    """The virtual G031's section (helper vg031's, sim/g031/g031_cycles.py):
+    instructions per class with their M0+ cycles on a few measured paths."""
+    return g031_cycles.markdown(bench_realpath, elf)
 
 
 def render(build):
@@ -53,6 +60,7 @@ def render(build):
     for fig, ins, cyc, tgt in rows:
         out.append("| %s | %s | %s | %s |" % (fig, ins or "—", cyc or "—", tgt or "—"))
     out += [""] + g031_figures.markdown(images)
+    out += instruction_classes(elf)
     out += ["## Flash and RAM (stm32g031 servo image, from its linker map)", "", "```"]
     out += footprint(os.path.join(images, "km-servo-stm32g031.map"))
     out += ["```", "", "Reproduce: `cmake --build --preset stm32g031 && PYTHONPATH=sim/g031"
