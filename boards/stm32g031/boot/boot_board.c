@@ -238,11 +238,8 @@ bool km_bootb_uart_rx(uint8_t *byte)
 #define PRV_WAKE_US 10000u
 #define PRV_WAKE_IRQS ((1u << G0_IRQ_TIM2) | (1u << G0_IRQ_USART1))
 
-/* WFI until USART1's RXNE or TIM2's CC1 (now + 10 ms) pends its
- * interrupt: both are enabled at the peripheral and in the NVIC only
- * around the WFI, with PRIMASK set, so the core wakes (ARMv6-M B1.5.19)
- * but never takes them (the table has no handler for them). A byte
- * already in RDR pends USART1 at once: the WFI then returns at once. */
+/* Sleeps until USART1's RXNE or a TIM2 CC1 10 ms ahead pends, PRIMASK set:
+ * wakes, never taken (ARMv6-M B1.5.19; docs/update.md §6). */
 void km_bootb_wait(void)
 {
     __asm__ volatile("cpsid i" ::: "memory");
