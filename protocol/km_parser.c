@@ -97,23 +97,38 @@ static prv_verdict_t prv_judge(km_parser_t *p, uint16_t avail, uint16_t *total, 
     return command ? PRV_COMMAND : PRV_RESPONSE;
 }
 
-/* Hands the command frame at head out: a view in the ring, or copied into out->spill when it wraps. */
-static void prv_deliver(const km_parser_t *p, uint16_t total, km_parser_out_t *out)
+/* Turns the 256-byte ring so that ring[i] takes the byte at ring[(i + k) mod 256]: one pass per cycle of the
+ * permutation (gcd(k, 256) of them, k's lowest set bit), every byte moved once. */
+static void prv_rotate(uint8_t *ring, uint32_t k)
 {
-    km_frame_view_t *f = &out->frame;
-    const uint8_t len = (uint8_t)(total - 6u); /* header 2, id, len, cmd, checksum */
-    f->id = prv_at(p, 2);
-    f->body_len = len;
-    f->cmd = prv_at(p, 4);
-    const uint8_t start = (uint8_t)(p->head + 5u);
-    const uint16_t first = (uint16_t)(KM_FRAME_MAX - start);
-    if (len <= first) {
-        f->body = &p->window[start];
-    } else {
-        memcpy(out->spill, &p->window[start], first);
-        memcpy(&out->spill[first], p->window, (size_t)(len - first));
-        f->body = out->spill;
+    const uint32_t cycles = k & (0u - k);
+    for (uint32_t c = 0u; c < cycles; c++) {
+        const uint8_t first = ring[c];
+        uint32_t i = c;
+        uint32_t next = (c + k) & (KM_FRAME_MAX - 1u);
+        while (next != c) {
+            ring[i] = ring[next];
+            i = next;
+            next = (next + k) & (KM_FRAME_MAX - 1u);
+        }
+        ring[i] = first;
     }
+}
+
+/* Hands the command frame at head out: a view in the ring. A frame that wraps around the ring's end (only one
+ * found by a rescan) is first turned to slot 0 with every byte after it, window and prefix sums alike. */
+static void prv_deliver(km_parser_t *p, uint16_t total, km_parser_out_t *out)
+{
+    if ((uint32_t)p->head + total > KM_FRAME_MAX) {
+        prv_rotate(p->window, p->head);
+        prv_rotate(p->psum, p->head);
+        p->head = 0u;
+    }
+    km_frame_view_t *f = &out->frame;
+    f->id = prv_at(p, 2);
+    f->body_len = (uint8_t)(total - 6u); /* header 2, id, len, cmd, checksum */
+    f->cmd = prv_at(p, 4);
+    f->body = &p->window[(uint8_t)(p->head + 5u)];
     f->end_tick = p->stale ? p->stale_tick : p->last_tick;
 }
 

@@ -48,7 +48,6 @@ typedef struct {
 /* A frame handed out by the batch entries: a view, valid until the next call on the parser. */
 typedef struct {
     km_frame_view_t frame;
-    uint8_t spill[KM_BODY_MAX];
 } km_parser_out_t;
 
 void km_parser_init(km_parser_t *p, uint32_t gap_ticks);

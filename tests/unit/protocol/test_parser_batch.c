@@ -16,6 +16,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 #include <cmocka.h>
 
 #include "parser_stream.h"
@@ -189,9 +190,9 @@ static void test_s2_batch_views(void **state)
 }
 
 /* §2 resync: a good frame found by the rescan of a failed 256-byte
- * candidate, starting near the ring's end, wraps around it: its body is
- * handed out whole, copied into the spill. */
-static void test_s2_batch_wrapped_body_in_spill(void **state)
+ * candidate, starting near the ring's end, wraps around it: it is handed
+ * out whole, as a view at the ring's start (the ring turned, no copy). */
+static void test_s2_batch_wrapped_body_turned_to_ring_start(void **state)
 {
     (void)state;
     static km_parser_t p;
@@ -222,8 +223,51 @@ static void test_s2_batch_wrapped_body_in_spill(void **state)
     assert_int_equal(used, 4u);
     assert_int_equal(out.frame.id, 2);
     assert_int_equal(out.frame.body_len, sizeof inner_body);
-    assert_ptr_equal(out.frame.body, out.spill);
+    assert_ptr_equal(out.frame.body, &p.window[5]);
     assert_memory_equal(out.frame.body, inner_body, sizeof inner_body);
+}
+
+/* The same with bytes after the wrapped frame already in the ring (a
+ * second failed candidate's rescan finds it): turning the ring keeps them
+ * and their prefix sums, so the ping after it is handed out next. */
+static void test_s2_batch_wrapped_frame_keeps_the_bytes_after_it(void **state)
+{
+    (void)state;
+    static km_parser_t p;
+    static km_parser_out_t out;
+    km_parser_init(&p, GAP);
+    uint8_t s[300] = {0};
+    uint32_t ticks[300] = {0};
+    const uint8_t outer[] = {0xF9, 0xFF, 1, KM_LENGTH_MAX}; /* 0..255, checksum wrong */
+    memcpy(s, outer, sizeof outer);
+    const uint8_t middle[] = {0xF9, 0xFF, 1, 116}; /* 150..269, checksum wrong */
+    memcpy(&s[150], middle, sizeof middle);
+    uint8_t inner_body[54];
+    for (size_t i = 0; i < sizeof inner_body; i++) {
+        inner_body[i] = (uint8_t)(100u + i);
+    }
+    assert_int_equal(rig_command(&s[200], 2, 0x03, inner_body, sizeof inner_body), 60); /* 200..259 */
+    assert_int_equal(rig_command(&s[260], 3, 0x01, NULL, 0), 6);                        /* 260..265 */
+    uint32_t used = 0;
+    unsigned ev = km_parser_feed_bytes(&p, s, ticks, 4u, &used, &out);
+    assert_int_equal(ev, 0u);
+    ev = km_parser_feed_bytes(&p, &s[4], ticks, 252u, &used, &out);
+    assert_int_equal(ev, KM_PARSE_CHECKSUM_ERR); /* outer fails, the middle one waits */
+    assert_int_equal(p.fill, 106u);
+    ev = km_parser_feed_bytes(&p, &s[256], ticks, 44u, &used, &out);
+    assert_int_equal(used, 14u); /* up to the middle one's end: it fails, the rescan finds the inner one */
+    assert_int_equal(ev, KM_PARSE_CHECKSUM_ERR | KM_PARSE_FRAME);
+    assert_int_equal(out.frame.id, 2);
+    assert_int_equal(out.frame.cmd, 0x03);
+    assert_int_equal(out.frame.body_len, sizeof inner_body);
+    assert_ptr_equal(out.frame.body, &p.window[5]);
+    assert_memory_equal(out.frame.body, inner_body, sizeof inner_body);
+    assert_int_equal(p.fill, 10u); /* 260..269 wait: the ping and four zeros */
+    ev = km_parser_poll_view(&p, 0u, &out);
+    assert_int_equal(ev, KM_PARSE_FRAME);
+    assert_int_equal(out.frame.id, 3);
+    assert_int_equal(out.frame.cmd, 0x01);
+    assert_int_equal(out.frame.body_len, 0);
 }
 
 int main(void)
@@ -232,7 +276,8 @@ int main(void)
         cmocka_unit_test(test_s2_s7_batch_equals_byte_by_byte_short_runs),
         cmocka_unit_test(test_s2_s7_batch_equals_byte_by_byte_long_runs),
         cmocka_unit_test(test_s2_batch_views),
-        cmocka_unit_test(test_s2_batch_wrapped_body_in_spill),
+        cmocka_unit_test(test_s2_batch_wrapped_body_turned_to_ring_start),
+        cmocka_unit_test(test_s2_batch_wrapped_frame_keeps_the_bytes_after_it),
     };
     return cmocka_run_group_tests_name("parser_batch", tests, NULL, NULL);
 }
