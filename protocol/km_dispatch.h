@@ -35,7 +35,8 @@ void km_dispatch_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t le
 /* The readable register at `addr`, or -1 (unknown, or write-only). */
 int km_dispatch_readable(uint8_t addr);
 
-/* The answer to a read of register r (-1: bit 5, short response), started in slot `slot`. */
+/* The answer to a read of register r (-1: bit 5, short response), started in slot `slot`; reply NULL: the
+ * read runs (bit 5, the register's read) with nothing encoded. */
 void km_dispatch_read_answer(km_servo_t *s, int r, uint8_t addr, uint32_t slot, km_reply_t *reply);
 
 /* The answer's start after the frame: 0x12, plus the own ID's slot when

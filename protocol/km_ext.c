@@ -32,17 +32,19 @@ km_report_t km_cmd_ext(km_servo_t *s, const km_frame_view_t *f, km_reply_t *repl
 {
     uint8_t body[1 + KM_EXT_VALUE_MAX];
     uint8_t n = 0;
-    if (f->body_len != 1 || !prv_ext_value(s, f->body[0], &body[1], &n)) {
+    const bool ok = f->body_len == 1 && prv_ext_value(s, f->body[0], &body[1], &n);
+    if (!ok) {
         km_regfile_exception(&s->reg);
+    }
+    if (f->id == KM_ID_BROADCAST) {
+        return KM_REPORT_NONE; /* run, never answered */
+    }
+    if (!ok) {
         km_dispatch_answer_status(s, km_regfile_own_status(&s->reg), f->id, reply);
     } else {
         body[0] = f->body[0];
         reply->len = km_encode_response(reply->bytes, km_servo_id(s), KM_CMD_EXT, body, (uint8_t)(1u + n));
         reply->delay_us = km_dispatch_delay_us(s, f->id, (uint16_t)(7u + (n > 2u ? n : 2u)));
-    }
-    if (f->id == KM_ID_BROADCAST) {
-        reply->len = 0;
-        return KM_REPORT_NONE;
     }
     return KM_REPORT_OWN;
 }

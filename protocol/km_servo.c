@@ -191,18 +191,21 @@ static uint16_t prv_read_answer_max(int r)
 
 void km_dispatch_read_answer(km_servo_t *s, int r, uint8_t addr, uint32_t slot, km_reply_t *reply)
 {
-    const uint32_t delay = prv_slot_delay_us(s, slot, prv_read_answer_max(r));
     if (r < 0) {
         km_regfile_exception(&s->reg);
-        reply->len = km_encode_status(reply->bytes, km_servo_id(s), km_regfile_own_status(&s->reg));
-        reply->delay_us = delay;
+        if (reply != NULL) {
+            reply->len = km_encode_status(reply->bytes, km_servo_id(s), km_regfile_own_status(&s->reg));
+            reply->delay_us = prv_slot_delay_us(s, slot, prv_read_answer_max(r));
+        }
         return;
     }
     uint8_t body[1 + TEXT_MAX];
     body[0] = addr;
     const uint8_t n = km_reg_read[r](s, (km_reg_index_t)r, &body[1]);
-    reply->len = km_encode_response(reply->bytes, km_servo_id(s), CMD_READ, body, (uint8_t)(1u + n));
-    reply->delay_us = delay;
+    if (reply != NULL) {
+        reply->len = km_encode_response(reply->bytes, km_servo_id(s), CMD_READ, body, (uint8_t)(1u + n));
+        reply->delay_us = prv_slot_delay_us(s, slot, prv_read_answer_max(r));
+    }
 }
 
 km_report_t km_cmd_read(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply)
@@ -211,9 +214,10 @@ km_report_t km_cmd_read(km_servo_t *s, const km_frame_view_t *f, km_reply_t *rep
     const bool one = f->body_len == 1;
     const int r = one ? km_dispatch_readable(f->body[0]) : -1;
     const uint32_t slot = f->id == KM_ID_SUPER ? km_servo_id(s) : 0u;
-    km_dispatch_read_answer(s, r, one ? f->body[0] : 0u, slot, reply);
-    if (f->id == KM_ID_BROADCAST) {
-        reply->len = 0; /* run, so a bad address is bit 5; never answered */
+    /* At the broadcast ID run (a bad address is bit 5) but never answered. */
+    const bool broadcast = f->id == KM_ID_BROADCAST;
+    km_dispatch_read_answer(s, r, one ? f->body[0] : 0u, slot, broadcast ? NULL : reply);
+    if (broadcast) {
         return KM_REPORT_NONE;
     }
     /* The status register's value is the ping's status byte. */
@@ -365,6 +369,14 @@ void km_servo_handle_view(km_servo_t *s, const km_frame_view_t *f, km_reply_t *r
         s->reg.unreported |= s->reg.flags;
     }
     s->reg.flags = 0u;
+}
+
+bool km_servo_may_answer(const km_servo_t *s, const km_frame_view_t *f)
+{
+    if (f->id == KM_ID_BROADCAST) {
+        return f->cmd == CMD_MULTI_READ; /* §3: the only command a listed servo answers at the broadcast ID */
+    }
+    return f->id == km_servo_id(s) || f->id == KM_ID_SUPER;
 }
 
 void km_servo_handle(km_servo_t *s, const km_frame_t *frame, km_reply_t *reply)

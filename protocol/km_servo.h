@@ -72,8 +72,15 @@ void km_servo_init(km_servo_t *s, const km_product_t *product, const uint32_t *p
 void km_servo_handle(km_servo_t *s, const km_frame_t *frame, km_reply_t *reply);
 
 /* The same for a frame the parser handed out as a view (its body where it
- * lies: no copy). */
+ * lies: no copy). reply->bytes are written only for an answer (reply->len
+ * > 0 on return): a frame without one leaves them as they were, so the
+ * caller may keep there an answer still to be sent (firmware/app: one
+ * buffer for the answer built and the answer on the wire). */
 void km_servo_handle_view(km_servo_t *s, const km_frame_view_t *frame, km_reply_t *reply);
+
+/* False when `frame` cannot be answered by this servo (another servo's ID;
+ * the broadcast ID, except 0x82): handling it leaves reply->bytes alone. */
+bool km_servo_may_answer(const km_servo_t *s, const km_frame_view_t *frame);
 
 /* The parser saw a bad-checksum frame with our ID: bit 5 until a status
  * answer reports it ("Status bits 5 and 6"). */
