@@ -33,6 +33,7 @@ static volatile bool s_wake;
 static km_parser_t s_parser;
 static km_parser_out_t s_out; /* the frame the parser hands out: a view */
 static km_servo_t s_servo;
+/* The answer, built and sent from here: the TX path's from arming to tx_busy's end. */
 static km_reply_t s_reply;
 static km_control_t s_control;
 static km_control_params_t s_params; /* the control registers, decoded */
@@ -45,9 +46,7 @@ static uint32_t s_last_control_tick;
 static uint32_t s_next_tick;
 static uint32_t s_tick_period;
 
-/* The answer being sent: owned by the TX path from arming until tx_busy ends. */
-static uint8_t s_tx[KM_FRAME_MAX];
-static uint16_t s_tx_len;
+static uint16_t s_tx_len; /* bytes of s_reply armed or being sent */
 static volatile bool s_tx_armed;
 static uint32_t s_armed_frame_end; /* the armed answer's frame end tick */
 static uint32_t s_armed_delay_us;  /* and the delay it asked for */
@@ -58,9 +57,10 @@ static volatile uint32_t s_answer_start; /* tick the answer's first byte was han
 static volatile bool s_answer_started;
 static volatile uint32_t s_tx_refused; /* answers the UART would not take (diagnostic) */
 
-/* An answer in s_reply waiting for the TX buffer; no frame is parsed meanwhile. */
-static bool s_reply_waiting;
-static uint32_t s_reply_end;
+/* A frame that may be answered, waiting for the answer on the wire to end
+ * (no frame is parsed meanwhile); its queue bytes, released once handled. */
+static bool s_frame_waiting;
+static uint32_t s_frame_release;
 static bool s_restart_pending;
 static bool s_boot_confirmed; /* km_board_boot_confirm() was called */
 /* The store needs preparing in idle time this session. */
@@ -80,7 +80,7 @@ static void ISR_answer_due(void *ctx)
 {
     (void)ctx;
     s_tx_armed = false;
-    if (km_hal_uart_send(s_tx, s_tx_len)) {
+    if (km_hal_uart_send(s_reply.bytes, s_tx_len)) {
         s_answer_start = km_hal_time_now();
         s_answer_frame_end = s_armed_frame_end;
         s_answer_delay_us = s_armed_delay_us;
@@ -105,22 +105,13 @@ static uint32_t prv_ticks_to_us(uint32_t ticks)
     return s_ticks_us_shift < 32u ? ticks >> s_ticks_us_shift : ticks / s_ticks_per_us;
 }
 
-/* Hands s_reply to the TX path; false if the UART is still sending the
- * previous answer (try again on a later pass). */
-static bool prv_try_schedule_answer(void)
+/* Arms the timer to send s_tx_len bytes of s_reply `delay_us` after `frame_end`. */
+static void prv_arm_answer(uint32_t frame_end, uint32_t delay_us)
 {
-    /* Cancel first: then s_tx is armed-and-unsent or already sending. */
-    km_hal_timer_cancel();
-    if (!s_tx_armed && km_hal_uart_tx_busy()) {
-        return false;
-    }
-    memcpy(s_tx, s_reply.bytes, s_reply.len);
-    s_tx_len = s_reply.len;
     s_tx_armed = true;
-    s_armed_frame_end = s_reply_end;
-    s_armed_delay_us = s_reply.delay_us;
-    km_hal_timer_at(s_reply_end + prv_us_to_ticks(s_reply.delay_us), ISR_answer_due, NULL);
-    return true;
+    s_armed_frame_end = frame_end;
+    s_armed_delay_us = delay_us;
+    km_hal_timer_at(frame_end + prv_us_to_ticks(delay_us), ISR_answer_due, NULL);
 }
 
 /* Measurement hook after each answer started; the QEMU timing image overrides it. */
@@ -147,14 +138,28 @@ static void prv_report_answer(void)
     km_app_answer_started(frame_end, start, delay_us);
 }
 
-static void prv_on_frame(void)
+/* Hands s_out's frame to the dispatcher and arms its answer; false: it may be answered and s_reply is on the
+ * wire, so it waits (docs/app-design.md). */
+static bool prv_on_frame(void)
 {
-    km_servo_handle_view(&s_servo, &s_out.frame, &s_reply);
+    const km_frame_view_t *frame = &s_out.frame;
+    bool held = false;
+    if (km_servo_may_answer(&s_servo, frame)) {
+        km_hal_timer_cancel(); /* then s_reply is armed-and-unsent or already sending */
+        if (!s_tx_armed && km_hal_uart_tx_busy()) {
+            return false;
+        }
+        held = s_tx_armed;
+    }
+    km_servo_handle_view(&s_servo, frame, &s_reply);
     if (s_reply.len > 0) {
-        s_reply_end = s_out.frame.end_tick;
-        s_reply_waiting = !prv_try_schedule_answer();
+        s_tx_len = s_reply.len;
+        prv_arm_answer(frame->end_tick, s_reply.delay_us);
+    } else if (held) {
+        prv_arm_answer(s_armed_frame_end, s_armed_delay_us);
     }
     prv_report_answer();
+    return true;
 }
 
 static void prv_on_events(unsigned events)
@@ -163,15 +168,25 @@ static void prv_on_events(unsigned events)
     if ((events & KM_PARSE_CHECKSUM_ERR) && km_parser_take_checksum_error(&s_parser, km_servo_id(&s_servo))) {
         km_servo_note_checksum_error(&s_servo);
     }
-    if (events & KM_PARSE_FRAME) {
-        prv_on_frame();
+    if ((events & KM_PARSE_FRAME) && !prv_on_frame()) {
+        s_frame_waiting = true;
     }
 }
 
-/* True while the parser must not be fed: a restart or an answer pending. */
+/* True while the parser must not be fed: a restart or a waiting frame. */
 static inline __attribute__((always_inline)) bool prv_rx_blocked(void)
 {
-    return s_restart_pending || s_reply_waiting;
+    return s_restart_pending || s_frame_waiting;
+}
+
+/* The waiting frame, once the answer on the wire has ended: handled, its queue bytes released. */
+static void prv_take_waiting_frame(void)
+{
+    if (s_frame_waiting && prv_on_frame()) {
+        s_frame_waiting = false;
+        km_rx_queue_release(&s_rxq, s_frame_release);
+        s_frame_release = 0u;
+    }
 }
 
 /* Runs of bytes from the RX queue to the parser, frames as views of the queue. */
@@ -190,6 +205,10 @@ static void prv_drain_rx(void)
         if (events != 0u) {
             prv_on_events(events);
         }
+        if (s_frame_waiting) {
+            s_frame_release = used; /* the frame may be a view of these bytes */
+            return;
+        }
         km_rx_queue_release(&s_rxq, used);
         budget -= used;
     }
@@ -204,7 +223,7 @@ static void prv_drain_rx(void)
 /* 0x02 restart: due once an earlier answer has gone out. */
 static bool prv_restart_ready(void)
 {
-    return s_restart_pending && !s_reply_waiting && !s_tx_armed && !km_hal_uart_tx_busy();
+    return s_restart_pending && !s_frame_waiting && !s_tx_armed && !km_hal_uart_tx_busy();
 }
 
 /* The control registers in engineering units, decoded again after a change. */
@@ -401,7 +420,8 @@ void km_app_init(void)
     s_tx_armed = false;
     s_answer_started = false;
     s_tx_refused = 0;
-    s_reply_waiting = false;
+    s_frame_waiting = false;
+    s_frame_release = 0u;
     s_restart_pending = false;
     s_boot_confirmed = false;
 
@@ -502,9 +522,7 @@ static void prv_sleep(uint32_t irq)
 __attribute__((noinline)) void km_app_poll(void)
 {
     prv_report_answer();
-    if (s_reply_waiting) {
-        s_reply_waiting = !prv_try_schedule_answer();
-    }
+    prv_take_waiting_frame();
     prv_drain_rx();
     if (prv_restart_ready()) {
         km_hal_system_reset();
@@ -519,7 +537,7 @@ __attribute__((noinline)) void km_app_poll(void)
         /* check and sleep under the lock: WFI still wakes on a pending IRQ */
         const uint32_t irq = km_hal_irq_lock();
         const bool rx_work = !prv_rx_blocked() && !km_rx_queue_empty(&s_rxq);
-        const bool tx_work = s_reply_waiting && !km_hal_uart_tx_busy();
+        const bool tx_work = s_frame_waiting && !km_hal_uart_tx_busy();
         if (!rx_work && !tx_work && !prv_restart_ready()) {
             prv_sleep(irq);
         }

@@ -362,6 +362,92 @@ static void test_s3_tx_buffer_never_overwritten_while_sending(void **state)
     assert_true(answers >= 200u);
 }
 
+/* The first byte's tick of the first answer since the last look, and the
+ * whole answer; 0 bytes if none. */
+static unsigned take_answer(wire_t *w, uint32_t *first_tick)
+{
+    *first_tick = kf_world.tx_n > kf_world.tx_read ? kf_world.tx[kf_world.tx_read].tick : 0u;
+    take(w);
+    return w->n;
+}
+
+/* One answer buffer (docs/footprint.md "STM32G031F6"): an answer armed
+ * for later (the response delay, 0x12 = 2 ms) stays intact and on time
+ * while frames it is not for arrive before it is due: a broadcast read
+ * (run, not answered), another servo's ping, and a sync execute to this
+ * servo (§3 0x84, no answer: the armed answer is held, then armed again).
+ * Same bytes, same delay from the read's end as a read left alone. */
+static void test_s3_armed_answer_kept_by_frames_without_answer(void **state)
+{
+    (void)state;
+    boot();
+    exchange("F9 FF 00 05 03 12 D0 07 0E", 5, NULL); /* 0x12 = 2000 us */
+    uint8_t read[8];
+    const uint8_t adr = 0x0A;
+    const unsigned rn = kt_command(read, 0x00, 0x02, &adr, 1);
+    kf_send_at(kf_world.now, read, rn);
+    const uint32_t alone_end = kf_world.rx[kf_world.rx_n - 1u].tick;
+    run_ms(12);
+    wire_t alone;
+    uint32_t alone_tick;
+    assert_true(take_answer(&alone, &alone_tick) > 0u);
+    assert_int_equal(wire_frames_ok(&alone), 1);
+
+    uint8_t f[16];
+    kf_send_at(kf_world.now, read, rn);
+    const uint32_t read_end = kf_world.rx[kf_world.rx_n - 1u].tick;
+    kf_send_at(read_end + 200u, f, kt_command(f, KM_ID_BROADCAST, 0x02, &adr, 1));
+    kf_send_at(kf_world.rx[kf_world.rx_n - 1u].tick + 100u, f, kt_command(f, 5, 0x01, NULL, 0));
+    kf_send_at(kf_world.rx[kf_world.rx_n - 1u].tick + 100u, f, kt_command(f, 0x00, 0x84, NULL, 0));
+    assert_true(kf_world.rx[kf_world.rx_n - 1u].tick < read_end + 2000u); /* all before the answer is due */
+    run_ms(12);
+    wire_t w;
+    uint32_t tick;
+    assert_int_equal(take_answer(&w, &tick), alone.n);
+    assert_memory_equal(w.b, alone.b, alone.n);
+    assert_int_equal(tick - read_end, alone_tick - alone_end);
+    assert_int_equal(km_app_tx_refused(), 0);
+}
+
+/* A frame for this servo that completes while its previous answer is on
+ * the wire waits for that answer's end (the buffer is busy), then is
+ * handled and answered: both answers whole, one after the other. */
+static void test_s3_frame_during_answer_answered_after_it(void **state)
+{
+    (void)state;
+    boot();
+    uint8_t read[8];
+    const uint8_t adr = 0x0A;
+    const unsigned rn = kt_command(read, 0x00, 0x02, &adr, 1);
+    kf_send_at(kf_world.now, read, rn);
+    const uint32_t alone_end = kf_world.rx[kf_world.rx_n - 1u].tick;
+    run_ms(12);
+    wire_t alone;
+    uint32_t alone_tick;
+    const unsigned an = take_answer(&alone, &alone_tick);
+    assert_true(an >= 8u);
+    kf_send_at(kf_world.now, read, rn);
+    const uint32_t read_end = kf_world.rx[kf_world.rx_n - 1u].tick;
+    /* A ping whose last byte comes when half the read's answer is sent. */
+    const uint32_t half_sent = read_end + (alone_tick - alone_end) + (an / 2u) * kf_byte_us();
+    uint8_t ping[6];
+    const unsigned pn = kt_command(ping, 0x00, 0x01, NULL, 0);
+    kf_send_at(half_sent - (pn - 1u) * kf_byte_us(), ping, pn);
+    assert_true(kf_world.rx[kf_world.rx_n - 1u].tick > read_end + (alone_tick - alone_end));
+    run_ms(12);
+    assert_int_equal(kf_world.tx_n - kf_world.tx_read, an + 6u);
+    const uint32_t read_answer_last = kf_world.tx[kf_world.tx_read + an - 1u].tick;
+    const uint32_t ping_answer_first = kf_world.tx[kf_world.tx_read + an].tick;
+    assert_true(ping_answer_first > read_answer_last);
+    wire_t w;
+    take(&w);
+    assert_int_equal(wire_frames_ok(&w), 2);
+    assert_memory_equal(w.b, alone.b, an);
+    assert_int_equal(w.b[an + 2], 0x00); /* the ping's answer: F9 F5 00 02 status cs */
+    assert_int_equal(w.b[an + 3], 0x02);
+    assert_int_equal(km_app_tx_refused(), 0);
+}
+
 /* A stored baud the board cannot make: the servo opens the bus at 115200
  * (a fresh servo's baud) instead of going deaf, and says so in 0x7F 0x03. */
 static void test_s3_unmakeable_baud_falls_back(void **state)
@@ -411,6 +497,8 @@ int main(void)
         cmocka_unit_test(test_ext_reset_cause),
         cmocka_unit_test(test_ext_userdata_source),
         cmocka_unit_test(test_s3_tx_buffer_never_overwritten_while_sending),
+        cmocka_unit_test(test_s3_armed_answer_kept_by_frames_without_answer),
+        cmocka_unit_test(test_s3_frame_during_answer_answered_after_it),
         cmocka_unit_test(test_s3_unmakeable_baud_falls_back),
         cmocka_unit_test(test_s3_burst_all_answered),
     };
