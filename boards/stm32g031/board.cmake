@@ -36,9 +36,9 @@ set_property(CACHE KM_G031_FLASH_KB PROPERTY STRINGS 64 32)
 if(KM_G031_FLASH_KB EQUAL 32)
   set(KM_G031_BOOT_KB 4)
   set(KM_BOARD_IMAGE_CHECK_ARGS --enforce-budget)
-  # The usable stack: 1,664 B instead of the linker scripts' 1,920 (the
-  # static bound is 1,624, the measured high-water 980): 256 B of the 6 KiB.
-  list(APPEND KM_BOARD_LINK_OPTIONS -Wl,--defsym=KM_APP_STACK_SIZE=1664)
+  # The usable stack: 1,408 B instead of the linker scripts' 1,920 (the
+  # static bound is 1,208): 512 B of the 6 KiB (docs/footprint.md).
+  list(APPEND KM_BOARD_LINK_OPTIONS -Wl,--defsym=KM_APP_STACK_SIZE=1408)
 elseif(KM_G031_FLASH_KB EQUAL 64)
   set(KM_G031_BOOT_KB 8)
 else()

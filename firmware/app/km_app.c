@@ -415,7 +415,10 @@ static uint32_t prv_open_bus(uint32_t baud)
     return fallback;
 }
 
-void km_app_init(void)
+/* noinline: under LTO its locals (the persisted values read at boot)
+ * would otherwise stay on the stack below every pass of the main loop
+ * (docs/footprint.md "STM32G031F6"). */
+__attribute__((noinline)) void km_app_init(void)
 {
     s_tx_armed = false;
     s_answer_started = false;

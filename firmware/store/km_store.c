@@ -99,9 +99,36 @@ static bool prv_compact(km_store_t *s, uint32_t target, const uint32_t *state)
     return true;
 }
 
-static km_store_status_t prv_commit_state(km_store_t *s, const uint32_t *next)
+/* What prv_append_delta did. */
+typedef enum {
+    PRV_DELTA_WRITTEN,
+    PRV_DELTA_NO_ROOM, /* the active page cannot take it: nothing written */
+    PRV_DELTA_FAILED,  /* the write failed: nothing may follow it */
+} prv_delta_t;
+
+/* Appends the delta record of the `changed` keys of `next` to the active
+ * page. noinline: its record buffer is gone before a compaction (with its
+ * own) runs, so the two are never on the stack together (docs/footprint.md
+ * "STM32G031F6"). */
+static __attribute__((noinline)) prv_delta_t prv_append_delta(km_store_t *s, const uint32_t *next,
+                                                              uint32_t changed)
 {
     const km_flash_t *f = s->flash;
+    const km_rec_t hdr = {.type = KM_REC_DELTA, .version = 0u, .gen = 0u, .hash = 0u};
+    uint8_t buf[KM_REC_MAX_BYTES];
+    const uint32_t size = km_rec_encode(buf, &hdr, s->schema, next, changed, f->prog_size);
+    if (size > f->page_size - s->tail) {
+        return PRV_DELTA_NO_ROOM;
+    }
+    if (!prv_write(s, s->active, s->tail, buf, size, false)) {
+        return PRV_DELTA_FAILED;
+    }
+    s->tail += size;
+    return PRV_DELTA_WRITTEN;
+}
+
+static km_store_status_t prv_commit_state(km_store_t *s, const uint32_t *next)
+{
     uint32_t changed = 0;
     for (uint32_t i = 0; i < s->schema->count; i++) {
         if (next[i] != s->values[i]) {
@@ -115,13 +142,10 @@ static km_store_status_t prv_commit_state(km_store_t *s, const uint32_t *next)
     } else if (changed == 0u) {
         return KM_STORE_OK;
     } else {
-        const km_rec_t hdr = {.type = KM_REC_DELTA, .version = 0u, .gen = 0u, .hash = 0u};
-        uint8_t buf[KM_REC_MAX_BYTES];
-        const uint32_t size = km_rec_encode(buf, &hdr, s->schema, next, changed, f->prog_size);
-        if (size > f->page_size - s->tail) {
+        const prv_delta_t delta = prv_append_delta(s, next, changed);
+        if (delta == PRV_DELTA_NO_ROOM) {
             ok = prv_compact(s, prv_next(s, s->active), next);
-        } else if (prv_write(s, s->active, s->tail, buf, size, false)) {
-            s->tail += size;
+        } else if (delta == PRV_DELTA_WRITTEN) {
             ok = true;
         } else {
             /* The record may be half there and read valid later, or not:
