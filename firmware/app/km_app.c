@@ -415,9 +415,7 @@ static uint32_t prv_open_bus(uint32_t baud)
     return fallback;
 }
 
-/* noinline: under LTO its locals (the persisted values read at boot)
- * would otherwise stay on the stack below every pass of the main loop
- * (docs/footprint.md "STM32G031F6"). */
+/* noinline: its boot-time locals off the main loop's stack (docs/footprint.md "STM32G031F6"). */
 __attribute__((noinline)) void km_app_init(void)
 {
     s_tx_armed = false;

@@ -106,10 +106,8 @@ typedef enum {
     PRV_DELTA_FAILED,  /* the write failed: nothing may follow it */
 } prv_delta_t;
 
-/* Appends the delta record of the `changed` keys of `next` to the active
- * page. noinline: its record buffer is gone before a compaction (with its
- * own) runs, so the two are never on the stack together (docs/footprint.md
- * "STM32G031F6"). */
+/* Appends the delta record of the `changed` keys of `next` to the active page (noinline: its buffer is off
+ * the stack before a compaction runs, docs/footprint.md "STM32G031F6"). */
 static __attribute__((noinline)) prv_delta_t prv_append_delta(km_store_t *s, const uint32_t *next,
                                                               uint32_t changed)
 {
