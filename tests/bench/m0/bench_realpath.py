@@ -206,11 +206,12 @@ class Bench:
 
     def armed(self, lo, hi):
         """Where the answer is armed: the entry of km_hal_timer_at, or, with
-        it inlined (LTO), the return of prv_try_schedule_answer."""
+        it inlined (LTO), the return of prv_arm_answer (prv_try_schedule_answer
+        before the application's one answer buffer)."""
         i = self.first("km_hal_timer_at", lo, hi)
         if i is not None or "km_hal_timer_at" in self.d.sym:
             return i
-        i = self.first("prv_try_schedule_answer", lo, hi)
+        i = self.first(("prv_arm_answer", "prv_try_schedule_answer"), lo, hi)
         if i is None:
             return None
         ret = self.trace[i - 1] + 4
