@@ -345,6 +345,14 @@ def lists(b, rows, figs, step):
                          "<= %d%s" % (TARGET_LAST, "" if ours else " / <= 2")))
 
 
+def part(b, name, counts):
+    """A tick part's instruction count, or why there is none: under LTO the
+    function may be inlined into the main loop, leaving no symbol to cut at."""
+    if counts:
+        return "%d" % counts[0]
+    return "inlined" if name not in b.d.sym else "not reached"
+
+
 def ticks(b, rows, figs):
     """Control ticks, torque off and moving, with the real sensor read and
     motor drive."""
@@ -381,8 +389,9 @@ def ticks(b, rows, figs):
         figs[key] = {"instructions": w[0][0], "cycles": w[0][1], "library_divisions": divs,
                      "sensors": list(w[1]) if w[1] else None, "step": list(w[2]) if w[2] else None}
         rows.append(("control tick all in, idle to idle, %s, worst of %d (sensor read %s, "
-                     "km_control_step %s; library divisions per tick %g)" % (label, len(got), w[1][0] if w[1] else "?",
-                                                                    w[2][0] if w[2] else "?", divs),
+                     "km_control_step %s; library divisions per tick %g)" % (label, len(got),
+                                                                    part(b, "km_hal_sensors_read", w[1]),
+                                                                    part(b, "km_control_step", w[2]), divs),
                      "%d" % w[0][0], "%d" % w[0][1], "<= %d" % TARGET_TICK))
 
 
