@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "km_plant_rig.h"
+#include "stream_rig.h"
 
 static kr_rig_t r;
 
@@ -116,14 +117,8 @@ static void test_d8_profile_capped_at_product_fastest(void **state)
     assert_true(vmax <= (int32_t)r.params.gains.fastest_dps * KM_PROFILE_UPS_PER_DPS);
 }
 
+/* The streams' jitter generator: the 100 Hz test goes on from the 50 Hz one's. */
 static uint32_t s_lcg = 12345u;
-
-/* Uniform integer in [-5, 5] ms of arrival jitter, reproducible. */
-static int32_t jitter(void)
-{
-    s_lcg = s_lcg * 1103515245u + 12345u;
-    return (int32_t)((s_lcg >> 16) % 11u) - 5;
-}
 
 /* D2b: 0x68 at `period` ms, 90 deg/s from -60 to +60 deg, each frame up to
  * +-5 ms off its time, one in 17 dropped (realistic plant): from 300 ms to
@@ -133,31 +128,15 @@ static int32_t jitter(void)
 static void stream_checked(uint32_t period)
 {
     on_at("realistic", -600);
-    const int32_t step = (int32_t)(period * 9u / 10u);
-    const uint32_t n = 1200u / (uint32_t)step;
-    uint32_t t = 0, last = 0, k = 1, arrive = period + (uint32_t)jitter();
-    int64_t hist[10];
+    sr_stream_t s;
+    sr_start(&s, period, &s_lcg);
     int32_t vmin = INT32_MAX, vmax = INT32_MIN, peak = 0;
-    while (k <= n) {
-        while (k <= n && arrive <= t) {
-            if (k % 17u != 8u) {
-                assert_true(kr_move(&r, KM_MOVE_STREAM, (int16_t)(-600 + (int32_t)k * step), 0));
-            }
-            last = arrive;
-            k++;
-            const int32_t due = (int32_t)(k * period) + jitter();
-            arrive = due < (int32_t)last ? last : (uint32_t)due;
-        }
-        kr_tick(&r);
-        const int64_t now = km_plant_shaft_udeg(&r.plant);
-        if (t >= 300u) {
-            const int32_t v = (int32_t)((now - hist[t % 10u]) / 10); /* m deg/s over 10 ms */
-            vmin = v < vmin ? v : vmin;
-            vmax = v > vmax ? v : vmax;
+    while (sr_step(&s, &r)) {
+        if (s.at_ms >= 300u) {
+            vmin = s.speed_mdps < vmin ? s.speed_mdps : vmin;
+            vmax = s.speed_mdps > vmax ? s.speed_mdps : vmax;
             peak = iabs(km_plant_current_ma(&r.plant)) > peak ? iabs(km_plant_current_ma(&r.plant)) : peak;
         }
-        hist[t % 10u] = now;
-        t++;
     }
     print_message("stream %u ms: shaft %d..%d m deg/s (90000), peak %d mA\n", period, vmin, vmax, peak);
     assert_true(vmin >= 81000 && vmax <= 99000);

@@ -15,6 +15,7 @@
 
 #include "km_plant_rig.h"
 #include "km_speed_est.h"
+#include "stream_rig.h"
 
 static kr_rig_t r;
 
@@ -24,61 +25,37 @@ static int32_t iabs(int32_t v)
     return v < 0 ? -v : v;
 }
 
-static uint32_t s_lcg;
-
-/* Uniform integer in [-5, 5] ms of arrival jitter, reproducible. */
-static int32_t jitter(void)
-{
-    s_lcg = s_lcg * 1103515245u + 12345u;
-    return (int32_t)((s_lcg >> 16) % 11u) - 5;
-}
-
 typedef struct {
     int32_t vmin, vmax; /* 10 ms means of the shaft speed, m deg/s */
     int32_t peak_ma;    /* the largest |current| within any tick */
     int32_t mean_ma;    /* the mean |current| at the end of the ticks */
 } stream_figures_t;
 
-/* Criterion 4's ramp, as bench_control runs it: 90 deg/s from -60 to
- * +60 deg as 0x68 frames every `period` ms, jitter from `seed`, frame k
- * dropped when k mod 17 = 8; figures from 300 ms to the last frame. */
+/* Criterion 4's ramp, as bench_control runs it (stream_rig.h): 90 deg/s
+ * from -60 to +60 deg as 0x68 frames every `period` ms, jitter from `seed`,
+ * frame k dropped when k mod 17 = 8; figures from 300 ms to the last frame. */
 static void stream_run(uint32_t period, uint32_t seed, stream_figures_t *f)
 {
     kr_init_at(&r, km_plant_config_named("realistic"), -600);
     assert_true(kr_torque(&r, 2));
     kr_run(&r, 1000);
-    s_lcg = seed;
-    const int32_t step = (int32_t)(period * 9u / 10u);
-    const uint32_t n = 1200u / (uint32_t)step;
-    uint32_t t = 0, last = 0, k = 1, arrive = period + (uint32_t)jitter();
-    int64_t hist[10] = {0}, sum_ma = 0;
+    uint32_t lcg = seed;
+    sr_stream_t s;
+    sr_start(&s, period, &lcg);
+    int64_t sum_ma = 0;
     uint32_t ticks = 0;
     f->vmin = INT32_MAX;
     f->vmax = INT32_MIN;
     f->peak_ma = 0;
-    while (k <= n) {
-        while (k <= n && arrive <= t) {
-            if (k % 17u != 8u) {
-                assert_true(kr_move(&r, KM_MOVE_STREAM, (int16_t)(-600 + (int32_t)k * step), 0));
-            }
-            last = arrive;
-            k++;
-            const int32_t due = (int32_t)(k * period) + jitter();
-            arrive = due < (int32_t)last ? last : (uint32_t)due;
-        }
-        kr_tick(&r);
-        const int64_t now = km_plant_shaft_udeg(&r.plant);
-        if (t >= 300u && k <= n) {
-            const int32_t v = (int32_t)((now - hist[t % 10u]) / 10); /* m deg/s over 10 ms */
-            f->vmin = v < f->vmin ? v : f->vmin;
-            f->vmax = v > f->vmax ? v : f->vmax;
+    while (sr_step(&s, &r)) {
+        if (s.at_ms >= 300u && s.frames_left) {
+            f->vmin = s.speed_mdps < f->vmin ? s.speed_mdps : f->vmin;
+            f->vmax = s.speed_mdps > f->vmax ? s.speed_mdps : f->vmax;
             const int32_t peak = km_plant_step_peak_ma(&r.plant);
             f->peak_ma = peak > f->peak_ma ? peak : f->peak_ma;
             sum_ma += iabs(km_plant_current_ma(&r.plant));
             ticks++;
         }
-        hist[t % 10u] = now;
-        t++;
     }
     f->mean_ma = (int32_t)(sum_ma / (ticks ? ticks : 1u));
     print_message(
