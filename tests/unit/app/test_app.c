@@ -371,6 +371,27 @@ static unsigned take_answer(wire_t *w, uint32_t *first_tick)
     return w->n;
 }
 
+/* A read of 0x0A sent to this servo and answered alone: what the reads
+ * that follow are measured against. */
+typedef struct {
+    uint8_t read[8];     /* the read command's bytes */
+    unsigned rn;         /* its length */
+    uint32_t read_end;   /* its last byte's tick */
+    wire_t answer;       /* its answer */
+    uint32_t first_tick; /* the answer's first byte's tick */
+} alone_read_t;
+
+/* Sends the read, runs 12 ms and takes its answer into *a. */
+static void read_answered_alone(alone_read_t *a)
+{
+    const uint8_t adr = 0x0A;
+    a->rn = kt_command(a->read, 0x00, 0x02, &adr, 1);
+    kf_send_at(kf_world.now, a->read, a->rn);
+    a->read_end = kf_world.rx[kf_world.rx_n - 1u].tick;
+    run_ms(12);
+    (void)take_answer(&a->answer, &a->first_tick);
+}
+
 /* One answer buffer (docs/footprint.md "STM32G031F6"): an answer armed
  * for later (the response delay, 0x12 = 2 ms) stays intact and on time
  * while frames it is not for arrive before it is due: a broadcast read
@@ -382,19 +403,14 @@ static void test_s3_armed_answer_kept_by_frames_without_answer(void **state)
     (void)state;
     boot();
     exchange("F9 FF 00 05 03 12 D0 07 0E", 5, NULL); /* 0x12 = 2000 us */
-    uint8_t read[8];
-    const uint8_t adr = 0x0A;
-    const unsigned rn = kt_command(read, 0x00, 0x02, &adr, 1);
-    kf_send_at(kf_world.now, read, rn);
-    const uint32_t alone_end = kf_world.rx[kf_world.rx_n - 1u].tick;
-    run_ms(12);
-    wire_t alone;
-    uint32_t alone_tick;
-    assert_true(take_answer(&alone, &alone_tick) > 0u);
-    assert_int_equal(wire_frames_ok(&alone), 1);
+    alone_read_t alone;
+    read_answered_alone(&alone);
+    assert_true(alone.answer.n > 0u);
+    assert_int_equal(wire_frames_ok(&alone.answer), 1);
 
+    const uint8_t adr = 0x0A;
     uint8_t f[16];
-    kf_send_at(kf_world.now, read, rn);
+    kf_send_at(kf_world.now, alone.read, alone.rn);
     const uint32_t read_end = kf_world.rx[kf_world.rx_n - 1u].tick;
     kf_send_at(read_end + 200u, f, kt_command(f, KM_ID_BROADCAST, 0x02, &adr, 1));
     kf_send_at(kf_world.rx[kf_world.rx_n - 1u].tick + 100u, f, kt_command(f, 5, 0x01, NULL, 0));
@@ -403,9 +419,9 @@ static void test_s3_armed_answer_kept_by_frames_without_answer(void **state)
     run_ms(12);
     wire_t w;
     uint32_t tick;
-    assert_int_equal(take_answer(&w, &tick), alone.n);
-    assert_memory_equal(w.b, alone.b, alone.n);
-    assert_int_equal(tick - read_end, alone_tick - alone_end);
+    assert_int_equal(take_answer(&w, &tick), alone.answer.n);
+    assert_memory_equal(w.b, alone.answer.b, alone.answer.n);
+    assert_int_equal(tick - read_end, alone.first_tick - alone.read_end);
     assert_int_equal(km_app_tx_refused(), 0);
 }
 
@@ -416,24 +432,19 @@ static void test_s3_frame_during_answer_answered_after_it(void **state)
 {
     (void)state;
     boot();
-    uint8_t read[8];
-    const uint8_t adr = 0x0A;
-    const unsigned rn = kt_command(read, 0x00, 0x02, &adr, 1);
-    kf_send_at(kf_world.now, read, rn);
-    const uint32_t alone_end = kf_world.rx[kf_world.rx_n - 1u].tick;
-    run_ms(12);
-    wire_t alone;
-    uint32_t alone_tick;
-    const unsigned an = take_answer(&alone, &alone_tick);
+    alone_read_t alone;
+    read_answered_alone(&alone);
+    const unsigned an = alone.answer.n;
     assert_true(an >= 8u);
-    kf_send_at(kf_world.now, read, rn);
+    kf_send_at(kf_world.now, alone.read, alone.rn);
     const uint32_t read_end = kf_world.rx[kf_world.rx_n - 1u].tick;
+    const uint32_t delay = alone.first_tick - alone.read_end;
     /* A ping whose last byte comes when half the read's answer is sent. */
-    const uint32_t half_sent = read_end + (alone_tick - alone_end) + (an / 2u) * kf_byte_us();
+    const uint32_t half_sent = read_end + delay + (an / 2u) * kf_byte_us();
     uint8_t ping[6];
     const unsigned pn = kt_command(ping, 0x00, 0x01, NULL, 0);
     kf_send_at(half_sent - (pn - 1u) * kf_byte_us(), ping, pn);
-    assert_true(kf_world.rx[kf_world.rx_n - 1u].tick > read_end + (alone_tick - alone_end));
+    assert_true(kf_world.rx[kf_world.rx_n - 1u].tick > read_end + delay);
     run_ms(12);
     assert_int_equal(kf_world.tx_n - kf_world.tx_read, an + 6u);
     const uint32_t read_answer_last = kf_world.tx[kf_world.tx_read + an - 1u].tick;
@@ -442,7 +453,7 @@ static void test_s3_frame_during_answer_answered_after_it(void **state)
     wire_t w;
     take(&w);
     assert_int_equal(wire_frames_ok(&w), 2);
-    assert_memory_equal(w.b, alone.b, an);
+    assert_memory_equal(w.b, alone.answer.b, an);
     assert_int_equal(w.b[an + 2], 0x00); /* the ping's answer: F9 F5 00 02 status cs */
     assert_int_equal(w.b[an + 3], 0x02);
     assert_int_equal(km_app_tx_refused(), 0);
