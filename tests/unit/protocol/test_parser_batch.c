@@ -189,42 +189,52 @@ static void test_s2_batch_views(void **state)
     }
 }
 
+/* The wrapped-frame tests' parser and bytes. */
+typedef struct {
+    km_parser_t p;
+    km_parser_out_t out;
+    uint8_t s[300];         /* the bytes on the bus */
+    uint32_t ticks[300];    /* their ticks: all 0 */
+    uint8_t inner_body[54]; /* the body of the good frame at 200..259 */
+    uint32_t used;          /* bytes the last batch call consumed */
+} wrap_rig_t;
+
+/* §2 resync set-up of the wrapped-frame tests: in w->s an outer candidate
+ * of 256 bytes at 0 (its checksum wrong) and a good 60-byte frame for
+ * servo 2 at 200..259; bytes 0..3 fed alone, so the candidate enters the
+ * ring at slot 0. */
+static void wrapped_setup(wrap_rig_t *w)
+{
+    memset(w, 0, sizeof *w);
+    km_parser_init(&w->p, GAP);
+    const uint8_t outer[] = {0xF9, 0xFF, 1, KM_LENGTH_MAX};
+    memcpy(w->s, outer, sizeof outer);
+    for (size_t i = 0; i < sizeof w->inner_body; i++) {
+        w->inner_body[i] = (uint8_t)(100u + i);
+    }
+    assert_int_equal(rig_command(&w->s[200], 2, 0x03, w->inner_body, sizeof w->inner_body), 60);
+    assert_int_equal(km_parser_feed_bytes(&w->p, w->s, w->ticks, 4u, &w->used, &w->out), 0u);
+}
+
 /* §2 resync: a good frame found by the rescan of a failed 256-byte
  * candidate, starting near the ring's end, wraps around it: it is handed
  * out whole, as a view at the ring's start (the ring turned, no copy). */
 static void test_s2_batch_wrapped_body_turned_to_ring_start(void **state)
 {
     (void)state;
-    static km_parser_t p;
-    static km_parser_out_t out;
-    km_parser_init(&p, GAP);
-    uint8_t s[300] = {0};
-    uint32_t ticks[300] = {0};
-    s[0] = 0xF9; /* an outer candidate of 256 bytes, its checksum wrong */
-    s[1] = 0xFF;
-    s[2] = 1;
-    s[3] = KM_LENGTH_MAX;
-    uint8_t inner_body[54];
-    for (size_t i = 0; i < sizeof inner_body; i++) {
-        inner_body[i] = (uint8_t)(100u + i);
-    }
-    const size_t inner = rig_command(&s[200], 2, 0x03, inner_body, sizeof inner_body); /* 200..259 */
-    assert_int_equal(inner, 60);
-    uint32_t used = 0;
-    /* Bytes 0..3 alone, so the candidate enters the ring at slot 0. */
-    unsigned ev = km_parser_feed_bytes(&p, s, ticks, 4u, &used, &out);
-    assert_int_equal(ev, 0u);
-    ev = km_parser_feed_bytes(&p, &s[4], ticks, 252u, &used, &out);
-    assert_int_equal(used, 252u);
+    static wrap_rig_t w;
+    wrapped_setup(&w);
+    unsigned ev = km_parser_feed_bytes(&w.p, &w.s[4], w.ticks, 252u, &w.used, &w.out);
+    assert_int_equal(w.used, 252u);
     assert_int_equal(ev, KM_PARSE_CHECKSUM_ERR); /* the outer one fails... */
-    assert_int_equal(p.fill, 56u);               /* ...and the inner one waits */
-    ev = km_parser_feed_bytes(&p, &s[256], ticks, 4u, &used, &out);
+    assert_int_equal(w.p.fill, 56u);             /* ...and the inner one waits */
+    ev = km_parser_feed_bytes(&w.p, &w.s[256], w.ticks, 4u, &w.used, &w.out);
     assert_int_equal(ev, KM_PARSE_FRAME);
-    assert_int_equal(used, 4u);
-    assert_int_equal(out.frame.id, 2);
-    assert_int_equal(out.frame.body_len, sizeof inner_body);
-    assert_ptr_equal(out.frame.body, &p.window[5]);
-    assert_memory_equal(out.frame.body, inner_body, sizeof inner_body);
+    assert_int_equal(w.used, 4u);
+    assert_int_equal(w.out.frame.id, 2);
+    assert_int_equal(w.out.frame.body_len, sizeof w.inner_body);
+    assert_ptr_equal(w.out.frame.body, &w.p.window[5]);
+    assert_memory_equal(w.out.frame.body, w.inner_body, sizeof w.inner_body);
 }
 
 /* The same with bytes after the wrapped frame already in the ring (a
@@ -233,41 +243,28 @@ static void test_s2_batch_wrapped_body_turned_to_ring_start(void **state)
 static void test_s2_batch_wrapped_frame_keeps_the_bytes_after_it(void **state)
 {
     (void)state;
-    static km_parser_t p;
-    static km_parser_out_t out;
-    km_parser_init(&p, GAP);
-    uint8_t s[300] = {0};
-    uint32_t ticks[300] = {0};
-    const uint8_t outer[] = {0xF9, 0xFF, 1, KM_LENGTH_MAX}; /* 0..255, checksum wrong */
-    memcpy(s, outer, sizeof outer);
+    static wrap_rig_t w;
+    wrapped_setup(&w);
     const uint8_t middle[] = {0xF9, 0xFF, 1, 116}; /* 150..269, checksum wrong */
-    memcpy(&s[150], middle, sizeof middle);
-    uint8_t inner_body[54];
-    for (size_t i = 0; i < sizeof inner_body; i++) {
-        inner_body[i] = (uint8_t)(100u + i);
-    }
-    assert_int_equal(rig_command(&s[200], 2, 0x03, inner_body, sizeof inner_body), 60); /* 200..259 */
-    assert_int_equal(rig_command(&s[260], 3, 0x01, NULL, 0), 6);                        /* 260..265 */
-    uint32_t used = 0;
-    unsigned ev = km_parser_feed_bytes(&p, s, ticks, 4u, &used, &out);
-    assert_int_equal(ev, 0u);
-    ev = km_parser_feed_bytes(&p, &s[4], ticks, 252u, &used, &out);
+    memcpy(&w.s[150], middle, sizeof middle);
+    assert_int_equal(rig_command(&w.s[260], 3, 0x01, NULL, 0), 6); /* 260..265 */
+    unsigned ev = km_parser_feed_bytes(&w.p, &w.s[4], w.ticks, 252u, &w.used, &w.out);
     assert_int_equal(ev, KM_PARSE_CHECKSUM_ERR); /* outer fails, the middle one waits */
-    assert_int_equal(p.fill, 106u);
-    ev = km_parser_feed_bytes(&p, &s[256], ticks, 44u, &used, &out);
-    assert_int_equal(used, 14u); /* up to the middle one's end: it fails, the rescan finds the inner one */
+    assert_int_equal(w.p.fill, 106u);
+    ev = km_parser_feed_bytes(&w.p, &w.s[256], w.ticks, 44u, &w.used, &w.out);
+    assert_int_equal(w.used, 14u); /* up to the middle one's end: it fails, the rescan finds the inner one */
     assert_int_equal(ev, KM_PARSE_CHECKSUM_ERR | KM_PARSE_FRAME);
-    assert_int_equal(out.frame.id, 2);
-    assert_int_equal(out.frame.cmd, 0x03);
-    assert_int_equal(out.frame.body_len, sizeof inner_body);
-    assert_ptr_equal(out.frame.body, &p.window[5]);
-    assert_memory_equal(out.frame.body, inner_body, sizeof inner_body);
-    assert_int_equal(p.fill, 10u); /* 260..269 wait: the ping and four zeros */
-    ev = km_parser_poll_view(&p, 0u, &out);
+    assert_int_equal(w.out.frame.id, 2);
+    assert_int_equal(w.out.frame.cmd, 0x03);
+    assert_int_equal(w.out.frame.body_len, sizeof w.inner_body);
+    assert_ptr_equal(w.out.frame.body, &w.p.window[5]);
+    assert_memory_equal(w.out.frame.body, w.inner_body, sizeof w.inner_body);
+    assert_int_equal(w.p.fill, 10u); /* 260..269 wait: the ping and four zeros */
+    ev = km_parser_poll_view(&w.p, 0u, &w.out);
     assert_int_equal(ev, KM_PARSE_FRAME);
-    assert_int_equal(out.frame.id, 3);
-    assert_int_equal(out.frame.cmd, 0x01);
-    assert_int_equal(out.frame.body_len, 0);
+    assert_int_equal(w.out.frame.id, 3);
+    assert_int_equal(w.out.frame.cmd, 0x01);
+    assert_int_equal(w.out.frame.body_len, 0);
 }
 
 int main(void)
