@@ -53,6 +53,15 @@ static int32_t prv_hold_ki(km_position_loop_t *l, const km_control_gains_t *g,
     return ki + ((ki * (e_d < 0 ? -e_d : e_d) * KM_HOLD_KI_GROW_Q6) >> 6);
 }
 
+/* ki x e / 10 (ki_e) x dt / 100, dt capped at 2 ms, without overflowing:
+ * the quotient split at 100 gives C's result exactly (docs/tuning.md). */
+static int32_t prv_integral_step(int32_t ki_e, uint32_t dt_us)
+{
+    const int32_t dt = (int32_t)(dt_us > 2000u ? 2000u : dt_us);
+    const int32_t hundreds = km_sdiv100(ki_e);
+    return hundreds * dt + km_sdiv100((ki_e - hundreds * 100) * dt);
+}
+
 /* The integrator's PWM after this tick: ki x the error (u), frozen while
  * the output is saturated the way it would push (docs/tuning.md). */
 static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
@@ -70,7 +79,7 @@ static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
         }
     }
     const int32_t i_max = (g->i_max_pwm > 1000u ? 1000 : (int32_t)g->i_max_pwm) * 256000;
-    const int32_t di = km_sdiv100(km_sdiv10(ki * e_d) * (int32_t)(dt_us > 2000u ? 2000u : dt_us));
+    const int32_t di = prv_integral_step(km_sdiv10(ki * e_d), dt_us);
     before += i_pwm;
     if (!((before >= in->pwm_max && di > 0) || (before <= -in->pwm_max && di < 0))) {
         l->i_acc = prv_clamp(l->i_acc + di, -i_max, i_max);

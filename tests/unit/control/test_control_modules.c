@@ -217,6 +217,27 @@ static void test_position_loop_terms_and_bounds(void **state)
     assert_int_equal(l.i_acc, 0);
 }
 
+/* A settled hold pushed 5 deg away with a 2 ms tick: ki_hold grown by the
+ * error (x 4.9) times the error times dt passes 2^31 before the division by
+ * 100; the step must still push back, by exactly ki x e / 10 x dt / 100. */
+static void test_position_loop_hold_integral_no_overflow(void **state)
+{
+    (void)state;
+    const km_control_gains_t g = gains();
+    km_position_loop_t l;
+    km_position_loop_init(&l);
+    l.still_ms = KM_HOLD_SETTLED_MS;
+    l.rest_pos = 0;
+    const km_position_loop_in_t in = {
+        .setpoint_u = 0, .position = -51, .pwm_max = 1000, .integrate = true, .still = true};
+    (void)km_position_loop_step(&l, &g, &in, 2000u);
+    const int64_t e_d = 51 - (int64_t)g.hold_band_ddeg; /* the band is a dead band */
+    const int64_t ki = (int64_t)g.ki_hold_q4 * 16;
+    const int64_t ki_grown = ki + ((ki * e_d * KM_HOLD_KI_GROW_Q6) >> 6);
+    assert_true(ki_grown * e_d / 10 * 2000 > INT32_MAX); /* the case this test is for */
+    assert_int_equal(l.i_acc, (int32_t)(ki_grown * e_d / 10 * 2000 / 100));
+}
+
 /* Output stage: direction flips the PWM into the sensor's frame, the limit
  * clamps it, free and brake carry no PWM; 0x49 reports |PWM|. */
 static void test_output_direction_limit_modes(void **state)
@@ -344,6 +365,7 @@ int main(void)
         cmocka_unit_test(test_profile_retarget_blends),
         cmocka_unit_test(test_profile_stream_constant_speed),
         cmocka_unit_test(test_position_loop_terms_and_bounds),
+        cmocka_unit_test(test_position_loop_hold_integral_no_overflow),
         cmocka_unit_test(test_output_direction_limit_modes),
         cmocka_unit_test(test_speed_fast_estimator),
         cmocka_unit_test(test_servo_mode_clamp),
