@@ -215,7 +215,8 @@ def main():
             (interrupted and not after_handlers(where, handlers_at)))
         if not in_python_startup:
             if p.returncode != 0:
-                problems.append("exit status %d" % p.returncode)
+                last = err.strip().splitlines()[-1:] or ["(nothing on stderr)"]
+                problems.append("exit status %d, stderr ends: %s" % (p.returncode, last[0][:200]))
             if "Traceback" in err:
                 problems.append("traceback: %s at %s" % (err.strip().splitlines()[-1],
                                                          where[-1] if where else "?"))
