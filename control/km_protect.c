@@ -105,9 +105,9 @@ static void prv_time(km_protect_t *s, uint8_t over, uint8_t enabled, const km_co
         s->timer_us[prv_bit_number((uint8_t)(dropped & (0u - dropped)))] = 0u;
     }
     uint8_t timing = 0;
-    for (uint8_t todo = (uint8_t)((over | s->active | s->timing) & enabled); todo != 0u;
-         todo &= (uint8_t)(todo - 1u)) {
-        const uint8_t bit = (uint8_t)(todo & (0u - todo));
+    for (uint8_t pending = (uint8_t)((over | s->active | s->timing) & enabled); pending != 0u;
+         pending &= (uint8_t)(pending - 1u)) {
+        const uint8_t bit = (uint8_t)(pending & (0u - pending));
         uint32_t *const timer = &s->timer_us[prv_bit_number(bit)];
         uint32_t t = *timer;
         if ((over & bit) != 0u) {
