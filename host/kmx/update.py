@@ -16,8 +16,12 @@ without one refuses ENTER with bit 5); otherwise one line names the IDs
 and nothing is sent. Steps: read each servo's 0x0C; ENTER by broadcast (each restarts into its bootloader); BEGIN by
 broadcast, STATUS per ID (a servo that refuses the image, e.g. another
 model, is left out and reported); every block by broadcast; STATUS per ID
-and the missing blocks again by broadcast (up to --rounds); VERIFY, COMMIT,
-STATUS per ID; START by broadcast; 0x0C per ID again.
+and the missing blocks again by broadcast (up to --rounds); VERIFY by
+broadcast, the wire quiet while the servos compute its CRC passes, STATUS
+per ID (VERIFIED); COMMIT likewise (COMMITTED); START by broadcast; 0x0C
+per ID again. A broadcast a servo lost (its STATUS shows the state before
+the step) is sent to it alone, logged and counted in the figures ("sent
+alone after a lost broadcast"; docs/update.md §4).
 
 --rescue: everything by broadcast, no ID needed (the servo must be alone on
 the bus); ends by pinging IDs 0..250 to say where it answers.
@@ -86,6 +90,17 @@ BOOT_WAIT_S = 5.0
 # from flash meanwhile does not read the bus (docs/update.md §4): G0, 16
 # double words x 85 us = 1.36 ms; the master keeps the wire quiet this long.
 PROGRAM_GAP_S = 0.002
+# VERIFY reads the image back twice (its CRC-32 over the whole image, then
+# the body's), COMMIT's boot check once more, and a bootloader computing
+# does not read the bus (docs/update.md §4 "After VERIFY and COMMIT"): one
+# pass costs 23 instructions, about 33 M0+ cycles, a byte (the G031
+# bootloader's read loop and nibble CRC); the master budgets 50 and leaves
+# the wire quiet that long at the bootloader's clock, by the image's model.
+CRC_PASS_CYCLES_PER_BYTE = 50
+BOOT_CLOCK_HZ = {0x4B4D0001: 16000000, 0x4B4D0002: 16000000}  # qemu-microbit, stm32g031: reset clocks
+BUSY_FLOOR_S = 0.01
+VERIFY_PASSES, COMMIT_PASSES = 2, 1
+ALONE = ("ENTER", "BEGIN", "VERIFY", "COMMIT", "START")  # the frames a lost broadcast sends again
 
 
 class Monitor:
@@ -142,6 +157,20 @@ class Updater:
         self.left_out = {}
         self.touched = False    # an ENTER went out: servos may sit in their bootloaders
         self.pending = list(ids)  # not through a whole pass yet
+        self.alone = dict.fromkeys(ALONE, 0)  # frames sent again to one servo after a lost broadcast
+
+    def busy_s(self, passes):
+        """How long a bootloader reads no bus while it runs `passes` CRC-32
+        passes over this image (VERIFY 2, COMMIT's boot check 1), at its
+        board's clock with the margin of CRC_PASS_CYCLES_PER_BYTE."""
+        model, length = struct.unpack_from("<II", self.image, 4)
+        hz = BOOT_CLOCK_HZ.get(model, min(BOOT_CLOCK_HZ.values()))
+        return passes * length * CRC_PASS_CYCLES_PER_BYTE / hz + BUSY_FLOOR_S
+
+    def sent_alone(self, dev_id, what):
+        """Counts and logs a frame sent again to one servo after its broadcast was lost."""
+        self.alone[what] += 1
+        self.log("  ID %d missed %s: sent to it alone" % (dev_id, what))
 
     # -- wire --------------------------------------------------------------
     def start_pass(self):
@@ -287,14 +316,14 @@ class Updater:
                 raise Restarted("ID %d: no STATUS after BEGIN" % i)
             if st["state"] == 0:
                 # Still the application: the broadcast ENTER was lost.
-                self.log("  ID %d missed ENTER: sent to it alone" % i)
+                self.sent_alone(i, "ENTER")
                 self.send(frame(i, ENTER, ENTER_MAGIC))
                 time.sleep(0.2)
                 self.wait_boot(i)
                 st = {"state": 1, "result": 0}
             if st["state"] == 1 and st["result"] == 0:
                 # The broadcast BEGIN did not reach it (a frame lost): its own.
-                self.log("  ID %d missed BEGIN: sent to it alone" % i)
+                self.sent_alone(i, "BEGIN")
                 self.ask(i, BEGIN, self.image[:32], timeout=2.0)
                 st = self.status(i)
                 if st is None:
@@ -331,27 +360,44 @@ class Updater:
             todo = sorted(need)
         else:
             raise Restarted("blocks still missing after %d rounds" % rounds)
-        self.send(frame(self.dest, VERIFY))
-        self.send(frame(self.dest, COMMIT))
-        time.sleep(0.05)
-        for i in ids:
-            st = self.status(i)
-            # A lost broadcast VERIFY or COMMIT: to that servo alone.
-            if st is not None and st["state"] == 2:
-                self.log("  ID %d missed VERIFY: sent to it alone" % i)
-                self.ask(i, VERIFY)
-                st = self.status(i)
-            if st is not None and st["state"] == 3:
-                self.log("  ID %d missed COMMIT: sent to it alone" % i)
-                self.ask(i, COMMIT)
-                st = self.status(i)
-            if st is None or st["state"] != 4:
-                raise Restarted("ID %d not committed: %s" % (
-                    i, st and (STATES.get(st["state"]), RESULTS.get(st["result"]))))
+        self.step(VERIFY, VERIFY_PASSES)
+        self.confirm(ids, VERIFY, 3)
+        self.step(COMMIT, COMMIT_PASSES)
+        self.confirm(ids, COMMIT, 4)
         self.send(frame(self.dest, START, START_MAGIC))
         time.sleep(0.2)
         self.restart_missed(ids)
         return ids
+
+    def step(self, sub, passes):
+        """VERIFY or COMMIT to the pass's destination, and the wait for its
+        CRC passes: by broadcast (no answer) the wire stays quiet for
+        busy_s(passes); to one ID its answer, which comes once it is done."""
+        if self.dest == BCAST:
+            self.send(frame(BCAST, sub))
+            self.quiet_for(self.busy_s(passes))
+        else:
+            t0 = time.monotonic()
+            got = self.ask(self.dest, sub, timeout=max(2.0, 2 * self.busy_s(passes)))
+            if got is not None:
+                self.log("  ID %d: %s answered %.1f ms after it was sent (budget %.1f ms)" % (
+                    self.dest, "VERIFY" if sub == VERIFY else "COMMIT", (time.monotonic() - t0) * 1000,
+                    self.busy_s(passes) * 1000))
+
+    def confirm(self, ids, sub, state):
+        """STATUS of each ID after VERIFY or COMMIT (docs/update.md §4): the
+        state it leads to (3 VERIFIED, 4 COMMITTED); the state before it
+        means the frame was lost: sent again to that servo alone, whose
+        answer comes once it is done. Restarted for anything else."""
+        for i in ids:
+            st = self.status(i)
+            if st is not None and st["state"] == state - 1:
+                self.sent_alone(i, "VERIFY" if sub == VERIFY else "COMMIT")
+                self.ask(i, sub, timeout=max(2.0, 2 * self.busy_s(VERIFY_PASSES)))
+                st = self.status(i)
+            if st is None or st["state"] != state:
+                raise Restarted("ID %d not %s: %s" % (
+                    i, STATES[state], st and (STATES.get(st["state"]), RESULTS.get(st["result"]))))
 
     def restart_missed(self, ids):
         """A lost broadcast START leaves a servo committed in its bootloader:
@@ -359,7 +405,7 @@ class Updater:
         for i in ids:
             st = self.status(i)
             if st is not None and st["state"] == 4:
-                self.log("  ID %d missed START: sent to it alone" % i)
+                self.sent_alone(i, "START")
                 self.send(frame(i, START, START_MAGIC))
                 time.sleep(0.2)
 
@@ -378,7 +424,9 @@ class Updater:
                                 struct.pack("<I", zlib.crc32(data) & 0xFFFFFFFF)))
                 self.quiet_for(PROGRAM_GAP_S)
         self.send(frame(BCAST, VERIFY))
+        self.quiet_for(self.busy_s(VERIFY_PASSES))
         self.send(frame(BCAST, COMMIT))
+        self.quiet_for(self.busy_s(COMMIT_PASSES))
         time.sleep(0.1)
         self.send(frame(BCAST, START, START_MAGIC))
         time.sleep(1.0)
@@ -507,8 +555,9 @@ def plan_restarts(a, image, ids):
         rng = random.Random(a.seed * 7919 + 1)
         n = len(ids)
         # Frames of a pass with nothing lost, in order: ENTER, BEGIN, n STATUS,
-        # the blocks, n x (STATUS per 512 blocks), VERIFY, COMMIT, n STATUS, START.
-        total = blocks + 5 + n * (2 + (blocks + 511) // 512)
+        # the blocks, n x (STATUS per 512 blocks), VERIFY, n STATUS, COMMIT,
+        # n STATUS, START.
+        total = blocks + 5 + n * (3 + (blocks + 511) // 512)
         for _ in range(a.resets):
             # Half at a random frame of the pass (mostly WRITE: programs),
             # half at the next ENTER, BEGIN (the erase), VERIFY, COMMIT (the
@@ -656,9 +705,10 @@ def print_figures(up, a, image, done, seconds):
                             for i, t in sorted(tally.items()))), flush=True)
     print("%s: %s, %d bytes of image, %d frames (%d bytes) in %.2f s: "
           "%.0f bytes of image per second; %d restarts injected, %d resets injected, %d times a "
-          "servo did not answer after one"
+          "servo did not answer after one; sent alone after a lost broadcast: %s"
           % (a.prog, "rescue (1 servo, blind)" if a.rescue else "%d servo(s)" % len(done), len(image), up.frames,
-             up.bytes_sent, seconds, len(image) / seconds, up.restarts_done, up.resets_done, up.unreachable),
+             up.bytes_sent, seconds, len(image) / seconds, up.restarts_done, up.resets_done, up.unreachable,
+             ", ".join("%s %d" % (k, up.alone[k]) for k in ALONE)),
           flush=True)
 
 

@@ -12,9 +12,11 @@ servo_update_qemu.py (CTest update_qemu_interrupt). About 8 s."""
 import os
 import re
 import struct
+import time
 import unittest
 from types import SimpleNamespace
 
+from kmx import frame as fr
 from kmx import update as kup
 
 from test_kmx import REPO, ServoBus
@@ -151,6 +153,124 @@ class LostStart(unittest.TestCase):
         self.assertEqual([d for d, sub in bus.sent if sub == kup.START], [2])
         self.assertEqual(lines, ["  ID 2 missed START: sent to it alone"])
         self.assertEqual(bus.stuck, set())
+
+
+class Bootloaders:
+    """Servos in update mode on a bus, as the update sees them: 0x78 per
+    docs/update.md §4, and deaf while a CRC pass runs: VERIFY reads the
+    image back twice, COMMIT's boot check once, at DEAF_S_PER_BYTE a pass
+    (the G031 bootloader: 24 instructions a byte at 16 MHz on the virtual
+    G031, docs/update.md §4 "After VERIFY and COMMIT"); a frame that
+    arrives meanwhile is lost. `drop` = {(ID, sub)}: that servo also loses
+    the first broadcast of that sub (a real loss)."""
+
+    DEAF_S_PER_BYTE = 24 / 16e6
+
+    def __init__(self, ids, image, drop=()):
+        self.length = struct.unpack_from("<I", image, 8)[0]
+        self.blocks = (self.length + kup.BLOCK - 1) // kup.BLOCK
+        self.state = dict.fromkeys(ids, 0)
+        self.got = {i: set() for i in ids}
+        self.deaf_until = dict.fromkeys(ids, 0.0)
+        self.erased = dict.fromkeys(ids, False)  # BEGIN erased the old image, no COMMIT since
+        self.drop, self.pending, self.lost = set(drop), [], []
+
+    def answer(self, dev_id, body):
+        """An answer from dev_id, on the wire once it is done computing."""
+        self.pending.append((self.deaf_until[dev_id], fr.Frame(fr.RSP_HEADER, dev_id, body)))
+
+    def busy(self, dev_id, passes):
+        self.deaf_until[dev_id] = time.monotonic() + passes * self.length * self.DEAF_S_PER_BYTE
+
+    def run(self, dev_id, data, own):
+        """One frame at one servo: its 0x78 state machine (ping: a short answer)."""
+        if data[4] == fr.PING:
+            self.answer(dev_id, b"\x00")
+            return
+        sub, st = data[5], self.state[dev_id]
+        if sub == kup.ENTER or (sub == kup.BEGIN and st != 0):
+            self.state[dev_id], self.got[dev_id] = (1 if sub == kup.ENTER else 2), set()
+            self.erased[dev_id] |= sub == kup.BEGIN
+        elif sub == kup.WRITE and st == 2:
+            self.got[dev_id].add(struct.unpack_from("<H", data, 6)[0])
+        elif sub == kup.VERIFY and st == 2 and len(self.got[dev_id]) == self.blocks:
+            self.state[dev_id] = 3
+            self.busy(dev_id, 2)
+        elif sub == kup.COMMIT and st == 3:
+            self.state[dev_id], self.erased[dev_id] = 4, False
+            self.busy(dev_id, 1)
+        elif sub == kup.START and st != 0:
+            self.state[dev_id] = 1 if self.erased[dev_id] else 0  # the boot check: a whole image starts
+        if own and sub == kup.STATUS:
+            bits = bytearray((self.blocks + 7) // 8)
+            for b in self.got[dev_id]:
+                bits[b // 8] |= 1 << (b % 8)
+            self.answer(dev_id, bytes([kup.CMD, sub]) + struct.pack(
+                "<BBHHH", self.state[dev_id], 0, self.blocks, len(self.got[dev_id]), 0) + bytes(bits))
+        elif own and sub in (kup.BEGIN, kup.WRITE, kup.VERIFY, kup.COMMIT):
+            self.answer(dev_id, bytes([kup.CMD, sub, 0]))  # VERIFY, COMMIT: after their CRC passes
+
+    def transact(self, data, answers=0, timeout=None):
+        dev_id, now = data[2], time.monotonic()
+        for i in self.state if dev_id == kup.BCAST else [dev_id] if dev_id in self.state else []:
+            if now < self.deaf_until[i] or (dev_id == kup.BCAST and (i, data[5]) in self.drop):
+                self.drop.discard((i, data[5]))
+                self.lost.append((i, data[5]))
+                continue
+            self.run(i, data, dev_id != kup.BCAST)
+        return self.listen(timeout, answers) if answers else []
+
+    def listen(self, timeout, n):
+        """The answers on the wire within timeout."""
+        if self.pending:
+            time.sleep(max(0.0, min(timeout or 0.0, min(due for due, _ in self.pending) - time.monotonic())))
+        now = time.monotonic()
+        out = [f for due, f in self.pending if due <= now]
+        self.pending = [(due, f) for due, f in self.pending if due > now]
+        return out
+
+    def close(self):
+        pass
+
+
+class VerifyThenCommit(unittest.TestCase):
+    """After the broadcast VERIFY the master leaves the servos the time
+    their CRC passes take, reads each one's STATUS (VERIFIED), and only
+    then broadcasts COMMIT, so a pass with nothing lost sends no VERIFY or
+    COMMIT to a servo alone (docs/update.md §4, step 5). A COMMIT sent
+    right behind VERIFY lands while every bootloader is still computing."""
+
+    def updater(self, drop=()):
+        image = make_image(body_len=32036 - 0x100, model=0x4B4D0002)  # the G031 application's size
+        self.bus = Bootloaders([1, 2, 3], image, drop)
+        self.lines = []
+        up = kup.Updater(self.bus, [1, 2, 3], image, self.lines.append)
+        up.baud = 10 ** 12  # no line pacing: the frames follow each other as fast as the master sends them
+        return up
+
+    def test_no_frame_lost_and_none_sent_alone(self):
+        up = self.updater()
+        self.assertEqual(up.one_pass(4), [1, 2, 3])
+        self.assertEqual([line for line in self.lines if "missed" in line], [])
+        self.assertEqual(self.bus.lost, [])
+        self.assertEqual(up.alone, dict.fromkeys(kup.ALONE, 0))
+        self.assertEqual(self.bus.state, {1: 0, 2: 0, 3: 0})  # started
+
+    def test_a_lost_verify_or_commit_is_sent_to_that_servo_alone(self):
+        up = self.updater(drop={(2, kup.VERIFY), (3, kup.COMMIT)})
+        self.assertEqual(up.one_pass(4), [1, 2, 3])
+        self.assertEqual([line for line in self.lines if "missed" in line],
+                         ["  ID 2 missed VERIFY: sent to it alone", "  ID 3 missed COMMIT: sent to it alone"])
+        self.assertEqual(self.bus.lost, [(2, kup.VERIFY), (3, kup.COMMIT)])
+        self.assertEqual(up.alone, dict(dict.fromkeys(kup.ALONE, 0), VERIFY=1, COMMIT=1))
+        self.assertEqual(self.bus.state, {1: 0, 2: 0, 3: 0})
+
+    def test_rescue_waits_for_verify_before_commit(self):
+        up = self.updater()
+        self.bus.state = {1: 0}
+        up.rescue_pass(1)
+        self.assertEqual(self.bus.lost, [])
+        self.assertEqual(self.bus.state, {1: 0})  # committed, then START ran the new image
 
 
 if __name__ == "__main__":
