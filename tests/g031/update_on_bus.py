@@ -12,7 +12,9 @@ tools/servo-update exactly as on QEMU (tests/qemu/update_e2e.py):
      version 0x0102: the application answers 0x0C from its own code, so
      only a different build shows the update landed) to all three in one
      broadcast pass, through the real bootloader's erase and program: 0x0C
-     gives 0x10100102;
+     gives 0x10100102, and no ENTER, BEGIN, VERIFY or COMMIT had to be sent
+     to a servo alone (the master waits for VERIFY's CRC passes before the
+     broadcast COMMIT, docs/update.md §4 "After VERIFY and COMMIT");
   4. back to the shipped version with RESTARTS restart frames and RESETS
      NRST resets (the bus's monitor sockets, as QEMU's system_reset) at
      random points of the pass; the update completes on every servo.
@@ -96,6 +98,9 @@ def checks(spec, mon, tmp, image, image_v2, a):
     want = struct.unpack_from(HEADER, image_v2)[3] | 0x10000000  # the bootloader's byte 0x10 on top
     if rc != 0 or any(x != want for x in got.values()):
         failures.append("3: v2 (0x%08X) not on all three: %r" % (want, got))
+    if "sent alone after a lost broadcast: ENTER 0, BEGIN 0, VERIFY 0, COMMIT 0," not in out:
+        failures.append("3: the pass sent a step to a servo alone (a broadcast lost, e.g. a COMMIT "
+                        "while the bootloaders still computed VERIFY's CRC, docs/update.md §4)")
     rc, out = run_update(update, paths["shipped"], ["--restarts", str(a.restarts), "--seed", str(a.seed),
                                                     "--resets", str(a.resets), "--monitor-dir", mon])
     got = versions(spec, ids)
