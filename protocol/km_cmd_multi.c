@@ -10,31 +10,68 @@
 #include "km_dispatch.h"
 #include "km_hooks.h"
 
+/* The strided loops at -O2 (rotated: one compare a pass) in the -Os build. */
+#if defined(__GNUC__) && !defined(__clang__)
+#define PRV_LOOP_O2 __attribute__((optimize("O2"))) /* GCC only: clang has no per-function level */
+#else
+#define PRV_LOOP_O2
+#endif
+
 /* floor(n / d) for n <= 255, 1 <= d <= 8, as (n x ceil(2^11 / d)) >> 11:
  * exact in that range (tests/unit/protocol/test_dispatch_multi_scan.c);
  * on the M0 a division is a library call. */
 static const uint16_t s_recip_2048[9] = {0u, 2048u, 1024u, 683u, 512u, 410u, 342u, 293u, 256u};
 
-/* The first entry of `own` among the entries of `stride` bytes from p (the
- * ID first in each) up to end, or end. Four entries a pass with the stride
- * a constant where the caller inlines it: a load and a compare each. */
-static inline __attribute__((always_inline)) const uint8_t *
-prv_find_entry(const uint8_t *p, const uint8_t *end, uint8_t own, size_t stride)
+/* The first word from q up to q_end (q < q_end, whole blocks of four) in which a byte that k
+ * marks (bit 0 of each entry's ID byte) equals the byte of pat (own, four
+ * times), or q_end. SWAR: with x = word ^ pat, (x - k) & ~x has a bit 7
+ * set only in a marked byte that is zero, or above one through a chain
+ * of borrows, so exactly when some marked byte matches: the value bytes in
+ * between never count (docs/benchmarks.md "Lists"). A function of its own
+ * so the loop's values stay in registers. */
+static __attribute__((noinline)) const uint32_t *
+prv_find_block(const uint32_t *q, const uint32_t *const q_end, const uint32_t pat, const uint32_t k)
 {
-    while ((size_t)(end - p) >= 4u * stride) {
-        if (p[0] == own) {
-            return p;
+    do {
+        uint32_t x = *q++ ^ pat;
+        uint32_t marked = (x - k) & ~x;
+        x = *q++ ^ pat;
+        marked |= (x - k) & ~x;
+        x = *q++ ^ pat;
+        marked |= (x - k) & ~x;
+        x = *q++ ^ pat;
+        marked |= (x - k) & ~x;
+        if (marked & 0x80808080u) {
+            q -= 4;
+            while (!(((*q ^ pat) - k) & ~(*q ^ pat) & 0x80808080u)) {
+                q++; /* the word of the four that holds it */
+            }
+            return q;
         }
-        if (p[stride] == own) {
-            return p + stride;
+    } while (q != q_end);
+    return q;
+}
+
+/* The first entry of `own` among the entries of `stride` (1 or 2) bytes
+ * from p up to end (the ID first in each), or end: the entries before a
+ * word boundary one by one, then blocks of 16 bytes (prv_find_block), then
+ * one by one from the word that holds it or from the rest. */
+static __attribute__((noinline)) const uint8_t *prv_find_words(const uint8_t *p, const uint8_t *const end,
+                                                               const uint8_t own, const uint32_t stride)
+{
+    const uint8_t *const aligned = (const uint8_t *)(((uintptr_t)p + 3u) & ~(uintptr_t)3u);
+    while (p < aligned && p < end && *p != own) {
+        p += stride;
+    }
+    if (p >= aligned && p < end && *p != own) {
+        /* p - aligned: 0, or 1 (stride 2 from an odd address); the same in every block */
+        const uint32_t phase = (uint32_t)(p - aligned);
+        const uint32_t k = (stride == 1u ? 0x01010101u : 0x00010001u) << (8u * phase);
+        const uint32_t *const q = __builtin_assume_aligned(aligned, 4);
+        const uint32_t *const q_end = q + (((uint32_t)(end - aligned) >> 4) << 2);
+        if (q != q_end) {
+            p = (const uint8_t *)prv_find_block(q, q_end, own * 0x01010101u, k) + phase;
         }
-        if (p[2u * stride] == own) {
-            return p + 2u * stride;
-        }
-        if (p[3u * stride] == own) {
-            return p + 3u * stride;
-        }
-        p += 4u * stride;
     }
     while (p < end && *p != own) {
         p += stride;
@@ -42,24 +79,50 @@ prv_find_entry(const uint8_t *p, const uint8_t *end, uint8_t own, size_t stride)
     return p < end ? p : end;
 }
 
-/* prv_find_entry() for the strides 0x83's registers take (KM_K(1), KM_K(2),
- * KM_K(4): 2, 3, 5 bytes an entry), each with its stride a constant. */
-static __attribute__((noinline)) const uint8_t *prv_find_multi(const uint8_t *p, const uint8_t *end,
-                                                               uint8_t own, size_t stride)
+/* The first entry of `own` among the entries of `stride` bytes from p up
+ * to end (the ID first in each), or end: `per_pass` entries a pass (the
+ * stride a constant where inlined: a load and a compare each), then one
+ * by one from the pass that holds it or from the rest. */
+static inline __attribute__((always_inline)) const uint8_t *
+prv_find_bytes(const uint8_t *p, const uint8_t *const end, const uint8_t own, const size_t stride)
+{
+    const size_t pass = (stride <= 3u ? 8u : 6u) * stride; /* offsets within ldrb's 0..31 */
+    if ((size_t)(end - p) >= pass) {
+        const uint8_t *const last = end - pass;
+        do {
+            if (p[0] == own || p[stride] == own || p[2u * stride] == own || p[3u * stride] == own ||
+                p[4u * stride] == own || p[5u * stride] == own ||
+                (stride <= 3u && (p[6u * stride] == own || p[7u * stride] == own))) {
+                break;
+            }
+            p += pass;
+        } while (p <= last);
+    }
+    while (p < end && *p != own) {
+        p += stride;
+    }
+    return p < end ? p : end;
+}
+
+/* The first entry of `own` among 0x83's entries from p up to end, or end,
+ * for the strides its registers take (KM_K(1), KM_K(2), KM_K(4): 2, 3, 5
+ * bytes an entry): two a word for 2, one by one with the stride a
+ * constant for 3 and 5. */
+static __attribute__((noinline)) PRV_LOOP_O2 const uint8_t *
+prv_find_multi(const uint8_t *p, const uint8_t *const end, const uint8_t own, const uint32_t stride)
 {
     switch (stride) {
-    case 2u: /* 0x64's entries, the longest lists (124): eight a pass */
-        while ((uint32_t)(end - p) >= 16u && p[0] != own && p[2] != own && p[4] != own && p[6] != own &&
-               p[8] != own && p[10] != own && p[12] != own && p[14] != own) {
-            p += 16;
-        }
-        return prv_find_entry(p, end, own, 2u);
+    case 2u:
+        return prv_find_words(p, end, own, 2u);
     case 3u:
-        return prv_find_entry(p, end, own, 3u);
+        return prv_find_bytes(p, end, own, 3u);
     case 5u:
-        return prv_find_entry(p, end, own, 5u);
-    default:
-        return prv_find_entry(p, end, own, stride);
+        return prv_find_bytes(p, end, own, 5u);
+    default: /* no register takes another size today */
+        while (p < end && *p != own) {
+            p += stride;
+        }
+        return p < end ? p : end;
     }
 }
 
@@ -99,51 +162,6 @@ km_report_t km_cmd_multi_write(km_servo_t *s, const km_frame_view_t *f, km_reply
     return KM_REPORT_NONE;
 }
 
-/* The first pair of words from q up to q_end (pairs) holding a byte equal
- * to the byte of pat (repeated 4 times), or q_end. SWAR: that byte is a
- * zero byte of w = word ^ pat, and (w - 0x01010101) & ~w has a top bit set
- * in some byte exactly when w has a zero byte. A function of its own with
- * nothing else live, so the loop's eight values stay in registers. */
-#if defined(__GNUC__) && !defined(__clang__)
-#define PRV_LOOP_O2 __attribute__((optimize("O2"))) /* GCC only: clang has no per-function level */
-#else
-#define PRV_LOOP_O2
-#endif
-static __attribute__((noinline)) PRV_LOOP_O2 const uint32_t *
-prv_find_pair(const uint32_t *q, const uint32_t *q_end, uint32_t pat)
-{
-    const uint32_t ones = 0x01010101u;
-    for (; q != q_end; q += 2) {
-        const uint32_t a = q[0] ^ pat;
-        const uint32_t b = q[1] ^ pat;
-        if ((((a - ones) & ~a) | ((b - ones) & ~b)) & (ones << 7)) {
-            break;
-        }
-    }
-    return q;
-}
-
-/* The first position of `own` in ids[0..n), or n: bytes up to a word
- * boundary, then two words at a time (prv_find_pair), then the bytes
- * left. */
-static __attribute__((noinline)) uint32_t prv_find_id(const uint8_t *ids, uint32_t n, uint8_t own)
-{
-    const uint8_t *const end = ids + n;
-    const uint8_t *p = ids;
-    while (p != end && ((uintptr_t)p & 3u) != 0u && *p != own) {
-        p++;
-    }
-    if (p != end && *p != own) {
-        /* p is on a word boundary: the pairs of words that fit */
-        const uint32_t *const q = __builtin_assume_aligned(p, 4);
-        p = (const uint8_t *)prv_find_pair(q, q + (((uint32_t)(end - p) >> 3) << 1), own * 0x01010101u);
-    }
-    while (p != end && *p != own) {
-        p++;
-    }
-    return (uint32_t)(p - ids);
-}
-
 /* "Multi-ID read 0x82": F9 FF FE len 82 addr id_0 .. id_n-1 cs. A listed
  * servo answers exactly what a 0x02 read of addr answers, starting in slot
  * j, j = its first position in the list. */
@@ -158,7 +176,8 @@ km_report_t km_cmd_multi_read(km_servo_t *s, const km_frame_view_t *f, km_reply_
     }
     const uint8_t addr = f->body[0];
     const uint32_t n = f->body_len - 1u;
-    const uint32_t j = prv_find_id(&f->body[1], n, km_servo_id(s));
+    const uint8_t *const ids = &f->body[1];
+    const uint32_t j = (uint32_t)(prv_find_words(ids, ids + n, km_servo_id(s), 1u) - ids);
     const int r = km_dispatch_readable(addr);
     if (j == n) {
         if (r < 0) {

@@ -141,6 +141,102 @@ static void test_mwrite_scan_every_length_and_alignment(void **state)
     }
 }
 
+/* A byte for a random list: this servo's ID now and then, else one close
+ * to it (one bit or one count away), 0, 0xFF or any. */
+static uint8_t prv_pick(uint32_t *seed, uint8_t own, unsigned own_in_16)
+{
+    *seed = *seed * 1103515245u + 12345u;
+    const uint32_t r = *seed >> 16;
+    if (r % 16u < own_in_16) {
+        return own;
+    }
+    switch ((r >> 4) % 6u) {
+    case 0:
+        return (uint8_t)(own ^ 0x80u);
+    case 1:
+        return (uint8_t)(own ^ 0x01u);
+    case 2:
+        return (uint8_t)(own + 1u);
+    case 3:
+        return 0u;
+    case 4:
+        return 0xFFu;
+    default:
+        return (uint8_t)(r >> 8);
+    }
+}
+
+/* The first entry of `own` read byte by byte (§3), or n: what the scans
+ * must find. */
+static unsigned prv_first_entry(const uint8_t *ids, unsigned n, unsigned stride, uint8_t own)
+{
+    unsigned j = 0;
+    while (j < n && ids[j * stride] != own) {
+        j++;
+    }
+    return j;
+}
+
+/* "Multi-ID write" and "Multi-ID read 0x82" on random lists (fixed seed):
+ * IDs near this servo's, value bytes equal to it, 0 or 0xFF (a zero byte
+ * next to a match, a borrow across an entry), any length and alignment;
+ * the entry that runs, or the answer's slot, is the first listed one read
+ * byte by byte, and a value byte never counts as an ID. */
+static void test_scan_random_lists_as_read_byte_by_byte(void **state)
+{
+    (void)state;
+    static const struct {
+        uint8_t addr;
+        uint8_t k;
+    } regs[] = {{0x46u, 0u}, {0x64u, 1u}, {0x68u, 2u}, {0x65u, 4u}};
+    uint32_t seed = 0x5EEDu;
+    uint8_t body[KM_BODY_MAX];
+    for (unsigned round = 0; round < 6000u; round++) {
+        const uint8_t own = owns[round % sizeof owns];
+        const unsigned r = (round / sizeof owns) % 4u;
+        const unsigned stride = 1u + regs[r].k;
+        const unsigned head = regs[r].k ? 2u : 1u;
+        const unsigned max = (KM_BODY_MAX - head) / stride;
+        const unsigned n = 1u + (unsigned)(prv_pick(&seed, 0u, 0u) * 7u + round) % max;
+        const unsigned align = (round / 7u) % 4u;
+        const unsigned own_in_16 = round % 3u; /* 0: never listed */
+        body[0] = regs[r].addr;
+        body[1] = regs[r].k;
+        for (unsigned i = 0; i < n * stride; i++) {
+            body[head + i] = prv_pick(&seed, own, i % stride == 0u ? own_in_16 : 4u);
+        }
+        const unsigned j = prv_first_entry(&body[head], n, stride, own);
+        if (regs[r].k == 0u) {
+            const long d0 = prv_mread(own, 0u, 2u, 0u);
+            const long slot = prv_mread(own, 0u, 2u, 1u) - d0;
+            kt_init(&fx, kt_product_pot(), own);
+            prv_handle(0x82u, align, body, head + n);
+            assert_int_equal(fx.reply.len > 0u ? (long)fx.reply.delay_us : -1,
+                             j < n ? d0 + (long)j * slot : -1);
+            continue;
+        }
+        for (unsigned e = j; e < n; e++) { /* the value the first listed entry writes, another after it */
+            uint8_t *const value = &body[head + e * stride + 1u];
+            if (body[head + e * stride] == own) {
+                memset(value, 0, regs[r].k);
+                value[0] = regs[r].k == 1u ? (e == j ? 1u : 2u) : (e == j ? 100u : 200u);
+                if (regs[r].k == 4u) { /* 0x65's time: 1,000 ms */
+                    value[2] = 0xE8u;
+                    value[3] = 0x03u;
+                }
+            }
+        }
+        kt_init(&fx, kt_product_pot(), own);
+        prv_handle(0x83u, align, body, head + n * stride);
+        assert_int_equal(fx.fake.n_requests, j < n ? 1u : 0u);
+        if (j < n && regs[r].k == 1u) {
+            assert_int_equal(fx.fake.requests[0].u.torque, 1u);
+        } else if (j < n) {
+            assert_int_equal(fx.fake.requests[0].u.move.target, 100);
+        }
+    }
+}
+
 /* "Multi-ID write": parameters that are not whole entries (a length that
  * is not a multiple of 1 + k) fail on every servo and run nothing; the
  * test of whole entries takes no division, so every length is tried. */
@@ -197,6 +293,7 @@ int main(void)
         cmocka_unit_test(test_mread_scan_every_length_and_alignment),
         cmocka_unit_test(test_mwrite_scan_every_length_and_alignment),
         cmocka_unit_test(test_mwrite_whole_entries_every_length),
+        cmocka_unit_test(test_scan_random_lists_as_read_byte_by_byte),
         cmocka_unit_test(test_slot_length_every_answer_and_baud),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
