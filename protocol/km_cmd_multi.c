@@ -79,6 +79,14 @@ static __attribute__((noinline)) const uint8_t *prv_find_words(const uint8_t *p,
     return p < end ? p : end;
 }
 
+/* Whether one of the six entries of `stride` bytes from p is `own`'s. */
+static inline __attribute__((always_inline)) bool prv_in_six(const uint8_t *p, const uint8_t own,
+                                                             const size_t stride)
+{
+    return p[0] == own || p[stride] == own || p[2u * stride] == own || p[3u * stride] == own ||
+           p[4u * stride] == own || p[5u * stride] == own;
+}
+
 /* The first entry of `own` among the entries of `stride` bytes from p up
  * to end (the ID first in each), or end: `per_pass` entries a pass (the
  * stride a constant where inlined: a load and a compare each), then one
@@ -90,8 +98,7 @@ prv_find_bytes(const uint8_t *p, const uint8_t *const end, const uint8_t own, co
     if ((size_t)(end - p) >= pass) {
         const uint8_t *const last = end - pass;
         do {
-            if (p[0] == own || p[stride] == own || p[2u * stride] == own || p[3u * stride] == own ||
-                p[4u * stride] == own || p[5u * stride] == own ||
+            if (prv_in_six(p, own, stride) ||
                 (stride <= 3u && (p[6u * stride] == own || p[7u * stride] == own))) {
                 break;
             }
