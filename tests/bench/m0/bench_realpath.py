@@ -299,6 +299,19 @@ def per_byte(b, rows, figs):
                  "0"))
 
 
+def per_entry(pts):
+    """Instructions an entry: the least-squares slope over the list lengths
+    of the instructions from the dispatcher's entry on (the parser's copy
+    of the bytes since the previous wake-up before it varies with timing,
+    not with the list)."""
+    if len(pts) < 2:
+        return 0.0
+    mx = sum(n for n, _ in pts) / len(pts)
+    my = sum(v for _, v in pts) / len(pts)
+    den = sum((n - mx) ** 2 for n, _ in pts)
+    return sum((n - mx) * (v - my) for n, v in pts) / den if den else 0.0
+
+
 def lists(b, rows, figs, step):
     """0x83 and 0x82 at every list length (every `step`-th), this servo last
     or absent: the last byte to the answer armed or to the next WFI."""
@@ -322,11 +335,13 @@ def lists(b, rows, figs, step):
                 b.exchange(f, 2)
                 got = None
                 for lo, hi in b.segments():
-                    if b.first(DISPATCH, lo, hi) is not None:
+                    at = b.first(DISPATCH, lo, hi)
+                    if at is not None:
                         if b.first(SHARED, lo, hi) is not None:
                             break
                         armed = b.armed(lo, hi)
-                        got = b.cost(lo, armed if armed is not None else hi)
+                        stop = armed if armed is not None else hi
+                        got = b.cost(lo, stop) + (stop - at,)
                 if got is not None:
                     out[(kind, ours, n)] = got
     for kind in ("0x83 of 0x64", "0x83 of 0x65", "0x82 of 0x46"):
@@ -334,9 +349,8 @@ def lists(b, rows, figs, step):
             pts = sorted((n, v) for (kd, o, n), v in out.items() if kd == kind and o == ours)
             if not pts:
                 continue
-            n, (ins, cyc) = max(pts, key=lambda p: p[1][0])
-            (n0, (i0, _)), (n1, (i1, _)) = pts[0], pts[-1]
-            slope = (i1 - i0) / (n1 - n0) if n1 != n0 else 0.0
+            n, (ins, cyc, _) = max(pts, key=lambda p: p[1][0])
+            slope = per_entry([(m, v[2]) for m, v in pts])
             key = "%s_%s" % (kind.replace(" ", "_"), "ours" if ours else "absent")
             figs[key] = {"worst_n": n, "instructions": ins, "cycles": cyc, "per_entry": round(slope, 2)}
             rows.append(("%s, %s, %d list lengths: worst (at %d) / per entry" %
