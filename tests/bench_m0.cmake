@@ -14,7 +14,8 @@ endif()
 # docs/benchmarks.md): bytes through USART1's interrupt, queue and main loop,
 # the control tick with the board's sensors, 0x83/0x82 lists, on sim/g031, in
 # instructions and estimated M0+ cycles. Needs the stm32g031 preset built
-# first; fails when a byte inside a frame runs the parser.
+# first; fails when a byte inside a frame runs the parser, a control tick calls
+# a library division or a list scan costs more an entry than LIST_ENTRY_MAX.
 find_program(KM_DEBIAN_PYTHON_BENCH NAMES python3 PATHS /usr/bin NO_DEFAULT_PATH)
 if(KM_DEBIAN_PYTHON_BENCH)
   add_test(NAME bench_realpath_g031
