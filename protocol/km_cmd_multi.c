@@ -17,6 +17,9 @@
 #define PRV_LOOP_O2
 #endif
 
+/* A word of a frame's bytes: read as words, they may alias the bytes. */
+typedef uint32_t __attribute__((may_alias)) prv_word_t;
+
 /* floor(n / d) for n <= 255, 1 <= d <= 8, as (n x ceil(2^11 / d)) >> 11:
  * exact in that range (tests/unit/protocol/test_dispatch_multi_scan.c);
  * on the M0 a division is a library call. */
@@ -29,8 +32,8 @@ static const uint16_t s_recip_2048[9] = {0u, 2048u, 1024u, 683u, 512u, 410u, 342
  * of borrows, so exactly when some marked byte matches: the value bytes in
  * between never count (docs/benchmarks.md "Lists"). A function of its own
  * so the loop's values stay in registers. */
-static __attribute__((noinline)) const uint32_t *
-prv_find_block(const uint32_t *q, const uint32_t *const q_end, const uint32_t pat, const uint32_t k)
+static __attribute__((noinline)) const prv_word_t *
+prv_find_block(const prv_word_t *q, const prv_word_t *const q_end, const uint32_t pat, const uint32_t k)
 {
     do {
         uint32_t x = *q++ ^ pat;
@@ -67,8 +70,8 @@ static __attribute__((noinline)) const uint8_t *prv_find_words(const uint8_t *p,
         /* p - aligned: 0, or 1 (stride 2 from an odd address); the same in every block */
         const uint32_t phase = (uint32_t)(p - aligned);
         const uint32_t k = (stride == 1u ? 0x01010101u : 0x00010001u) << (8u * phase);
-        const uint32_t *const q = __builtin_assume_aligned(aligned, 4);
-        const uint32_t *const q_end = q + (((uint32_t)(end - aligned) >> 4) << 2);
+        const prv_word_t *const q = __builtin_assume_aligned(aligned, 4);
+        const prv_word_t *const q_end = q + (((uint32_t)(end - aligned) >> 4) << 2);
         if (q != q_end) {
             p = (const uint8_t *)prv_find_block(q, q_end, own * 0x01010101u, k) + phase;
         }
