@@ -34,13 +34,16 @@ UID = (0x00390041, 0x4E501120, 0x20383634)   # an arbitrary 96-bit unique ID (RM
 DEFAULT_SENSORS = {0: 2048, 1: 2048, 2: 1365, 3: 2048}
 QUIET_SLICE_NS = 16_000     # longest slice (vg031.Machine._slice_length)
 RESET_PIN, RESET_PWR, RESET_SFT, RESET_IWDG = 1 << 26, 1 << 27, 1 << 28, 1 << 29
+SCR_SLEEPONEXIT, SCR_SLEEPDEEP, SCR_SEVONPEND = 1 << 1, 1 << 2, 1 << 4   # ARMv6-M B3.2.7
 
 
 class Scs:
     """NVIC, SCB and SysTick (ARMv6-M B3.2-B3.4; PM0223 §4): 2 priority bits
     per field (bits 7:6), word-access IPR, VTOR bits 31:7, AIRCR VECTKEY /
-    SYSRESETREQ, ICSR PENDSV/PENDST, SysTick 24-bit down-counter on the core
-    clock with COUNTFLAG cleared by a read."""
+    SYSRESETREQ, ICSR PENDSV/PENDST, SCR's SLEEPONEXIT, SLEEPDEEP and
+    SEVONPEND (B3.2.7: stored; SLEEPONEXIT acts at an exception return,
+    Machine._exit), SysTick 24-bit down-counter on the core clock with
+    COUNTFLAG cleared by a read."""
 
     def __init__(self, machine):
         self.m = machine
@@ -54,6 +57,7 @@ class Scs:
         self.vtor = 0
         self.shpr2 = 0
         self.shpr3 = 0
+        self.scr = 0              # SCR: bit 1 SLEEPONEXIT, 2 SLEEPDEEP, 4 SEVONPEND
         self.pend_sys = set()     # 11 SVC, 14 PendSV, 15 SysTick
         self.syst_csr = 0
         self.syst_rvr = 0
@@ -102,6 +106,8 @@ class Scs:
             return self.vtor
         if off == 0xD0C:
             return 0xFA050000
+        if off == 0xD10:
+            return self.scr
         if off == 0xD14:
             return 0x208           # CCR: STKALIGN, UNALIGN_TRP (RES1 on ARMv6-M)
         if off == 0xD1C:
@@ -143,6 +149,8 @@ class Scs:
         elif off == 0xD0C:
             if val >> 16 == 0x05FA and val & 4:
                 self.m.request_reset("sysresetreq")
+        elif off == 0xD10:
+            self.scr = val & (SCR_SLEEPONEXIT | SCR_SLEEPDEEP | SCR_SEVONPEND)   # the rest is RAZ/WI
         elif off == 0xD1C:
             self.shpr2 = val & 0xC0000000
         elif off == 0xD20:
@@ -473,7 +481,12 @@ class Machine:
     def _exit(self, exc_return):
         """Exception return (ARMv6-M B1.5.8): a branch to EXC_RETURN in Handler
         mode pops the frame the entry pushed and goes back to the previous
-        mode. unicorn's core does not do it (it faults at 0xFFFFFFF8)."""
+        mode. unicorn's core does not do it (it faults at 0xFFFFFFF8).
+        True when the core then sleeps: a return from Handler mode to
+        Thread mode with SCR.SLEEPONEXIT set enters the sleep a WFI would
+        (B3.2.7, B1.5.19 "sleep-on-exit"), whatever PRIMASK holds; no
+        Thread mode instruction runs, and the next exception is taken with
+        the Thread mode state as it returned."""
         uc = self.uc
         sp = uc.reg_read(A.UC_ARM_REG_SP)
         words = [int.from_bytes(uc.mem_read(sp + 4 * i, 4), "little") for i in range(8)]
@@ -488,6 +501,7 @@ class Machine:
         uc.reg_write(A.UC_ARM_REG_APSR, psr & 0xF0000000)
         uc.reg_write(A.UC_ARM_REG_IPSR, self.active[-1] if self.active else 0)
         self.pc = words[6] & ~1
+        return not self.active and bool(self.scs.scr & SCR_SLEEPONEXIT)
 
     def _sync_active(self):
         """Exception returns happened inside unicorn: drop finished ones."""
@@ -533,7 +547,9 @@ class Machine:
             self.flash[off:off + len(old)] = old
 
     def _run_slice(self, ns):
-        """Runs the CPU for `ns` of virtual time (or to a WFI or a fault)."""
+        """Runs the CPU for `ns` of virtual time (or to a WFI, an exception
+        return or a fault); true when the core sleeps after it (a WFI, or
+        sleep-on-exit)."""
         count = max(1, int(self.hz * ns // P.NS))
         self.flash_writes, self.fault, self.wfi_at = [], None, None
         err = None
@@ -546,8 +562,7 @@ class Machine:
         self.now += ns
         self._undo_flash_writes()
         if (self.pc & 0xFFFFFFF0) == 0xFFFFFFF0 and self.active:
-            self._exit(self.pc | 1)
-            return False
+            return self._exit(self.pc | 1)
         if self.fault or err:
             kind = self.fault[0] if self.fault else str(err)
             if kind.startswith("unaligned"):
@@ -641,7 +656,7 @@ class Machine:
             self._sleep()
 
     def _sleep(self):
-        """WFI: time passes to the next event until an interrupt is pending
+        """WFI or sleep-on-exit: time passes to the next event until an interrupt is pending
         (PRIMASK does not stop the wake-up, B1.5.19), or up to the horizon
         of run_until (the core stays asleep: the next step goes on)."""
         while True:

@@ -303,6 +303,52 @@ class MachineExceptionTests(unittest.TestCase):
         self.assertEqual(m.faults, [])
 
 
+# Reset handler at 0x100 sets SCR.SLEEPONEXIT (r7 reads SCR back), starts
+# SysTick every 1,600 core clocks (100 us at the reset HSI16) with its
+# interrupt, then loops: r6 += 1; WFI. SysTick at 0x200: r5 += 1, and at
+# the third one clears SLEEPONEXIT.
+SLEEP_ON_EXIT = {
+    0x100: bytes.fromhex("0548" "0221" "0160" "0768" "044a" "054b" "5360" "0723" "1360"
+                         "0136" "30bf" "fce7" "10ed00e0" "10e000e0" "3f060000"),
+    0x200: bytes.fromhex("0135" "032d" "02d1" "0248" "0021" "0160" "7047" "0000" "10ed00e0"),
+}
+
+
+class MachineSleepOnExitTests(unittest.TestCase):
+    """SCR.SLEEPONEXIT (ARMv6-M B3.2.7): a return from Handler mode to
+    Thread mode sleeps without running a Thread mode instruction."""
+
+    def _run(self, us):
+        import vg031
+        from unicorn import arm_const as A
+        image = bytearray(b"\xff" * 0x800)
+        for n, v in {0: 0x20002000, 1: 0x08000101, 15: 0x08000201}.items():
+            image[4 * n:4 * n + 4] = v.to_bytes(4, "little")
+        for at, code in SLEEP_ON_EXIT.items():
+            image[at:at + len(code)] = code
+        m = vg031.Machine(bytes(image))
+        m.run_until(us * 1000)
+        self.assertEqual(m.faults, [])
+        return m, [m.uc.reg_read(r) for r in (A.UC_ARM_REG_R5, A.UC_ARM_REG_R6, A.UC_ARM_REG_R7)]
+
+    def test_scr_reads_back_what_was_written(self):  # B3.2.7
+        _m, (_r5, _r6, scr) = self._run(50)
+        self.assertEqual(scr, 2)
+
+    def test_handler_return_sleeps_while_set(self):  # B3.2.7
+        m, (ticks, passes, _scr) = self._run(250)
+        self.assertEqual(ticks, 2)
+        self.assertEqual(passes, 1, "Thread mode ran after a SysTick return with SLEEPONEXIT set")
+        self.assertTrue(m.asleep)
+        self.assertEqual(m.active, [])
+
+    def test_cleared_in_the_handler_returns_to_thread(self):  # B3.2.7
+        _m, (ticks, passes, _scr) = self._run(1050)
+        self.assertEqual(ticks, 10)
+        # ticks 1 and 2 slept on; 3 cleared the bit: each of 3..10 returned to the loop
+        self.assertEqual(passes, 1 + 8)
+
+
 class VclockTests(unittest.TestCase):
     """sim/g031/vclock.py: the master's clock on the bus's virtual time."""
 
