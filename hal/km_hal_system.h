@@ -38,4 +38,13 @@ km_reset_cause_t km_hal_reset_cause(void);
 /* Sleeps until an interrupt; lock held; returns within 1 ms. */
 void km_hal_idle(void);
 
+/* Lock held, taken from `state`: sleeps with the lock released (to `state`)
+ * until a handler calls km_hal_wake(), at the latest 1 ms later; handlers
+ * that do not call it go back to sleep, on a Cortex-M without running the
+ * caller. It may return early. Returns with the lock held. */
+void km_hal_sleep(uint32_t state);
+
+/* Interrupt context: km_hal_sleep() returns after this interrupt. */
+void km_hal_wake(void);
+
 #endif

@@ -131,3 +131,15 @@ void km_hal_idle(void)
     }
     hs_timer_service();
 }
+
+/* The "interrupts" run inside km_hal_idle(): it returns after each batch. */
+void km_hal_sleep(uint32_t state)
+{
+    (void)state;
+    km_hal_idle();
+}
+
+/* km_hal_sleep() returns after every batch anyway. */
+void km_hal_wake(void)
+{
+}

@@ -135,9 +135,10 @@ void km_hal_system_init(void)
     NRF_REG(SCS_SYST_CSR, 0) = (1u << 2) | (1u << 1) | (1u << 0); /* CPU clock, TICKINT, enable */
 }
 
-/* Only wakes the core from WFI: the main loop reads the time itself. */
+/* Wakes the core and km_hal_sleep(): the main loop reads the time itself. */
 void SysTick_Handler(void)
 {
+    km_cortex_wake();
 }
 
 /* Leaves the SOFTWARE record, then resets the MCU. */
@@ -207,4 +208,15 @@ void km_hal_idle(void)
 {
     /* WFI wakes on a pending interrupt even under the irq lock (PRIMASK). */
     km_cortex_wait_for_interrupt();
+}
+
+/* Sleep-on-exit; an emulator that ignores SLEEPONEXIT makes it return early. */
+void km_hal_sleep(uint32_t state)
+{
+    km_cortex_sleep_until_wake(state);
+}
+
+void km_hal_wake(void)
+{
+    km_cortex_wake();
 }

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* km_hal_system for the STM32G031: clock, reset, IWDG, PRIMASK lock, entropy,
- * WFI idle with a 1 kHz SysTick wake-up (README.md "Drivers"). */
+ * WFI idle and sleep-on-exit with a 1 kHz SysTick wake-up (README.md "Drivers"). */
 #include "km_cortex_m.h"
 #include "km_hal_system.h"
 
@@ -46,12 +46,14 @@ void km_hal_system_init(void)
     SYST_CSR = SYST_CSR_CLKSOURCE | SYST_CSR_TICKINT | SYST_CSR_ENABLE;
 }
 
-/* Wakes the main loop and checks the stack guard; in RAM (runs during erases). */
+/* Wakes the main loop (km_hal_sleep's 1 ms) and checks the stack guard; in
+ * RAM (runs during erases). */
 G0_RAMFUNC(SysTick_Handler) void SysTick_Handler(void)
 {
     if (!g0_stack_guard_intact()) {
         g0_fault_stop(G0_FAULT_STACK_GUARD, 0u, 0u);
     }
+    km_cortex_wake();
 }
 
 /* SYSRESETREQ. */
@@ -135,4 +137,16 @@ uint32_t km_hal_entropy(void)
 void km_hal_idle(void)
 {
     km_cortex_wait_for_interrupt();
+}
+
+/* Sleep-on-exit until a wake (docs/benchmarks.md "Per byte"). */
+void km_hal_sleep(uint32_t state)
+{
+    km_cortex_sleep_until_wake(state);
+}
+
+/* In RAM: the receive and timer interrupts call it during erases. */
+G0_RAMFUNC(km_hal_wake) void km_hal_wake(void)
+{
+    km_cortex_wake();
 }

@@ -55,3 +55,16 @@ uint32_t km_hal_entropy(void)
 void km_hal_idle(void)
 {
 }
+
+/* Cortex-M: SCR.SLEEPONEXIT, WFI, PRIMASK to `state` (the handlers run, the
+ * core sleeps again after each that does not wake), lock, SCR cleared; the
+ * periodic wake-up calls km_hal_wake() (boards/common/km_cortex_m.h). */
+void km_hal_sleep(uint32_t state)
+{
+    (void)state;
+}
+
+/* Cortex-M: clear SCR.SLEEPONEXIT; in RAM where flash work stalls fetches. */
+void km_hal_wake(void)
+{
+}

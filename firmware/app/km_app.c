@@ -25,9 +25,12 @@
 #define KM_APP_FLASH_QUIET_US 50000u /* bus silence before idle flash work */
 #define KM_APP_CONFIRM_US 1000000u   /* service before the boot is confirmed (docs/update.md §3a) */
 
-static km_rx_queue_t s_rxq;
-/* The RX interrupt's frame tracker (docs/benchmarks.md "Per byte"). */
-static km_rx_track_t s_rx_track;
+/* The receive interrupt's state: its frame tracker (docs/benchmarks.md "Per
+ * byte") and the queue, one base address for a byte's fast path. */
+static struct {
+    km_rx_track_t track;
+    km_rx_queue_t q;
+} s_rx;
 /* Set by the RX interrupt when the main loop must parse. */
 static volatile bool s_wake;
 static km_parser_t s_parser;
@@ -67,12 +70,15 @@ static bool s_boot_confirmed; /* km_board_boot_confirm() was called */
 static bool s_store_prepare;
 static uint32_t s_confirm_at; /* tick at which the start is confirmed */
 
+/* A received byte (docs/benchmarks.md "Per byte"): queued; the main loop
+ * woken only when the tracker asks. */
 static void ISR_rx_byte(void *ctx, uint8_t byte, uint32_t tick, bool lost)
 {
     (void)ctx;
-    km_rx_queue_push(&s_rxq, byte, tick, lost);
-    if (km_rx_track_byte(&s_rx_track, byte, tick, lost)) {
+    km_rx_queue_push(&s_rx.q, byte, tick, lost);
+    if (km_rx_track_byte(&s_rx.track, byte, tick, lost)) {
         s_wake = true;
+        km_hal_wake();
     }
 }
 
@@ -85,6 +91,7 @@ static void ISR_answer_due(void *ctx)
         s_answer_frame_end = s_armed_frame_end;
         s_answer_delay_us = s_armed_delay_us;
         s_answer_started = true;
+        km_hal_wake();
     } else {
         s_tx_refused++;
     }
@@ -184,7 +191,7 @@ static void prv_take_waiting_frame(void)
 {
     if (s_frame_waiting && prv_on_frame()) {
         s_frame_waiting = false;
-        km_rx_queue_release(&s_rxq, s_frame_release);
+        km_rx_queue_release(&s_rx.q, s_frame_release);
         s_frame_release = 0u;
     }
 }
@@ -195,7 +202,7 @@ static void prv_drain_rx(void)
     uint32_t budget = KM_APP_RX_BUDGET;
     km_rx_run_t run;
     s_wake = false; /* before looking: a later byte's wake-up is kept */
-    while (budget > 0u && !prv_rx_blocked() && km_rx_queue_peek(&s_rxq, &run)) {
+    while (budget > 0u && !prv_rx_blocked() && km_rx_queue_peek(&s_rx.q, &run)) {
         if (run.lost) {
             km_parser_overrun(&s_parser);
         }
@@ -209,7 +216,7 @@ static void prv_drain_rx(void)
             s_frame_release = used; /* the frame may be a view of these bytes */
             return;
         }
-        km_rx_queue_release(&s_rxq, used);
+        km_rx_queue_release(&s_rx.q, used);
         budget -= used;
     }
     if (!prv_rx_blocked() && !km_parser_empty(&s_parser)) { /* empty: no time read, no call */
@@ -291,7 +298,7 @@ static bool prv_ops_commit(void *ctx, const uint8_t *addrs, const uint32_t *valu
 /* One step of idle-time store work on a silent bus; true if it did flash work. */
 static bool prv_idle_flash_work(uint32_t now)
 {
-    if (prv_bridge_driving() || !km_rx_queue_empty(&s_rxq) ||
+    if (prv_bridge_driving() || !km_rx_queue_empty(&s_rx.q) ||
         now - s_parser.last_tick < prv_us_to_ticks(KM_APP_FLASH_QUIET_US)) {
         return false;
     }
@@ -455,12 +462,12 @@ __attribute__((noinline)) void km_app_init(void)
     s_params_gen = km_servo_params_gen(&s_servo);
     km_control_init(&s_control, &s_params);
 
-    km_rx_queue_init(&s_rxq);
+    km_rx_queue_init(&s_rx.q);
     const uint32_t baud = prv_open_bus(km_servo_active_baud(&s_servo));
     km_servo_set_active_baud(&s_servo, baud);
     /* docs/protocol-decisions.md "Inter-byte gap"; the slot floor is 0 */
     km_parser_init(&s_parser, prv_us_to_ticks(km_parser_default_gap_us(baud)));
-    s_rx_track.gap_ticks = s_parser.gap_ticks;
+    s_rx.track.gap_ticks = s_parser.gap_ticks;
 
     s_last_control_tick = km_hal_time_now();
     s_tick_period = prv_us_to_ticks(KM_APP_TICK_US);
@@ -477,7 +484,7 @@ void km_app_set_bus_floors(uint32_t gap_floor_us, uint32_t slot_floor_us)
         gap_us = gap_floor_us;
     }
     km_parser_set_gap(&s_parser, prv_us_to_ticks(gap_us));
-    s_rx_track.gap_ticks = s_parser.gap_ticks;
+    s_rx.track.gap_ticks = s_parser.gap_ticks;
 }
 
 /* True when the control tick is due at `now`. */
@@ -499,24 +506,19 @@ static void prv_next_tick(uint32_t now)
 }
 
 /* Sleeps, under the caller's lock, until something needs a pass of the
- * main loop (docs/benchmarks.md "Per byte"). */
+ * main loop: while the parser is blocked, the next interrupt (the answer on
+ * the wire may have ended); else a frame's end, an answer started or the
+ * control tick (docs/benchmarks.md "Per byte"). */
 static void prv_sleep(uint32_t irq)
 {
-    const bool blocked = prv_rx_blocked();
-    if (!blocked) {
-        km_rx_track_sync(&s_rx_track, &s_parser); /* the queue is empty: every byte is parsed */
-    }
-    for (;;) {
+    if (prv_rx_blocked()) {
         km_hal_idle();
-        if (blocked) {
-            return;
-        }
-        km_hal_irq_restore(irq); /* the interrupt that woke the core runs */
-        (void)km_hal_irq_lock(); /* the caller's state again: it restores irq */
-        if (s_wake || s_answer_started || prv_tick_due(km_hal_time_now())) {
-            return;
-        }
+        return;
     }
+    km_rx_track_sync(&s_rx.track, &s_parser); /* the queue is empty: every byte is parsed */
+    do {
+        km_hal_sleep(irq); /* the interrupts run in it; the caller restores irq */
+    } while (!s_wake && !s_answer_started && !prv_tick_due(km_hal_time_now()));
 }
 
 /* One pass (noinline: watched under LTO, docs/footprint.md "LTO"). */
@@ -537,7 +539,7 @@ __attribute__((noinline)) void km_app_poll(void)
     } else if (!prv_idle_flash_work(now)) {
         /* check and sleep under the lock: WFI still wakes on a pending IRQ */
         const uint32_t irq = km_hal_irq_lock();
-        const bool rx_work = !prv_rx_blocked() && !km_rx_queue_empty(&s_rxq);
+        const bool rx_work = !prv_rx_blocked() && !km_rx_queue_empty(&s_rx.q);
         const bool tx_work = s_frame_waiting && !km_hal_uart_tx_busy();
         if (!rx_work && !tx_work && !prv_restart_ready()) {
             prv_sleep(irq);
@@ -574,7 +576,7 @@ const km_parser_stats_t *km_app_parser_stats(void)
 
 uint32_t km_app_rx_dropped(void)
 {
-    return s_rxq.dropped;
+    return s_rx.q.dropped;
 }
 
 _Noreturn void km_app_run(void)

@@ -12,7 +12,7 @@ void km_rx_queue_init(km_rx_queue_t *q)
     q->marks_taken = 0;
     q->run_lost = false;
     q->dropped = 0;
-    q->pending_loss = false;
+    q->room = KM_RX_QUEUE_SIZE;
     memset(q->flags, 0, sizeof q->flags);
 }
 
@@ -23,15 +23,15 @@ void km_rx_queue_push_marked(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool
     atomic_signal_fence(memory_order_acquire);
     if (head - tail >= KM_RX_QUEUE_SIZE) {
         q->dropped++;
-        q->pending_loss = true;
+        q->room = 0u; /* the next byte comes here, to be marked */
         return;
     }
     const unsigned slot = head & (KM_RX_QUEUE_SIZE - 1u);
     q->byte[slot] = byte;
     q->tick[slot] = tick;
-    if (lost || q->pending_loss) {
+    if (lost || q->room == 0u) {
         q->flags[slot] = KM_RX_LOST; /* the consumer clears it when it takes the byte */
-        q->pending_loss = false;
+        q->room = KM_RX_QUEUE_SIZE;
         /* one writer: a plain load and store, published with head */
         atomic_store_explicit(&q->marks, atomic_load_explicit(&q->marks, memory_order_relaxed) + 1u,
                               memory_order_relaxed);

@@ -23,9 +23,11 @@ typedef struct {
     /* LOST-marked bytes stored (producer) and taken (consumer): equal = none waits. */
     atomic_uint marks;
     uint32_t marks_taken;
-    uint32_t dropped;  /* producer side: bytes lost because the queue was full */
-    bool pending_loss; /* producer side: mark the next stored byte as LOST */
-    bool run_lost;     /* consumer side: the run peeked starts with a LOST byte */
+    /* Producer side: KM_RX_QUEUE_SIZE, or 0 after a byte was dropped: the
+     * next byte goes to km_rx_queue_push_marked() to be marked LOST. */
+    uint32_t room;
+    uint32_t dropped; /* producer side: bytes lost because the queue was full */
+    bool run_lost;    /* consumer side: the run peeked starts with a LOST byte */
     uint8_t byte[KM_RX_QUEUE_SIZE];
     uint32_t tick[KM_RX_QUEUE_SIZE];
     uint8_t flags[KM_RX_QUEUE_SIZE]; /* KM_RX_LOST on a marked byte not yet taken, else 0 */
@@ -44,15 +46,16 @@ void km_rx_queue_init(km_rx_queue_t *q);
 /* Interrupt context: km_rx_queue_push's rare cases (full, after a loss). */
 void km_rx_queue_push_marked(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost);
 
-/* Interrupt context, every byte: a full queue drops it and marks the next. */
-static inline void km_rx_queue_push(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost)
+/* Interrupt context: stores an unmarked byte; false, storing nothing, when
+ * the queue is full or a loss waits to be marked (km_rx_queue_push then). */
+static inline __attribute__((always_inline)) bool km_rx_queue_try_push(km_rx_queue_t *q, uint8_t byte,
+                                                                       uint32_t tick)
 {
     const unsigned head = atomic_load_explicit(&q->head, memory_order_relaxed);
     const unsigned tail = atomic_load_explicit(&q->tail, memory_order_relaxed);
     atomic_signal_fence(memory_order_acquire); /* the slot was read before the consumer freed it */
-    if (head - tail >= KM_RX_QUEUE_SIZE || lost || q->pending_loss) {
-        km_rx_queue_push_marked(q, byte, tick, lost);
-        return;
+    if (head - tail >= q->room) {
+        return false;
     }
     const unsigned slot = head & (KM_RX_QUEUE_SIZE - 1u);
     q->byte[slot] = byte;
@@ -60,6 +63,15 @@ static inline void km_rx_queue_push(km_rx_queue_t *q, uint8_t byte, uint32_t tic
     /* Release: the entry is complete before the consumer can see it. */
     atomic_signal_fence(memory_order_release);
     atomic_store_explicit(&q->head, head + 1u, memory_order_relaxed);
+    return true;
+}
+
+/* Interrupt context, every byte: a full queue drops it and marks the next. */
+static inline void km_rx_queue_push(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost)
+{
+    if (lost || !km_rx_queue_try_push(q, byte, tick)) {
+        km_rx_queue_push_marked(q, byte, tick, lost);
+    }
 }
 
 /* Main loop: true when nothing is waiting. */

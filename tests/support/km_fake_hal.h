@@ -82,6 +82,8 @@ typedef struct {
     uint32_t wdt_timeout_us, wdt_last;
     bool wdt_running;
     uint32_t last_idle; /* when the main loop last slept */
+    unsigned wakes;     /* km_hal_wake() calls: interrupts that asked for a main-loop pass */
+    uint32_t wake_at;   /* the time of the last one */
     bool spun;
     km_reset_cause_t cause; /* what km_hal_reset_cause() answers at the next boot */
     unsigned boots, software_resets, watchdog_resets;

@@ -9,11 +9,13 @@ USART1 receiver at their real bit timing and go through the real receive
 interrupt, queue and main loop; the control tick runs with the board's
 ADC/DMA sensor read and TIM3 motor drive. During each measured window a
 code hook records every instruction executed; the window is cut into
-idle-to-idle segments at the image's WFI instructions:
+idle-to-idle segments at the image's WFI instructions and at the returns
+from a handler into sleep-on-exit:
 
   per byte      a byte that does not end a frame, at 115200 baud: every
-                instruction from the WFI before its interrupt to the next
-                WFI (interrupt, and whatever main-loop work it causes);
+                instruction from the sleep before its interrupt to the next
+                sleep, a WFI or the handler's return into sleep-on-exit
+                (interrupt, and whatever main-loop work it causes);
   last byte     from the WFI before a frame's last byte to the entry of
                 km_hal_timer_at (the answer timer armed), or to the next WFI
                 for a frame with no answer;
@@ -143,15 +145,23 @@ class Bench:
         self.m = vg031.Machine(vg031.flash_from_images(elf=elf), elves=[elf])
         self.trace = []         # executed PCs, while recording
         self.entries = []       # trace index of each exception entry while recording
+        self.sleeps = []        # trace index after each return into sleep-on-exit while recording
         self.hook = None
         self.wfi = self.m.wfi_sites
-        enter = self.m._enter
+        enter, leave = self.m._enter, self.m._exit
 
         def counting_enter(exc, ret_pc):
             if self.hook is not None:
                 self.entries.append(len(self.trace))
             return enter(exc, ret_pc)
+
+        def noting_exit(exc_return):
+            asleep = leave(exc_return)
+            if asleep and self.hook is not None:
+                self.sleeps.append(len(self.trace))
+            return asleep
         self.m._enter = counting_enter
+        self.m._exit = noting_exit
         self.poll = self.d.sym["km_app_poll"]
         # libgcc's division entries (ARM EABI names and their aliases)
         self.divs = {a for n, a in self.d.sym.items()
@@ -160,7 +170,7 @@ class Bench:
     def record(self, on):
         uc = self.m.uc
         if on and self.hook is None:
-            self.trace, self.entries = [], []
+            self.trace, self.entries, self.sleeps = [], [], []
             tr = self.trace
             self.hook = uc.hook_add(UC_HOOK_CODE, lambda _uc, a, _s, _u: tr.append(a))
             uc.ctl_remove_cache(FLASH_LO, FLASH_HI)
@@ -181,13 +191,14 @@ class Bench:
         self.m.run_until(self.m.now + 20 * MS)
 
     def segments(self):
-        """(start, end) trace indices of each idle-to-idle segment: a WFI
-        ends one, the instruction after it starts the next."""
-        cuts = [i for i, a in enumerate(self.trace) if a in self.wfi]
+        """(start, end) trace indices of each idle-to-idle segment: a WFI,
+        or a handler's return into sleep-on-exit (SCR.SLEEPONEXIT), ends
+        one; the instruction after it starts the next."""
+        cuts = sorted([i + 1 for i, a in enumerate(self.trace) if a in self.wfi] + self.sleeps)
         out, start = [], 0
         for c in cuts:
-            out.append((start, c + 1))
-            start = c + 1
+            out.append((start, c))
+            start = c
         return out
 
     def cost(self, lo, hi):

@@ -269,6 +269,33 @@ static void test_s7_gap_real_rule(void **state)
     ping_is(0, 0x00); /* the dropped frame left nothing behind */
 }
 
+/* docs/benchmarks.md "Per byte": the receive interrupt asks for a main-loop
+ * pass (km_hal_wake) on a frame's last byte only, not on the bytes before
+ * it; frames for another servo and another servo's answer (§2), so no
+ * answer timer wakes the loop either. */
+static void test_rx_wakes_main_loop_at_frame_end_only(void **state)
+{
+    (void)state;
+    boot();
+    static const char *const frames[] = {
+        "F9 FF 05 04 02 38 02 BA",    /* read for servo 5 */
+        "F9 F5 05 04 00 10 27 BF",    /* servo 5's answer */
+        "F9 FF 07 05 03 2A 01 02 C3", /* write for servo 7 */
+    };
+    for (unsigned f = 0; f < 3u; f++) {
+        uint8_t b[16];
+        const unsigned n = kt_hex(frames[f], b, sizeof b);
+        const unsigned wakes = kf_world.wakes;
+        const uint32_t at = kf_world.now + 100u;
+        kf_send_at(at, b, n); /* back to back at line rate: byte i at at + i byte times */
+        run_ms(3);
+        assert_int_equal(kf_world.wakes - wakes, 1u);
+        const uint32_t last = at + (n - 1u) * kf_byte_us();  /* the last byte's tick */
+        assert_true(kf_world.wake_at - last < kf_byte_us()); /* woken by that byte */
+    }
+    nothing_sent();
+}
+
 /* An emulated board's floor (20 ms by default there) keeps a frame whose
  * bytes the host delivered 5 ms apart. */
 static void test_s7_gap_delivery_floor(void **state)
@@ -512,6 +539,7 @@ int main(void)
         cmocka_unit_test(test_s3_frame_during_answer_answered_after_it),
         cmocka_unit_test(test_s3_unmakeable_baud_falls_back),
         cmocka_unit_test(test_s3_burst_all_answered),
+        cmocka_unit_test(test_rx_wakes_main_loop_at_frame_end_only),
     };
     return cmocka_run_group_tests_name("app", tests, NULL, NULL);
 }
