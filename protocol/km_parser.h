@@ -104,48 +104,47 @@ typedef struct {
  * fed to it (the receive interrupt masked). */
 void km_rx_track_sync(km_rx_track_t *t, const km_parser_t *p);
 
-/* The header byte after F9 (FF or F5), or after F9 FF|F5 (the ID): the
- * state the parser's judging leads to. */
-static inline unsigned km_rx_track_header(unsigned state, uint8_t byte)
+/* The state after F9 (KM_TRACK_F9) and `byte`: the parser drops the F9
+ * and judges this byte alone unless it is FF or F5. */
+static inline __attribute__((always_inline)) unsigned km_rx_track_after_f9(uint8_t byte)
 {
-    if (state == KM_TRACK_F9) { /* the parser drops the F9 and judges this byte alone */
-        return byte == KM_HDR1_COMMAND    ? KM_TRACK_COMMAND
-               : byte == KM_HDR1_RESPONSE ? KM_TRACK_RESPONSE
-               : byte == KM_HDR0          ? KM_TRACK_F9
-                                          : KM_TRACK_HUNT;
-    }
-    /* A bad ID is never F9 (249 is a valid ID of both kinds), so the
-     * parser's rescan of FF|F5 and the ID finds nothing. The test of
-     * km_id_is_addressable() written out: a call could land outside the
-     * interrupt's RAM code (LTO outlines it). */
+    return byte == KM_HDR1_COMMAND    ? KM_TRACK_COMMAND
+           : byte == KM_HDR1_RESPONSE ? KM_TRACK_RESPONSE
+           : byte == KM_HDR0          ? KM_TRACK_F9
+                                      : KM_TRACK_HUNT;
+}
+
+/* The state after F9 FF|F5 (`state`) and the ID `byte`. A bad ID is never
+ * F9 (249 is a valid ID of both kinds), so the parser's rescan of FF|F5
+ * and the ID finds nothing. The test of km_id_is_addressable() written out:
+ * a call could land outside the interrupt's RAM code (LTO outlines it). */
+static inline __attribute__((always_inline)) unsigned km_rx_track_after_hdr1(unsigned state, uint8_t byte)
+{
     const bool id_ok =
         byte <= KM_ID_MAX || (state == KM_TRACK_COMMAND && (byte == KM_ID_SUPER || byte == KM_ID_BROADCAST));
     return id_ok ? KM_TRACK_ID : KM_TRACK_HUNT;
 }
 
-/* km_rx_track_byte() for every state but counting (the header, a lost
- * byte, a gap): `since` is the time since the previous byte. Inline too:
- * the interrupt's code must stay where the board puts it (in RAM on the
- * stm32g031, so that a flash erase does not stall it). */
-static inline bool km_rx_track_other(km_rx_track_t *t, uint8_t byte, uint32_t since, bool lost)
+/* km_rx_track_byte() for a byte on time and after no loss, in any state but
+ * counting. Ranges of states, not a chain of equalities: GCC turns such a
+ * chain into a table walked by a libgcc helper, which is in flash. */
+static inline __attribute__((always_inline)) bool km_rx_track_header(km_rx_track_t *t, unsigned state,
+                                                                     uint8_t byte)
 {
-    const unsigned state = t->state;
-    if (state == KM_TRACK_HUNT && byte != KM_HDR0) {
-        return lost; /* idle bus: the parser keeps nothing but an F9 */
-    }
-    if (lost || (state != KM_TRACK_HUNT && since > t->gap_ticks) || state == KM_TRACK_EVERY) {
-        t->state = KM_TRACK_EVERY; /* a cut: the parser may rescan */
-        return true;
-    }
-    if (state == KM_TRACK_HUNT) {
-        t->state = KM_TRACK_F9;
-        return false;
+    if (state < KM_TRACK_ID) {
+        if (state >= KM_TRACK_COMMAND) { /* COMMAND or RESPONSE */
+            t->state = (uint8_t)km_rx_track_after_hdr1(state, byte);
+        } else if (state != KM_TRACK_HUNT) { /* F9 */
+            t->state = (uint8_t)km_rx_track_after_f9(byte);
+        } else if (byte == KM_HDR0) {
+            t->state = KM_TRACK_F9;
+        }
+        return false; /* hunting, the parser keeps nothing but an F9 */
     }
     if (state != KM_TRACK_ID) {
-        t->state = (uint8_t)km_rx_track_header(state, byte);
-        return false;
+        return true; /* KM_TRACK_EVERY */
     }
-    if (byte < KM_LENGTH_MIN || byte > KM_LENGTH_MAX) {
+    if ((uint32_t)byte - KM_LENGTH_MIN > KM_LENGTH_MAX - KM_LENGTH_MIN) {
         t->state = KM_TRACK_EVERY; /* the rescan may find an F9 in the ID */
         return true;
     }
@@ -157,23 +156,36 @@ static inline bool km_rx_track_other(km_rx_track_t *t, uint8_t byte, uint32_t si
 /* The parser's framing rule for one received byte; true when the parser
  * must look: a frame may be complete, 64 bytes of a long frame are waiting
  * (the queue holds 128), or the tracker lost step. Inline: it runs in the
- * receive interrupt, and a byte inside a frame takes the first branch. */
-static inline bool km_rx_track_byte(km_rx_track_t *t, uint8_t byte, uint32_t tick, bool lost)
+ * receive interrupt (in RAM on the stm32g031, so that a flash erase does
+ * not stall it); a byte inside a frame takes the first branches. */
+static inline __attribute__((always_inline)) bool km_rx_track_byte(km_rx_track_t *t, uint8_t byte,
+                                                                   uint32_t tick, bool lost)
 {
     const uint32_t since = tick - t->last_tick;
     t->last_tick = tick;
-    if (t->state == KM_TRACK_COUNT && since <= t->gap_ticks && !lost) {
-        const uint32_t left = (uint32_t)t->left - 1u;
-        t->left = (uint16_t)left;
-        if ((left & 63u) != 0u) {
-            return false;
+    const unsigned state = t->state;
+    if (since <= t->gap_ticks && !lost) {
+        if (state == KM_TRACK_COUNT) {
+            const uint32_t left = (uint32_t)t->left - 1u;
+            t->left = (uint16_t)left;
+            if ((left & 63u) != 0u) {
+                return false;
+            }
+            if (left == 0u) {
+                t->state = KM_TRACK_HUNT;
+            }
+            return true;
         }
-        if (left == 0u) {
-            t->state = KM_TRACK_HUNT;
-        }
-        return true;
+        return km_rx_track_header(t, state, byte);
     }
-    return km_rx_track_other(t, byte, since, lost);
+    if (state == KM_TRACK_HUNT && (byte != KM_HDR0 || !lost)) {
+        if (byte == KM_HDR0) {
+            t->state = KM_TRACK_F9; /* an idle bus: the gap does not matter */
+        }
+        return lost;
+    }
+    t->state = KM_TRACK_EVERY; /* a cut: the parser may rescan */
+    return true;
 }
 
 /* The caller (UART driver) lost bytes: the partial frame is dropped. */

@@ -158,21 +158,23 @@ static void prv_tx(uint32_t isr, uint32_t cr1)
 }
 
 /* Receiving (RXNEIE) and sending (TXEIE, then TCIE) never overlap: a send
- * turns RXNEIE off and TC turns it on again. A byte with no error flag and
- * no loss before it goes to the handler straight (docs/benchmarks.md "Per
- * byte"). */
+ * turns RE and RXNEIE off and TC turns them on again. A received byte with
+ * no error flag and no loss before it goes to the handler first, before
+ * CR1 is read (docs/benchmarks.md "Per byte"): RXNE is only set with RE on,
+ * or by a byte that came in just before a send turned RE off, which is then
+ * handed over at once instead of at TC. */
 G0_RAMFUNC(USART1_IRQHandler) void USART1_IRQHandler(void)
 {
     const uint32_t isr = USART1_ISR;
+    const uint32_t errors = USART_ISR_ORE | USART_ISR_FE | USART_ISR_NE | USART_ISR_PE;
+    if ((isr & (errors | USART_ISR_RXNE)) == USART_ISR_RXNE && !s_rx.lost) {
+        const uint32_t tick = TIM_CNT(TIM2_BASE_R);
+        const uint8_t byte = (uint8_t)USART1_RDR; /* reading clears RXNE */
+        s_rx.handler(s_rx.ctx, byte, tick, false);
+        return;
+    }
     const uint32_t cr1 = USART1_CR1;
     if ((cr1 & USART_CR1_RXNEIE) != 0u) {
-        const uint32_t errors = USART_ISR_ORE | USART_ISR_FE | USART_ISR_NE | USART_ISR_PE;
-        if ((isr & (errors | USART_ISR_RXNE)) == USART_ISR_RXNE && !s_rx.lost) {
-            const uint32_t tick = TIM_CNT(TIM2_BASE_R);
-            const uint8_t byte = (uint8_t)USART1_RDR; /* reading clears RXNE */
-            s_rx.handler(s_rx.ctx, byte, tick, false);
-            return;
-        }
         prv_rx(isr);
         return;
     }

@@ -70,15 +70,35 @@ static bool s_boot_confirmed; /* km_board_boot_confirm() was called */
 static bool s_store_prepare;
 static uint32_t s_confirm_at; /* tick at which the start is confirmed */
 
-/* A received byte (docs/benchmarks.md "Per byte"): queued; the main loop
- * woken only when the tracker asks. */
-static void ISR_rx_byte(void *ctx, uint8_t byte, uint32_t tick, bool lost)
+/* The main loop must parse: woken (docs/benchmarks.md "Per byte"). */
+static void ISR_rx_wake(void)
+{
+    s_wake = true;
+    km_hal_wake();
+}
+
+/* A byte after a loss, or one the queue cannot take as it is: the queue's
+ * and the tracker's rules for a loss. */
+static __attribute__((noinline, noipa)) void ISR_rx_byte_rare(void *ctx, uint8_t byte, uint32_t tick,
+                                                              bool lost)
 {
     (void)ctx;
     km_rx_queue_push(&s_rx.q, byte, tick, lost);
     if (km_rx_track_byte(&s_rx.track, byte, tick, lost)) {
-        s_wake = true;
-        km_hal_wake();
+        ISR_rx_wake();
+    }
+}
+
+/* A received byte (docs/benchmarks.md "Per byte"): queued; the main loop
+ * woken only when the tracker asks. */
+static void ISR_rx_byte(void *ctx, uint8_t byte, uint32_t tick, bool lost)
+{
+    __typeof__(&s_rx) rx = &s_rx;
+    __asm__("" : "+l"(rx)); /* one base register for every field */
+    if (lost || !km_rx_queue_try_push(&rx->q, byte, tick)) {
+        ISR_rx_byte_rare(ctx, byte, tick, lost); /* the same arguments: a tail call */
+    } else if (km_rx_track_byte(&rx->track, byte, tick, false)) {
+        ISR_rx_wake();
     }
 }
 

@@ -17,19 +17,21 @@
 #define KM_RX_LOST 0x01u /* bytes were lost before this one (overrun) */
 
 typedef struct {
-    /* Scalars first: each field one ARMv6-M load or store from the pointer. */
+    /* What a push touches first: from the queue's address (or from a
+     * struct that holds it after a few words), each scalar one ARMv6-M load
+     * or store, a byte an add and a store (byte offsets reach 31). */
     atomic_uint head; /* written by the producer only */
     atomic_uint tail; /* written by the consumer only */
-    /* LOST-marked bytes stored (producer) and taken (consumer): equal = none waits. */
-    atomic_uint marks;
-    uint32_t marks_taken;
     /* Producer side: KM_RX_QUEUE_SIZE, or 0 after a byte was dropped: the
      * next byte goes to km_rx_queue_push_marked() to be marked LOST. */
     uint32_t room;
-    uint32_t dropped; /* producer side: bytes lost because the queue was full */
-    bool run_lost;    /* consumer side: the run peeked starts with a LOST byte */
     uint8_t byte[KM_RX_QUEUE_SIZE];
     uint32_t tick[KM_RX_QUEUE_SIZE];
+    /* LOST-marked bytes stored (producer) and taken (consumer): equal = none waits. */
+    atomic_uint marks;
+    uint32_t marks_taken;
+    uint32_t dropped;                /* producer side: bytes lost because the queue was full */
+    bool run_lost;                   /* consumer side: the run peeked starts with a LOST byte */
     uint8_t flags[KM_RX_QUEUE_SIZE]; /* KM_RX_LOST on a marked byte not yet taken, else 0 */
 } km_rx_queue_t;
 
