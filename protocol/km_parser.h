@@ -131,10 +131,10 @@ static inline __attribute__((always_inline)) unsigned km_rx_track_after_hdr1(uns
 static inline __attribute__((always_inline)) bool km_rx_track_header(km_rx_track_t *t, unsigned state,
                                                                      uint8_t byte)
 {
-    if (state < KM_TRACK_ID) {
-        if (state >= KM_TRACK_COMMAND) { /* COMMAND or RESPONSE */
+    if (state <= KM_TRACK_RESPONSE) {
+        if (state > KM_TRACK_F9) { /* COMMAND or RESPONSE */
             t->state = (uint8_t)km_rx_track_after_hdr1(state, byte);
-        } else if (state != KM_TRACK_HUNT) { /* F9 */
+        } else if (state == KM_TRACK_F9) {
             t->state = (uint8_t)km_rx_track_after_f9(byte);
         } else if (byte == KM_HDR0) {
             t->state = KM_TRACK_F9;

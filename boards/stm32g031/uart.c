@@ -24,12 +24,18 @@
 #include "usart_brr.h"
 
 /* The receive side, in one place: the interrupt reaches every field from
- * one base address. */
+ * one base address. A loss (an error flag) is remembered by pointing
+ * `call` at prv_rx_after_loss until the next byte: the byte's fast path
+ * tests nothing for it. */
 static struct {
-    km_uart_rx_handler_t handler;
+    km_uart_rx_handler_t call; /* `handler`, or prv_rx_after_loss */
     void *ctx;
-    bool lost; /* an error flag was seen: the next byte follows a loss */
+    km_uart_rx_handler_t handler;
 } s_rx;
+
+/* USART1_ISR's and USART1_RDR's offsets (RM0444 §33.8.9, §33.8.10). */
+#define PRV_ISR_OFFSET 0x1Cu
+#define PRV_RDR_OFFSET 0x24u
 
 static const uint8_t *s_tx_data;
 static uint16_t s_tx_len;
@@ -49,6 +55,15 @@ static void prv_de(bool on)
 #endif
 }
 
+/* The byte after a loss: to the handler with `lost` set, and the next one
+ * straight to the handler again. */
+G0_RAMFUNC(prv_rx_after_loss) static void prv_rx_after_loss(void *ctx, uint8_t byte, uint32_t tick, bool lost)
+{
+    (void)lost;
+    s_rx.call = s_rx.handler;
+    s_rx.handler(ctx, byte, tick, true);
+}
+
 /* The handler of a receiver opened with none: the bytes are dropped. */
 G0_RAMFUNC(prv_rx_discard) static void prv_rx_discard(void *ctx, uint8_t byte, uint32_t tick, bool lost)
 {
@@ -66,8 +81,8 @@ bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx)
     }
     g0_nvic_disable(G0_IRQ_USART1);
     s_rx.handler = handler != 0 ? handler : prv_rx_discard;
+    s_rx.call = s_rx.handler;
     s_rx.ctx = ctx;
-    s_rx.lost = false;
     s_tx_busy = false;
 
     RCC_APBENR2 |= RCC_APBENR2_USART1;
@@ -125,14 +140,12 @@ static inline __attribute__((always_inline)) void prv_rx(uint32_t isr)
 {
     if ((isr & (USART_ISR_ORE | USART_ISR_FE | USART_ISR_NE | USART_ISR_PE)) != 0u) {
         USART1_ICR = USART_ICR_ORECF | USART_ICR_FECF | USART_ICR_NECF | USART_ICR_PECF;
-        s_rx.lost = true;
+        s_rx.call = prv_rx_after_loss;
     }
     if ((isr & USART_ISR_RXNE) != 0u) {
         const uint32_t tick = TIM_CNT(TIM2_BASE_R);
         const uint8_t byte = (uint8_t)USART1_RDR; /* reading clears RXNE */
-        const bool lost = s_rx.lost;
-        s_rx.lost = false;
-        s_rx.handler(s_rx.ctx, byte, tick, lost);
+        s_rx.call(s_rx.ctx, byte, tick, false);
     }
 }
 
@@ -165,12 +178,14 @@ static void prv_tx(uint32_t isr, uint32_t cr1)
  * handed over at once instead of at TC. */
 G0_RAMFUNC(USART1_IRQHandler) void USART1_IRQHandler(void)
 {
-    const uint32_t isr = USART1_ISR;
+    uintptr_t usart = USART1_BASE_R;
+    __asm__("" : "+l"(usart)); /* ISR and RDR from one base register */
+    const uint32_t isr = G0_REG(usart + PRV_ISR_OFFSET);
     const uint32_t errors = USART_ISR_ORE | USART_ISR_FE | USART_ISR_NE | USART_ISR_PE;
-    if ((isr & (errors | USART_ISR_RXNE)) == USART_ISR_RXNE && !s_rx.lost) {
+    if ((isr & (errors | USART_ISR_RXNE)) == USART_ISR_RXNE) {
         const uint32_t tick = TIM_CNT(TIM2_BASE_R);
-        const uint8_t byte = (uint8_t)USART1_RDR; /* reading clears RXNE */
-        s_rx.handler(s_rx.ctx, byte, tick, false);
+        const uint8_t byte = (uint8_t)G0_REG(usart + PRV_RDR_OFFSET); /* reading clears RXNE */
+        s_rx.call(s_rx.ctx, byte, tick, false);
         return;
     }
     const uint32_t cr1 = USART1_CR1;
@@ -181,7 +196,7 @@ G0_RAMFUNC(USART1_IRQHandler) void USART1_IRQHandler(void)
     /* Error flags interrupt through EIE even while RX is off: clear them. */
     if ((isr & (USART_ISR_ORE | USART_ISR_FE | USART_ISR_NE | USART_ISR_PE)) != 0u) {
         USART1_ICR = USART_ICR_ORECF | USART_ICR_FECF | USART_ICR_NECF | USART_ICR_PECF;
-        s_rx.lost = true;
+        s_rx.call = prv_rx_after_loss;
     }
     prv_tx(isr, cr1);
 }

@@ -316,6 +316,25 @@ class Images(unittest.TestCase):
             self.assertTrue(all(inner), "a byte inside %s returned to the main loop: %s" % (f.hex(), got))
             self.assertFalse(got[-1][1], "the last byte of %s did not wake the main loop" % f.hex())
 
+    def test_framing_error_drops_its_frame_then_bytes_flow(self):
+        # A byte received with FE (RM0444 §33.5.6: the data still reaches
+        # RDR) is handed over as after a loss: the parser drops the frame it
+        # was in (no answer), and the bytes after it take the receive fast
+        # path again (the next ping is answered). docs/protocol.md §2.
+        m, (poll,) = boot_and_app()
+        self.assertTrue(to_main_loop(m, poll))
+        m.run_until(m.now + 5 * MS)
+        ping = frame(0, 0x01)
+        m.take_output()
+        bit = 1e9 / BAUD
+        t = m.now
+        for k, byte in enumerate(ping):
+            m.wire_in(t + (10 * k + 9.5) * bit, byte, framing_error=(k == 3))
+        m.run_until(t + 10 * len(ping) * bit + 5 * MS)
+        self.assertEqual(m.take_output(), [], "a frame with a framing error was answered")
+        for _ in range(2):
+            self.assertEqual(exchange(m, ping)[0][:4], bytes.fromhex("F9F50002"))
+
     def test_hung_main_loop_ends_in_iwdg_reset(self):
         m, (poll,) = boot_and_app()
         self.assertTrue(to_main_loop(m, poll))
