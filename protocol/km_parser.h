@@ -132,10 +132,10 @@ static inline __attribute__((always_inline)) bool km_rx_track_header(km_rx_track
                                                                      uint8_t byte)
 {
     if (state <= KM_TRACK_RESPONSE) {
-        if (state > KM_TRACK_F9) { /* COMMAND or RESPONSE */
-            t->state = (uint8_t)km_rx_track_after_hdr1(state, byte);
-        } else if (state == KM_TRACK_F9) {
+        if (state == KM_TRACK_F9) {
             t->state = (uint8_t)km_rx_track_after_f9(byte);
+        } else if (state != KM_TRACK_HUNT) { /* COMMAND or RESPONSE */
+            t->state = (uint8_t)km_rx_track_after_hdr1(state, byte);
         } else if (byte == KM_HDR0) {
             t->state = KM_TRACK_F9;
         }

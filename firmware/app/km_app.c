@@ -77,27 +77,18 @@ static void ISR_rx_wake(void)
     km_hal_wake();
 }
 
-/* A byte after a loss, or one the queue cannot take as it is: the queue's
- * and the tracker's rules for a loss. */
-static __attribute__((noinline, noipa)) void ISR_rx_byte_rare(void *ctx, uint8_t byte, uint32_t tick,
-                                                              bool lost)
-{
-    (void)ctx;
-    km_rx_queue_push(&s_rx.q, byte, tick, lost);
-    if (km_rx_track_byte(&s_rx.track, byte, tick, lost)) {
-        ISR_rx_wake();
-    }
-}
-
-/* A received byte (docs/benchmarks.md "Per byte"): queued; the main loop
- * woken only when the tracker asks. */
+/* A received byte (docs/benchmarks.md "Per byte"): queued (after a loss or
+ * into a full queue by the queue's rare path), the main loop woken only when
+ * the tracker asks. */
 static void ISR_rx_byte(void *ctx, uint8_t byte, uint32_t tick, bool lost)
 {
+    (void)ctx;
     __typeof__(&s_rx) rx = &s_rx;
     __asm__("" : "+l"(rx)); /* one base register for every field */
     if (lost || !km_rx_queue_try_push(&rx->q, byte, tick)) {
-        ISR_rx_byte_rare(ctx, byte, tick, lost); /* the same arguments: a tail call */
-    } else if (km_rx_track_byte(&rx->track, byte, tick, false)) {
+        km_rx_queue_push_marked(&rx->q, byte, tick, lost);
+    }
+    if (km_rx_track_byte(&rx->track, byte, tick, lost)) {
         ISR_rx_wake();
     }
 }
