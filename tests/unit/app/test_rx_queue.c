@@ -58,6 +58,38 @@ static void test_full_queue_marks_loss(void **state)
     assert_int_equal(f, KM_RX_LOST);
 }
 
+/* The interrupt's fast path (km_rx_queue_try_push) stores nothing while a
+ * drop waits to be marked, even with room again, and nothing into a full
+ * queue: those bytes go to km_rx_queue_push, which marks the first one. */
+static void test_try_push_refuses_while_a_loss_waits(void **state)
+{
+    (void)state;
+    km_rx_queue_init(&s_q);
+    for (unsigned i = 0; i < KM_RX_QUEUE_SIZE; i++) {
+        assert_true(km_rx_queue_try_push(&s_q, (uint8_t)i, i));
+    }
+    assert_false(km_rx_queue_try_push(&s_q, 0xEE, 999)); /* full */
+    assert_int_equal(s_q.dropped, 0);                    /* and nothing counted */
+    km_rx_queue_push(&s_q, 0xEE, 999, false);            /* dropped */
+    uint8_t b, f;
+    uint32_t t;
+    assert_true(km_rx_queue_pop(&s_q, &b, &t, &f)); /* room for one again */
+    assert_false(km_rx_queue_try_push(&s_q, 0x42, 5));
+    km_rx_queue_push(&s_q, 0x42, 5, false);
+    assert_false(km_rx_queue_try_push(&s_q, 0x43, 6)); /* full again */
+    for (unsigned i = 1; i < KM_RX_QUEUE_SIZE; i++) {
+        assert_true(km_rx_queue_pop(&s_q, &b, &t, &f));
+        assert_int_equal(f, 0);
+    }
+    assert_true(km_rx_queue_pop(&s_q, &b, &t, &f));
+    assert_int_equal(b, 0x42);
+    assert_int_equal(f, KM_RX_LOST);
+    assert_true(km_rx_queue_try_push(&s_q, 0x44, 7)); /* the loss marked: the fast path again */
+    assert_true(km_rx_queue_pop(&s_q, &b, &t, &f));
+    assert_int_equal(b, 0x44);
+    assert_int_equal(f, 0);
+}
+
 /* Indices are free-running; many laps must keep order. */
 static void test_index_wrap_many_laps(void **state)
 {
@@ -212,6 +244,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fifo_order_and_ticks),
         cmocka_unit_test(test_full_queue_marks_loss),
+        cmocka_unit_test(test_try_push_refuses_while_a_loss_waits),
         cmocka_unit_test(test_index_wrap_many_laps),
         cmocka_unit_test(test_peek_runs_stop_at_end_and_at_loss),
         cmocka_unit_test(test_marked_slot_reused_unmarked),
