@@ -11,51 +11,47 @@ static __attribute__((noinline)) uint32_t prv_mulhi_shr(uint32_t n, uint32_t m, 
     return km_umulhi(n, m) >> s;
 }
 
-#define PRV_INLINE static inline __attribute__((always_inline))
+/* A divisor of the tick: floor(n / d) = floor((n >> pre) / d') with
+ * d' = d / 2^pre, its reciprocal m and shift s (km_fixdiv.h). */
+typedef struct {
+    uint32_t m;
+    uint16_t d;
+    uint8_t pre, s;
+} prv_divisor_t;
 
-/* floor(n / d), 0 at once below d (a compare, not a call). */
-PRV_INLINE uint32_t prv_udiv(uint32_t n, uint32_t d, uint32_t m, uint32_t s)
+enum { PRV_D10, PRV_D100, PRV_D1000, PRV_D2560, PRV_D256000 };
+
+/* 2560 = 2^9 x 5 and 256000 = 2^8 x 1000: floor(floor(n / 2^k) / d') = floor(n / d). */
+static const prv_divisor_t s_divisors[] = {
+    [PRV_D10] = {KM_FIXDIV_M10, 10u, 0u, 3u},         [PRV_D100] = {KM_FIXDIV_M100, 100u, 0u, 6u},
+    [PRV_D1000] = {KM_FIXDIV_M1000, 1000u, 0u, 6u},   [PRV_D2560] = {KM_FIXDIV_M5, 5u, 9u, 2u},
+    [PRV_D256000] = {KM_FIXDIV_M1000, 1000u, 8u, 6u},
+};
+
+/* floor(n / d) for divisor `k`, 0 at once below d (a compare, not a multiply). */
+static __attribute__((noinline)) uint32_t prv_udiv(uint32_t n, unsigned k)
 {
-    return n < d ? 0u : prv_mulhi_shr(n, m, s);
+    const prv_divisor_t *v = &s_divisors[k];
+    n >>= v->pre;
+    return n < v->d ? 0u : prv_mulhi_shr(n, v->m, v->s);
 }
 
-PRV_INLINE uint32_t prv_udiv10(uint32_t n)
+/* n / d toward zero, as C's `/`, for divisor `k`. */
+static __attribute__((noinline)) int32_t prv_sdiv(int32_t n, unsigned k)
 {
-    return prv_udiv(n, 10u, KM_FIXDIV_M10, 3u);
+    const uint32_t q = prv_udiv(n < 0 ? 0u - (uint32_t)n : (uint32_t)n, k);
+    return n < 0 ? -(int32_t)q : (int32_t)q;
 }
 
-PRV_INLINE uint32_t prv_udiv100(uint32_t n)
-{
-    return prv_udiv(n, 100u, KM_FIXDIV_M100, 6u);
-}
-
-PRV_INLINE uint32_t prv_udiv1000(uint32_t n)
-{
-    return prv_udiv(n, 1000u, KM_FIXDIV_M1000, 6u);
-}
-
-/* 2560 = 2^9 x 5: floor(floor(n / 2^9) / 5) = floor(n / 2560). */
-PRV_INLINE uint32_t prv_udiv2560(uint32_t n)
-{
-    return prv_udiv(n >> 9, 5u, KM_FIXDIV_M5, 2u);
-}
-
-/* 256000 = 2^8 x 1000, likewise. */
-PRV_INLINE uint32_t prv_udiv256000(uint32_t n)
-{
-    return prv_udiv(n >> 8, 1000u, KM_FIXDIV_M1000, 6u);
-}
-
-/* Each unsigned quotient and its signed twin (toward zero, as C's `/`). */
-#define PRV_DIVS(d)                                                             \
-    uint32_t km_udiv##d(uint32_t n)                                             \
-    {                                                                           \
-        return prv_udiv##d(n);                                                  \
-    }                                                                           \
-    int32_t km_sdiv##d(int32_t n)                                               \
-    {                                                                           \
-        const uint32_t q = prv_udiv##d(n < 0 ? 0u - (uint32_t)n : (uint32_t)n); \
-        return n < 0 ? -(int32_t)q : (int32_t)q;                                \
+/* Each unsigned quotient and its signed twin. */
+#define PRV_DIVS(d)                   \
+    uint32_t km_udiv##d(uint32_t n)   \
+    {                                 \
+        return prv_udiv(n, PRV_D##d); \
+    }                                 \
+    int32_t km_sdiv##d(int32_t n)     \
+    {                                 \
+        return prv_sdiv(n, PRV_D##d); \
     }
 
 PRV_DIVS(10)
