@@ -101,3 +101,13 @@ __attribute__((noinline)) uint32_t km_udiv_near(uint32_t n, uint32_t d, const km
     }
     return q;
 }
+
+__attribute__((noinline)) int32_t km_clamp(int32_t v, int32_t lo, int32_t hi)
+{
+    return v < lo ? lo : (v > hi ? hi : v);
+}
+
+__attribute__((noinline)) int32_t km_sat(int32_t v, int32_t m)
+{
+    return v > m ? m : (v < -m ? -m : v);
+}

@@ -51,4 +51,9 @@ typedef struct {
     }
 uint32_t km_udiv_near(uint32_t n, uint32_t d, const km_recip_near_t *c);
 
+/* v bounded to [lo, hi]: lo below lo, else hi above hi (one copy, not inlined: flash). */
+int32_t km_clamp(int32_t v, int32_t lo, int32_t hi);
+/* v bounded to +-m: m above m, else -m below -m. */
+int32_t km_sat(int32_t v, int32_t m);
+
 #endif

@@ -33,7 +33,7 @@ static int32_t prv_speed(const km_control_params_t *p, int32_t dps)
         lim = p->gains.fastest_dps;
     }
     lim = lim > 20000 ? 20000 : lim; /* keeps the loop's products in 32 bits */
-    return dps > lim ? lim : (dps < -lim ? -lim : dps);
+    return km_sat(dps, lim);
 }
 
 static void prv_start(km_motor_mode_t *m, bool speed_mode, int32_t value, km_bridge_mode_t stop_bridge)
@@ -118,7 +118,7 @@ static void prv_count(km_motor_mode_t *m, int32_t position, uint32_t dt_us)
 /* `v` bounded to +-`bound`. */
 static int32_t prv_bound(int32_t v, int32_t bound)
 {
-    return v > bound ? bound : (v < -bound ? -bound : v);
+    return km_sat(v, bound);
 }
 
 /* The speed loop (0.1 deg/s): feedforward kv x speed and friction, kd x

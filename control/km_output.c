@@ -2,6 +2,8 @@
 /* Output stage (see km_output.h). */
 #include "km_output.h"
 
+#include "km_fixdiv.h"
+
 km_bridge_t km_output_bridge(km_bridge_mode_t mode, int32_t pwm_user, int32_t pwm_limit, bool reverse)
 {
     km_bridge_t b = {mode, 0};
@@ -13,7 +15,7 @@ km_bridge_t km_output_bridge(km_bridge_mode_t mode, int32_t pwm_user, int32_t pw
     } else if (pwm_limit < 0) {
         pwm_limit = 0;
     }
-    int32_t v = pwm_user > pwm_limit ? pwm_limit : (pwm_user < -pwm_limit ? -pwm_limit : pwm_user);
+    int32_t v = km_sat(pwm_user, pwm_limit);
     b.pwm = (int16_t)(reverse ? -v : v);
     return b;
 }

@@ -173,10 +173,10 @@ static int32_t prv_begin(km_profile_t *p, int32_t target_ddeg)
 static void prv_move_u(km_profile_t *p, int32_t tgt, int32_t vmax_ups, int32_t accel)
 {
     p->target = tgt;
-    p->vmax = vmax_ups > 0 ? (vmax_ups < VMAX_MAX ? vmax_ups : VMAX_MAX) : 1;
+    p->vmax = km_clamp(vmax_ups, 1, VMAX_MAX);
     p->vsq_hi = km_umulhi((uint32_t)p->vmax, (uint32_t)p->vmax);
     p->vsq_lo = (uint32_t)p->vmax * (uint32_t)p->vmax;
-    p->accel = accel > 0 ? (accel < ACCEL_MAX ? accel : ACCEL_MAX) : 1;
+    p->accel = km_clamp(accel, 1, ACCEL_MAX);
     p->stream = false;
     p->s_period = 0; /* a stream that follows starts afresh */
     p->done = false;
@@ -252,7 +252,7 @@ void km_profile_retime(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, i
     const int32_t tgt = prv_begin(p, target_ddeg);
     const int32_t d = tgt - p->pos;
     const int32_t dabs = prv_abs(d);
-    const int32_t a = km_sdiv1000(accel > 0 ? (accel < ACCEL_MAX ? accel : ACCEL_MAX) : 1);
+    const int32_t a = km_sdiv1000(km_clamp(accel, 1, ACCEL_MAX));
     if (p->done || p->stream || p->vel == 0 || dabs > 1000000 || time_ms == 0u || a < 1) {
         prv_move_time_u(p, tgt, time_ms, vlimit_ups);
         return;
@@ -261,7 +261,7 @@ void km_profile_retime(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, i
     const int32_t t = time_ms > 65535u ? 65535 : (int32_t)time_ms;
     int32_t vc = prv_retime_cruise(v0, dabs, t, a);
     const int32_t vlim = km_sdiv1000(vlimit_ups);
-    vc = vc < 1 ? 1 : (vc > vlim ? vlim : vc);
+    vc = km_clamp(vc, 1, vlim);
     prv_move_u(p, tgt, vc * 1000, prv_brake_accel(v0, dabs, a * 1000));
 }
 
@@ -287,7 +287,7 @@ static int32_t prv_stream_periods(const km_profile_t *p, int32_t d)
     if (b != 0u && a / b <= 8u && (d >= 0) == (p->s_step >= 0)) {
         n = (int32_t)((a + b / 2u) / b);
     }
-    return n < 1 ? 1 : (n > 8 ? 8 : n);
+    return km_clamp(n, 1, 8);
 }
 
 /* The stream's clock (phase and period) on a target `n` periods after the
@@ -298,7 +298,7 @@ static void prv_stream_clock(km_profile_t *p, int32_t n)
     const int32_t late = p->s_since - n * p->s_period;
     const int32_t k = p->s_frames, kk = (k + 1) * (k + 2);
     const int32_t q = k < KM_PROFILE_STREAM_FRAMES ? 1000000 : p->s_period / 4;
-    const int32_t lp = late > q ? q : (late < -q ? -q : late);
+    const int32_t lp = km_sat(late, q);
     p->s_since = late - late * (2 * (2 * k + 1)) / kk; /* alpha = 2(2k+1)/((k+1)(k+2)) */
     p->s_period += lp * 6 / (kk * n);                  /* beta = 6/((k+1)(k+2)) */
     p->s_period = p->s_period < 1000 ? 1000 : p->s_period;
@@ -320,8 +320,8 @@ void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_u
         n = prv_stream_periods(p, tgt - p->target);
         prv_stream_clock(p, n);
     }
-    p->vmax = vlimit_ups > 0 ? (vlimit_ups < VMAX_MAX ? vlimit_ups : VMAX_MAX) : 1;
-    p->accel = accel > 0 ? (accel < ACCEL_MAX ? accel : ACCEL_MAX) : 1;
+    p->vmax = km_clamp(vlimit_ups, 1, VMAX_MAX);
+    p->accel = km_clamp(accel, 1, ACCEL_MAX);
     p->s_vel = prv_speed_us(tgt - p->target, n * p->s_period, p->vmax);
     p->s_step = (tgt - p->target) / n;
     p->s_lag = 2 * p->s_period +
@@ -427,7 +427,7 @@ static int32_t prv_stream_want(const km_profile_t *p, int32_t ahead)
     const int32_t ref = p->target - km_sdiv1000(vff) * km_sdiv1000(ahead);
     int32_t err = ref - p->pos;
     const int32_t emax = p->vmax / 32 + 1, near = KM_PROFILE_STREAM_NEAR_U;
-    err = err > emax ? emax : (err < -emax ? -emax : err);
+    err = km_sat(err, emax);
     int32_t corr = err * 8;
     if (err > near) {
         corr = near * 8 + (err - near) * 16;
@@ -435,7 +435,7 @@ static int32_t prv_stream_want(const km_profile_t *p, int32_t ahead)
         corr = -near * 8 + (err + near) * 16;
     }
     const int32_t want = vff + corr;
-    return want > p->vmax ? p->vmax : (want < -p->vmax ? -p->vmax : want);
+    return km_sat(want, p->vmax);
 }
 
 /* A stream piece: follow the reference s_lag behind the newest target, or

@@ -34,7 +34,7 @@ int32_t km_speed_window_step(km_speed_window_t *w, int32_t position, uint32_t dt
         w->us += dt_us;
         if (w->us >= KM_SPEED_WINDOW_US) {
             /* 0.1 deg per us -> deg/s; clamped so the product stays in 32 bits */
-            const int32_t acc = w->acc > 20000 ? 20000 : (w->acc < -20000 ? -20000 : w->acc);
+            const int32_t acc = km_sat(w->acc, 20000);
             w->dps = w->us == KM_SPEED_WINDOW_US ? acc * (100000 / (int32_t)KM_SPEED_WINDOW_US)
                                                  : prv_sdiv_near(acc * 100000, w->us, &s_window_recip);
             w->acc = 0;
@@ -74,7 +74,7 @@ int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
     const uint32_t span = f->span_us;
     const uint8_t i = (uint8_t)((f->head + KM_SPEED_FAST_N + 1u - f->count) % KM_SPEED_FAST_N);
     int32_t d = km_pos_diff(position, f->pos[i]);
-    d = d > 2000 ? 2000 : (d < -2000 ? -2000 : d);             /* keeps d x 1e6 in 32 bits */
+    d = km_sat(d, 2000);                                       /* keeps d x 1e6 in 32 bits */
     f->ddps = prv_sdiv_near(d * 1000000, span, &s_span_recip); /* 7,000 us: no Newton step */
     return f->ddps;
 }
@@ -95,7 +95,7 @@ int32_t km_hold_filter_step(km_hold_filter_t *h, int32_t position)
         return position;
     }
     int32_t d = km_pos_diff(position, h->out);
-    d = d > 100000 ? 100000 : (d < -100000 ? -100000 : d); /* keeps d x 16 in 32 bits */
+    d = km_sat(d, 100000); /* keeps d x 16 in 32 bits */
     const int32_t e = d * 16 - h->frac;
     if (e > KM_HOLD_FILTER_JUMP * 16 || e < -KM_HOLD_FILTER_JUMP * 16) {
         h->out = position; /* a real push or a new frame (0x16/0x17): taken at once */
@@ -121,14 +121,14 @@ void km_speed_obs_reset(km_speed_obs_t *o, int32_t position, int32_t speed_ddps)
     o->base = position;
     o->frac = 0;
     /* 0.1 deg/s -> Q16 count per ms: x 65536 / 1000 */
-    const int32_t v = speed_ddps > 16000 ? 16000 : (speed_ddps < -16000 ? -16000 : speed_ddps);
+    const int32_t v = km_sat(speed_ddps, 16000);
     o->vel = km_sdiv1000(v * 65536);
 }
 
 int32_t km_speed_obs_step(km_speed_obs_t *o, int32_t position, uint32_t dt_us)
 {
     const int32_t vmax = 1 << 20; /* 16 counts per ms (1,600 deg/s): keeps vel x dt in 32 bits */
-    o->vel = o->vel > vmax ? vmax : (o->vel < -vmax ? -vmax : o->vel);
+    o->vel = km_sat(o->vel, vmax);
     if (dt_us == 1000u) {
         o->frac += o->vel;
     } else {
