@@ -130,24 +130,21 @@ static uint32_t prv_isqrt56(uint32_t hi, uint32_t lo)
     return root;
 }
 
-/* floor(sqrt(x)), bit by bit: speeds above 2^28 u/s and retimes only. */
-static uint32_t prv_isqrt64(uint64_t x)
+/* floor(sqrt(hi:lo)) for hi:lo < 2^62: the nibble root of hi:lo / 2^8
+ * times 16 is at most 15 below the root (docs/control-design.md "Arithmetic"). */
+static uint32_t prv_isqrt(uint32_t hi, uint32_t lo)
 {
-    uint64_t r = 0;
-    uint64_t bit = (uint64_t)1 << 62;
-    while (bit > x) {
-        bit >>= 2;
+    if (hi < (1u << 24)) {
+        return prv_isqrt56(hi, lo);
     }
-    while (bit != 0u) {
-        if (x >= r + bit) {
-            x -= r + bit;
-            r = (r >> 1) + bit;
-        } else {
-            r >>= 1;
+    uint32_t r = prv_isqrt56(hi >> 8, (lo >> 8) | (hi << 24)) << 4;
+    for (;;) {
+        const uint32_t n = r + 1u, sq_hi = km_umulhi(n, n);
+        if (sq_hi > hi || (sq_hi == hi && n * n > lo)) {
+            return r;
         }
-        bit >>= 2;
+        r = n;
     }
-    return (uint32_t)r;
 }
 
 void km_profile_reset(km_profile_t *p, int32_t pos_ddeg)
@@ -224,13 +221,20 @@ static int32_t prv_retime_cruise(int32_t v0, int32_t dm, int32_t t, int32_t a)
             }
         }
     }
-    const int64_t b = (int64_t)v0 + (int64_t)a * t;
-    const int64_t c = (int64_t)a * dm + ((int64_t)v0 * v0) / 2;
-    const int64_t disc = b * b - 4 * c;
-    if (b <= 0 || disc < 0) {
-        return (int32_t)prv_isqrt64((uint64_t)c); /* the triangle: as fast as a allows */
+    /* b = v0 + a t < 2^27, c = a dm + v0^2 / 2 < 2^41 (two words), disc = b^2 - 4c */
+    const int32_t b = v0 + a * t;
+    const uint32_t v = v0 < 0 ? 0u - (uint32_t)v0 : (uint32_t)v0, adm = (uint32_t)(a * dm);
+    const uint32_t v_hi = km_umulhi(v, v), v_lo = v * v;
+    uint32_t c_hi = v_hi >> 1, c_lo = (v_lo >> 1) | (v_hi << 31);
+    c_lo += adm;
+    c_hi += c_lo < adm ? 1u : 0u;
+    const uint32_t ub = (uint32_t)b, b_hi = km_umulhi(ub, ub), b_lo = ub * ub;
+    const uint32_t f_hi = (c_hi << 2) | (c_lo >> 30), f_lo = c_lo << 2;
+    if (b <= 0 || b_hi < f_hi || (b_hi == f_hi && b_lo < f_lo)) {
+        return (int32_t)prv_isqrt(c_hi, c_lo); /* the triangle: as fast as a allows */
     }
-    return (int32_t)((b - (int64_t)prv_isqrt64((uint64_t)disc)) / 2);
+    const uint32_t d_hi = b_hi - f_hi - (b_lo < f_lo ? 1u : 0u);
+    return (int32_t)((ub - prv_isqrt(d_hi, b_lo - f_lo)) >> 1);
 }
 
 /* `acc`, or the harder braking `v0` needs to stop within `dabs` u. */
@@ -367,10 +371,7 @@ static int32_t prv_brake_speed(const km_profile_t *p, uint32_t k, uint32_t d)
     if (hi > p->vsq_hi || (hi == p->vsq_hi && lo >= p->vsq_lo)) {
         return p->vmax;
     }
-    if ((uint32_t)p->vmax < (1u << 28)) {
-        return (int32_t)prv_isqrt56(hi, lo);
-    }
-    return (int32_t)prv_isqrt64(((uint64_t)hi << 32) | lo);
+    return (int32_t)prv_isqrt(hi, lo);
 }
 
 /* The speed change a piece allows, remainder carried. */

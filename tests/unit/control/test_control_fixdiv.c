@@ -327,6 +327,97 @@ static void test_profile_equals_division_reference(void **state)
     }
 }
 
+/* Long moves (up to 80,000 deg) at speeds from 2^28 to 2^30 u/s and hard
+ * accelerations: their braking roots are of values from 2^56 up, the root
+ * taken from a shifted one and stepped up; equal to the 64-bit root at
+ * every tick. */
+static void test_profile_fast_long_moves_equal_reference(void **state)
+{
+    (void)state;
+    static const uint32_t dts[] = {1000u, 2000u, 1500u, 999u};
+    for (unsigned run = 0; run < 300u; run++) {
+        km_profile_t a, b;
+        km_profile_reset(&a, 0);
+        b = a;
+        const int32_t to = (int32_t)(rnd() % 1600001u) - 800000;
+        const int32_t vmax = (int32_t)(rnd() % 0x30000000u) + 0x10000000;
+        const int32_t accel = (int32_t)(rnd() % 500000u) + 500000;
+        km_profile_move(&a, to, vmax, accel);
+        km_profile_move(&b, to, vmax, accel);
+        const uint32_t dt = dts[run % 4u];
+        for (unsigned t = 1; t <= 100000u; t++) {
+            const bool da = km_profile_step(&a, dt), db = ref_step(&b, dt);
+            assert_int_equal(da, db);
+            expect_same(&a, &b, run, t);
+            if (da) {
+                break;
+            }
+        }
+        assert_true(a.done);
+    }
+}
+
+/* The cruise speed of a retimed move as it was computed, in 64 bits
+ * (km_profile.c's prv_retime_cruise before the two-word rewrite). */
+static int32_t ref_retime_cruise(int32_t v0, int32_t dm, int32_t t, int32_t a)
+{
+    if (v0 > 0) {
+        const int32_t s0 = (int32_t)(((uint32_t)v0 * (uint32_t)v0) / (2u * (uint32_t)a));
+        const int32_t tl = t - v0 / a;
+        if (tl > 0 && dm > s0) {
+            const int32_t vc = (dm - s0) / tl;
+            if (vc <= v0) {
+                return vc;
+            }
+        }
+    }
+    const int64_t b = (int64_t)v0 + (int64_t)a * t;
+    const int64_t c = (int64_t)a * dm + ((int64_t)v0 * v0) / 2;
+    const int64_t disc = b * b - 4 * c;
+    if (b <= 0 || disc < 0) {
+        return (int32_t)ref_isqrt64((uint64_t)c);
+    }
+    return (int32_t)((b - (int64_t)ref_isqrt64((uint64_t)disc)) / 2);
+}
+
+/* A speed from 1 to 2^30 u/s, about evenly spread over its binary magnitudes. */
+static int32_t rnd_speed(void)
+{
+    const int32_t v = (int32_t)((rnd() & 0x3FFFFFFFu) >> (rnd() % 30u));
+    return v > 0 ? v : 1;
+}
+
+/* km_profile_retime (docs/protocol.md §5.4 0x65 retargeting a moving
+ * servo) sets the cruise speed the 64-bit formula gave, for speeds up to
+ * 2^30 u/s, either direction, times past 65,535 ms and accelerations
+ * past the bound: the two-word arithmetic and root equal it exactly. */
+static void test_retime_cruise_equals_64_bit_reference(void **state)
+{
+    (void)state;
+    for (unsigned run = 0; run < 400000u; run++) {
+        km_profile_t p;
+        km_profile_reset(&p, 0);
+        p.done = false;
+        p.vel = rnd() % 2u ? rnd_speed() : -rnd_speed();
+        const int32_t to = (int32_t)(rnd() % 2001u) - 1000; /* |d| <= 1e6 u: a retime, not a new move */
+        const uint32_t time_ms = rnd() % 70000u + 1u;
+        const int32_t accel = (int32_t)(rnd() % 1200000u) + 1000;
+        const int32_t vlimit = rnd_speed();
+        km_profile_retime(&p, to, time_ms, vlimit, accel);
+        const int32_t d = to * KM_PROFILE_U_PER_DDEG;
+        const int32_t a = (accel < 1000000 ? accel : 1000000) / 1000;
+        const int32_t v0 = (d >= 0 ? p.vel : -p.vel) / 1000;
+        int32_t vc = ref_retime_cruise(v0, d < 0 ? -d : d, time_ms > 65535u ? 65535 : (int32_t)time_ms, a);
+        const int32_t vlim = vlimit / 1000;
+        vc = vc < 1 ? 1 : (vc > vlim ? vlim : vc);
+        const int32_t want = vc * 1000 > 1 ? vc * 1000 : 1;
+        if (p.vmax != want) {
+            fail_msg("run %u: vel %d to %d in %u ms at %d, limit %d: vmax %d, reference %d", run, p.vel, to,
+                     time_ms, accel, vlimit, p.vmax, want);
+        }
+    }
+}
+
 /* floor(n / d) for the divisor that wanders (the speed estimators' span
  * and window): equal to C's `/` for every d up to 40,000 (both nominal
  * bands of 7,000 and 20,000 us, their edges and the power-of-two
@@ -485,6 +576,8 @@ int main(void)
         cmocka_unit_test(test_unsigned_quotients_match_c),
         cmocka_unit_test(test_signed_quotients_match_c),
         cmocka_unit_test(test_profile_equals_division_reference),
+        cmocka_unit_test(test_profile_fast_long_moves_equal_reference),
+        cmocka_unit_test(test_retime_cruise_equals_64_bit_reference),
         cmocka_unit_test(test_udiv_near_matches_c),
         cmocka_unit_test(test_speed_fast_steady_tick_every_displacement),
         cmocka_unit_test(test_speed_fast_running_span_equals_sum),
