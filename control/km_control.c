@@ -29,7 +29,9 @@ static void prv_rebase_axis_speeds(km_control_t *c, const km_axis_t *was, const 
         c->fast.pos[k] = km_axis_map(was, now, c->fast.pos[k]);
     }
     c->fast.ddps *= sign;
-    km_speed_obs_reset(&c->obs, km_axis_map(was, now, c->obs.base), c->fast.ddps);
+    if (KM_FEATURE_STREAM_OBS) {
+        km_speed_obs_reset(&c->obs, km_axis_map(was, now, c->obs.base), c->fast.ddps);
+    }
     c->speed.last_position = km_axis_map(was, now, c->speed.last_position);
     c->speed.acc *= sign;
     c->speed.dps *= sign;
@@ -235,7 +237,7 @@ static int32_t prv_hold_position(km_control_t *c, int32_t pos)
  * (started where the shaft is when the stream starts). */
 static void prv_observe(km_control_t *c, int32_t raw, uint32_t dt_us)
 {
-    if (!c->servo.streaming) {
+    if (!KM_FEATURE_STREAM_OBS || !c->servo.streaming) {
         c->obs_on = false;
         return;
     }
@@ -345,13 +347,14 @@ static void prv_drive_servo(km_control_t *c, const km_control_params_t *p, int32
             km_position_loop_init(&c->loop);
         }
         const bool stream = c->servo.streaming && !c->servo.profile.done;
+        const bool obs = KM_FEATURE_STREAM_OBS && stream;
         const km_position_loop_in_t li = {
-            .setpoint_u = stream ? sm.setpoint_u - km_speed_obs_frac_u(&c->obs) : sm.setpoint_u,
+            .setpoint_u = obs ? sm.setpoint_u - km_speed_obs_frac_u(&c->obs) : sm.setpoint_u,
             .setpoint_ddps = sm.setpoint_ddps,
             .setpoint_sub = stream ? c->servo.profile.vel - sm.setpoint_ddps * 1000 : 0,
-            .position = km_pos_diff(stream ? c->obs.base : pos,
+            .position = km_pos_diff(obs ? c->obs.base : pos,
                                     c->servo.profile.origin), /* from the set-point's origin */
-            .speed_ddps = stream ? c->obs_ddps : speed_ddps,
+            .speed_ddps = obs ? c->obs_ddps : speed_ddps,
             .pwm_max = limit,
             /* not under a protection's hold or a closing current limit */
             .integrate = sm.holding && c->action == KM_PROT_ACT_NONE && c->ilim.cap >= KM_CURRENT_LIMIT_OPEN,

@@ -26,6 +26,13 @@
 
 #define KM_CONTROL_TICK_US 1000u /* 1 kHz: sensing, position loop and output */
 
+/* A 0x68 stream's loop on the sub-count observer (1, the default) or on
+ * the counts and the fast speed as a move's (0: the 32 KiB STM32G031F6
+ * build, docs/footprint.md "What gives way"). */
+#ifndef KM_FEATURE_STREAM_OBS
+#define KM_FEATURE_STREAM_OBS 1
+#endif
+
 typedef struct {
     /* Byte scalars first: an M0 byte access reaches 32 bytes into a struct. */
     uint8_t action;   /* km_prot_action_t in force */

@@ -67,7 +67,7 @@ static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
     /* 10 deg: the integrator is for small errors */
     const int32_t e_d = km_clamp(km_sdiv1000(e_u), -100, 100);
     int32_t ki = (int32_t)g->ki_q8;
-    if (in->still) {
+    if (KM_FEATURE_HOLD_KI && in->still) {
         ki = prv_hold_ki(l, g, in, e_u, e_d, in_band);
         if (ki < 0) {
             return km_sdiv256000(l->i_acc);

@@ -19,6 +19,14 @@
 #define KM_HOLD_RETURN_BLEED_Q9 5 /* ... by 5/512 a tick */
 
 /* kp and kd shifted down while a 0x68 stream runs (docs/tuning.md "0x68 streams"). */
+/* A pushed hold's integrator refinements (1, the default): ki_hold growing
+ * with the error, the bleed while the shaft returns and inside the band
+ * (prv_hold_ki, docs/tuning.md); 0: a still hold integrates at ki as a
+ * moving one (the 32 KiB STM32G031F6 build, docs/footprint.md "What gives
+ * way"). */
+#ifndef KM_FEATURE_HOLD_KI
+#define KM_FEATURE_HOLD_KI 1
+#endif
 #define KM_STREAM_KP_SHIFT 1
 #define KM_STREAM_KD_SHIFT 3
 

@@ -63,6 +63,18 @@ option(KM_G031_EXT "stm32g031: extension command 0x7F and the fault log" ${KM_G0
 if(NOT KM_G031_EXT)
   list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_FEATURE_EXT=0)
 endif()
+# Control refinements that are not in docs/protocol.md (docs/footprint.md
+# "What gives way"): a 0x68 stream's loop on the sub-count observer (else
+# on the counts, as a move's), and a pushed hold's integrator refinements
+# (else a still hold integrates at ki, as a moving one; docs/tuning.md).
+option(KM_G031_STREAM_OBS "stm32g031: 0x68 streams on the sub-count observer" ${KM_G031_FEATURE_DEFAULT})
+if(NOT KM_G031_STREAM_OBS)
+  list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_FEATURE_STREAM_OBS=0)
+endif()
+option(KM_G031_HOLD_KI "stm32g031: a pushed hold's integrator refinements (ki_hold, bleeds)" ${KM_G031_FEATURE_DEFAULT})
+if(NOT KM_G031_HOLD_KI)
+  list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_FEATURE_HOLD_KI=0)
+endif()
 # The application links the bootloader's compact run-time routines
 # (boot/boot_rt.c: byte-loop mem*, bit-serial division) instead of
 # newlib's and libgcc's unrolled ones: smaller, slower. Off in the 64 KiB
