@@ -51,6 +51,10 @@ typedef struct {
     }
 uint32_t km_udiv_near(uint32_t n, uint32_t d, const km_recip_near_t *c);
 
+/* floor(sqrt(hi:lo)) for hi:lo < 2^62, 32-bit operations only
+ * (docs/control-design.md "Arithmetic"). */
+uint32_t km_isqrt(uint32_t hi, uint32_t lo);
+
 /* v bounded to [lo, hi]: lo below lo, else hi above hi (one copy, not inlined: flash). */
 int32_t km_clamp(int32_t v, int32_t lo, int32_t hi);
 /* v bounded to +-m: m above m, else -m below -m. */

@@ -140,26 +140,6 @@ static int32_t prv_speed_loop(km_motor_mode_t *m, const km_control_gains_t *g, i
     return prv_bound(pwm, 1000);
 }
 
-/* floor(sqrt(n)), two bits a step: no divide. */
-static uint32_t prv_isqrt(uint32_t n)
-{
-    uint32_t root = 0u;
-    uint32_t bit = 1u << 30;
-    while (bit > n) {
-        bit >>= 2;
-    }
-    while (bit != 0u) {
-        if (n >= root + bit) {
-            n -= root + bit;
-            root = (root >> 1) + bit;
-        } else {
-            root >>= 1;
-        }
-        bit >>= 2;
-    }
-    return root;
-}
-
 /* The room (0.1 deg) the run has left in its direction `dir`: to the end
  * of a counted run and, on a potentiometer product, to the edge of the
  * travel (km_axis_travel); KM_MOTOR_ROOM_FREE when nothing ends it. */
@@ -191,7 +171,7 @@ static uint32_t prv_approach_sq(const km_control_gains_t *g, int32_t room)
 /* `sq` = v^2 as a speed (0.1 deg/s), at least KM_MOTOR_CREEP_DDPS. */
 static int32_t prv_approach_ddps(uint32_t sq)
 {
-    const int32_t v = (int32_t)prv_isqrt(sq);
+    const int32_t v = (int32_t)km_isqrt(0u, sq);
     return v < KM_MOTOR_CREEP_DDPS ? KM_MOTOR_CREEP_DDPS : v;
 }
 

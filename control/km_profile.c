@@ -80,73 +80,6 @@ static int32_t prv_speed_for(int32_t d, int32_t ms, int32_t vmax)
     return v < vmax ? v : vmax;
 }
 
-/* Four bits of the radicand, two of the root, a step; 32-bit for roots
- * below 2^28 (docs/control-design.md "Arithmetic"). */
-#define PRV_SQRT_NIBBLES(w, n)                              \
-    for (; (n) > 0u; (n)--) {                               \
-        const uint32_t x = (rem << 4) | ((w) >> 28);        \
-        (w) <<= 4;                                          \
-        const uint32_t r8 = root << 3, t2 = (r8 << 1) + 4u; \
-        root <<= 2;                                         \
-        if (x >= t2) {                                      \
-            const uint32_t t3 = t2 + r8 + 5u;               \
-            if (x >= t3) {                                  \
-                rem = x - t3;                               \
-                root |= 3u;                                 \
-            } else {                                        \
-                rem = x - t2;                               \
-                root |= 2u;                                 \
-            }                                               \
-        } else if (x > r8) {                                \
-            rem = x - (r8 + 1u);                            \
-            root |= 1u;                                     \
-        } else {                                            \
-            rem = x;                                        \
-        }                                                   \
-    }
-
-/* floor(sqrt(hi:lo)) for hi:lo < 2^56, leading zero nibbles skipped. */
-static uint32_t prv_isqrt56(uint32_t hi, uint32_t lo)
-{
-    uint32_t root = 0, rem = 0;
-    unsigned n = 8u, m = 8u; /* nibbles left in hi, in lo */
-    if (hi == 0u) {
-        hi = lo;
-        m = 0u;
-        if (hi == 0u) {
-            return 0u;
-        }
-    }
-    while ((hi >> 24) == 0u) {
-        hi <<= 8;
-        n -= 2u;
-    }
-    while ((hi >> 28) == 0u) {
-        hi <<= 4;
-        n--;
-    }
-    PRV_SQRT_NIBBLES(hi, n)
-    PRV_SQRT_NIBBLES(lo, m)
-    return root;
-}
-
-/* floor(sqrt(hi:lo)) for hi:lo < 2^62: the nibble root of hi:lo / 2^8
- * times 16 is at most 15 below the root (docs/control-design.md "Arithmetic"). */
-static uint32_t prv_isqrt(uint32_t hi, uint32_t lo)
-{
-    if (hi < (1u << 24)) {
-        return prv_isqrt56(hi, lo);
-    }
-    uint32_t r = prv_isqrt56(hi >> 8, (lo >> 8) | (hi << 24)) << 4;
-    for (;;) {
-        const uint32_t n = r + 1u, sq_hi = km_umulhi(n, n);
-        if (sq_hi > hi || (sq_hi == hi && n * n > lo)) {
-            return r;
-        }
-        r = n;
-    }
-}
-
 void km_profile_reset(km_profile_t *p, int32_t pos_ddeg)
 {
     memset(p, 0, sizeof *p);
@@ -231,10 +164,10 @@ static int32_t prv_retime_cruise(int32_t v0, int32_t dm, int32_t t, int32_t a)
     const uint32_t ub = (uint32_t)b, b_hi = km_umulhi(ub, ub), b_lo = ub * ub;
     const uint32_t f_hi = (c_hi << 2) | (c_lo >> 30), f_lo = c_lo << 2;
     if (b <= 0 || b_hi < f_hi || (b_hi == f_hi && b_lo < f_lo)) {
-        return (int32_t)prv_isqrt(c_hi, c_lo); /* the triangle: as fast as a allows */
+        return (int32_t)km_isqrt(c_hi, c_lo); /* the triangle: as fast as a allows */
     }
     const uint32_t d_hi = b_hi - f_hi - (b_lo < f_lo ? 1u : 0u);
-    return (int32_t)((ub - prv_isqrt(d_hi, b_lo - f_lo)) >> 1);
+    return (int32_t)((ub - km_isqrt(d_hi, b_lo - f_lo)) >> 1);
 }
 
 /* `acc`, or the harder braking `v0` needs to stop within `dabs` u. */
@@ -371,7 +304,7 @@ static int32_t prv_brake_speed(const km_profile_t *p, uint32_t k, uint32_t d)
     if (hi > p->vsq_hi || (hi == p->vsq_hi && lo >= p->vsq_lo)) {
         return p->vmax;
     }
-    return (int32_t)prv_isqrt(hi, lo);
+    return (int32_t)km_isqrt(hi, lo);
 }
 
 /* The speed change a piece allows, remainder carried. */

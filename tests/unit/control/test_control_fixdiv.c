@@ -327,6 +327,34 @@ static void test_profile_equals_division_reference(void **state)
     }
 }
 
+/* km_isqrt (the profile's braking and retime roots, motor mode's approach
+ * speed) is floor(sqrt) for every value below 2^62: around every square
+ * of a 32-bit root's magnitudes, all of uint32, and random 62-bit values. */
+static void test_isqrt_matches_64_bit_root(void **state)
+{
+    (void)state;
+    for (uint32_t b = 0; b < 31u; b++) {
+        for (uint32_t k = 0; k < 64u; k++) {
+            const uint64_t r = ((uint64_t)1 << b) + k * (((uint64_t)1 << b) / 64u + 1u);
+            for (int d = -1; d <= 1; d++) {
+                const uint64_t x = r * r + (uint64_t)(int64_t)d;
+                if (r >= ((uint64_t)1 << 31) || x >= ((uint64_t)1 << 62)) {
+                    continue;
+                }
+                assert_int_equal(km_isqrt((uint32_t)(x >> 32), (uint32_t)x), ref_isqrt64(x));
+            }
+        }
+    }
+    for (unsigned k = 0; k < 1000000u; k++) {
+        const uint32_t n = rnd() >> (rnd() % 32u);
+        assert_int_equal(km_isqrt(0u, n), ref_isqrt64(n));
+        const uint64_t x = (((uint64_t)rnd() << 32) | rnd()) >> (2u + rnd() % 62u);
+        assert_int_equal(km_isqrt((uint32_t)(x >> 32), (uint32_t)x), ref_isqrt64(x));
+    }
+    assert_int_equal(km_isqrt(0u, 0xFFFFFFFFu), 65535u);
+    assert_int_equal(km_isqrt(0x3FFFFFFFu, 0xFFFFFFFFu), ref_isqrt64(((uint64_t)1 << 62) - 1u));
+}
+
 /* Long moves (up to 80,000 deg) at speeds from 2^28 to 2^30 u/s and hard
  * accelerations: their braking roots are of values from 2^56 up, the root
  * taken from a shifted one and stepped up; equal to the 64-bit root at
@@ -576,6 +604,7 @@ int main(void)
         cmocka_unit_test(test_unsigned_quotients_match_c),
         cmocka_unit_test(test_signed_quotients_match_c),
         cmocka_unit_test(test_profile_equals_division_reference),
+        cmocka_unit_test(test_isqrt_matches_64_bit_root),
         cmocka_unit_test(test_profile_fast_long_moves_equal_reference),
         cmocka_unit_test(test_retime_cruise_equals_64_bit_reference),
         cmocka_unit_test(test_udiv_near_matches_c),
