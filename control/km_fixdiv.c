@@ -11,6 +11,7 @@ static __attribute__((noinline)) uint32_t prv_mulhi_shr(uint32_t n, uint32_t m, 
     return km_umulhi(n, m) >> s;
 }
 
+#if KM_CONTROL_COMPACT
 /* A divisor of the tick: floor(n / d) = floor((n >> pre) / d') with
  * d' = d / 2^pre, its reciprocal m and shift s (km_fixdiv.h). */
 typedef struct {
@@ -53,6 +54,56 @@ static __attribute__((noinline)) int32_t prv_sdiv(int32_t n, unsigned k)
     {                                 \
         return prv_sdiv(n, PRV_D##d); \
     }
+
+#else
+
+#define PRV_INLINE static inline __attribute__((always_inline))
+
+/* floor(n / d), 0 at once below d (a compare, not a call). */
+PRV_INLINE uint32_t prv_udiv(uint32_t n, uint32_t d, uint32_t m, uint32_t s)
+{
+    return n < d ? 0u : prv_mulhi_shr(n, m, s);
+}
+
+PRV_INLINE uint32_t prv_udiv10(uint32_t n)
+{
+    return prv_udiv(n, 10u, KM_FIXDIV_M10, 3u);
+}
+
+PRV_INLINE uint32_t prv_udiv100(uint32_t n)
+{
+    return prv_udiv(n, 100u, KM_FIXDIV_M100, 6u);
+}
+
+PRV_INLINE uint32_t prv_udiv1000(uint32_t n)
+{
+    return prv_udiv(n, 1000u, KM_FIXDIV_M1000, 6u);
+}
+
+/* 2560 = 2^9 x 5: floor(floor(n / 2^9) / 5) = floor(n / 2560). */
+PRV_INLINE uint32_t prv_udiv2560(uint32_t n)
+{
+    return prv_udiv(n >> 9, 5u, KM_FIXDIV_M5, 2u);
+}
+
+/* 256000 = 2^8 x 1000, likewise. */
+PRV_INLINE uint32_t prv_udiv256000(uint32_t n)
+{
+    return prv_udiv(n >> 8, 1000u, KM_FIXDIV_M1000, 6u);
+}
+
+/* Each unsigned quotient and its signed twin (toward zero, as C's `/`). */
+#define PRV_DIVS(d)                                                             \
+    uint32_t km_udiv##d(uint32_t n)                                             \
+    {                                                                           \
+        return prv_udiv##d(n);                                                  \
+    }                                                                           \
+    int32_t km_sdiv##d(int32_t n)                                               \
+    {                                                                           \
+        const uint32_t q = prv_udiv##d(n < 0 ? 0u - (uint32_t)n : (uint32_t)n); \
+        return n < 0 ? -(int32_t)q : (int32_t)q;                                \
+    }
+#endif
 
 PRV_DIVS(10)
 PRV_DIVS(100)
@@ -102,6 +153,7 @@ __attribute__((noinline)) uint32_t km_udiv_near(uint32_t n, uint32_t d, const km
     return q;
 }
 
+#if KM_CONTROL_COMPACT
 __attribute__((noinline)) int32_t km_clamp(int32_t v, int32_t lo, int32_t hi)
 {
     return v < lo ? lo : (v > hi ? hi : v);
@@ -111,65 +163,16 @@ __attribute__((noinline)) int32_t km_sat(int32_t v, int32_t m)
 {
     return v > m ? m : (v < -m ? -m : v);
 }
-
-/* Four bits of the radicand, two of the root, a step; 32-bit for roots
- * below 2^28 (docs/control-design.md "Arithmetic"). */
-#define PRV_SQRT_NIBBLES(w, n)                              \
-    for (; (n) > 0u; (n)--) {                               \
-        const uint32_t x = (rem << 4) | ((w) >> 28);        \
-        (w) <<= 4;                                          \
-        const uint32_t r8 = root << 3, t2 = (r8 << 1) + 4u; \
-        root <<= 2;                                         \
-        if (x >= t2) {                                      \
-            const uint32_t t3 = t2 + r8 + 5u;               \
-            if (x >= t3) {                                  \
-                rem = x - t3;                               \
-                root |= 3u;                                 \
-            } else {                                        \
-                rem = x - t2;                               \
-                root |= 2u;                                 \
-            }                                               \
-        } else if (x > r8) {                                \
-            rem = x - (r8 + 1u);                            \
-            root |= 1u;                                     \
-        } else {                                            \
-            rem = x;                                        \
-        }                                                   \
-    }
-
-/* floor(sqrt(hi:lo)) for hi:lo < 2^56, leading zero nibbles skipped. */
-static uint32_t prv_isqrt56(uint32_t hi, uint32_t lo)
-{
-    uint32_t root = 0, rem = 0;
-    unsigned n = 8u, m = 8u; /* nibbles left in hi, in lo */
-    if (hi == 0u) {
-        hi = lo;
-        m = 0u;
-        if (hi == 0u) {
-            return 0u;
-        }
-    }
-    while ((hi >> 24) == 0u) {
-        hi <<= 8;
-        n -= 2u;
-    }
-    while ((hi >> 28) == 0u) {
-        hi <<= 4;
-        n--;
-    }
-    PRV_SQRT_NIBBLES(hi, n)
-    PRV_SQRT_NIBBLES(lo, m)
-    return root;
-}
+#endif
 
 /* floor(sqrt(hi:lo)) for hi:lo < 2^62: the nibble root of hi:lo / 2^8
  * times 16 is at most 15 below the root (docs/control-design.md "Arithmetic"). */
 uint32_t km_isqrt(uint32_t hi, uint32_t lo)
 {
     if (hi < (1u << 24)) {
-        return prv_isqrt56(hi, lo);
+        return km_isqrt56(hi, lo);
     }
-    uint32_t r = prv_isqrt56(hi >> 8, (lo >> 8) | (hi << 24)) << 4;
+    uint32_t r = km_isqrt56(hi >> 8, (lo >> 8) | (hi << 24)) << 4;
     for (;;) {
         const uint32_t n = r + 1u, sq_hi = km_umulhi(n, n);
         if (sq_hi > hi || (sq_hi == hi && n * n > lo)) {

@@ -8,6 +8,13 @@
 
 #include <stdint.h>
 
+/* 1 in the 32 KiB STM32G031F6 build (boards/stm32g031/board.cmake): the
+ * forms that spend tick instructions to save flash (docs/footprint.md
+ * "Control: compact forms"); 0 keeps the faster ones. Same results. */
+#ifndef KM_CONTROL_COMPACT
+#define KM_CONTROL_COMPACT 0
+#endif
+
 /* High 32 bits of a x b, exact, from four 16 x 16 products. */
 static inline __attribute__((always_inline)) uint32_t km_umulhi(uint32_t a, uint32_t b)
 {
@@ -51,13 +58,78 @@ typedef struct {
     }
 uint32_t km_udiv_near(uint32_t n, uint32_t d, const km_recip_near_t *c);
 
+/* Four bits of the radicand, two of the root, a step; 32-bit for roots
+ * below 2^28 (docs/control-design.md "Arithmetic"). */
+#define KM_SQRT_NIBBLES(w, n)                               \
+    for (; (n) > 0u; (n)--) {                               \
+        const uint32_t x = (rem << 4) | ((w) >> 28);        \
+        (w) <<= 4;                                          \
+        const uint32_t r8 = root << 3, t2 = (r8 << 1) + 4u; \
+        root <<= 2;                                         \
+        if (x >= t2) {                                      \
+            const uint32_t t3 = t2 + r8 + 5u;               \
+            if (x >= t3) {                                  \
+                rem = x - t3;                               \
+                root |= 3u;                                 \
+            } else {                                        \
+                rem = x - t2;                               \
+                root |= 2u;                                 \
+            }                                               \
+        } else if (x > r8) {                                \
+            rem = x - (r8 + 1u);                            \
+            root |= 1u;                                     \
+        } else {                                            \
+            rem = x;                                        \
+        }                                                   \
+    }
+
+/* floor(sqrt(hi:lo)) for hi:lo < 2^56, leading zero nibbles skipped
+ * (the profile's braking speed calls it directly outside the compact build). */
+static inline uint32_t km_isqrt56(uint32_t hi, uint32_t lo)
+{
+    uint32_t root = 0, rem = 0;
+    unsigned n = 8u, m = 8u; /* nibbles left in hi, in lo */
+    if (hi == 0u) {
+        hi = lo;
+        m = 0u;
+        if (hi == 0u) {
+            return 0u;
+        }
+    }
+    while ((hi >> 24) == 0u) {
+        hi <<= 8;
+        n -= 2u;
+    }
+    while ((hi >> 28) == 0u) {
+        hi <<= 4;
+        n--;
+    }
+    KM_SQRT_NIBBLES(hi, n)
+    KM_SQRT_NIBBLES(lo, m)
+    return root;
+}
+
 /* floor(sqrt(hi:lo)) for hi:lo < 2^62, 32-bit operations only
  * (docs/control-design.md "Arithmetic"). */
 uint32_t km_isqrt(uint32_t hi, uint32_t lo);
 
+#if KM_CONTROL_COMPACT
 /* v bounded to [lo, hi]: lo below lo, else hi above hi (one copy, not inlined: flash). */
 int32_t km_clamp(int32_t v, int32_t lo, int32_t hi);
 /* v bounded to +-m: m above m, else -m below -m. */
 int32_t km_sat(int32_t v, int32_t m);
+#else
+/* v bounded to [lo, hi]: lo below lo, else hi above hi (inlined: tick instructions). */
+static inline int32_t km_clamp(int32_t v, int32_t lo, int32_t hi)
+{
+    return v < lo ? lo : (v > hi ? hi : v);
+}
+
+/* v bounded to +-m: m above m, else -m below -m. */
+static inline int32_t km_sat(int32_t v, int32_t m)
+{
+    return v > m ? m : (v < -m ? -m : v);
+}
+#endif
 
 #endif

@@ -304,6 +304,11 @@ static int32_t prv_brake_speed(const km_profile_t *p, uint32_t k, uint32_t d)
     if (hi > p->vsq_hi || (hi == p->vsq_hi && lo >= p->vsq_lo)) {
         return p->vmax;
     }
+#if !KM_CONTROL_COMPACT
+    if ((uint32_t)p->vmax < (1u << 28)) {
+        return (int32_t)km_isqrt56(hi, lo);
+    }
+#endif
     return (int32_t)km_isqrt(hi, lo);
 }
 

@@ -75,6 +75,20 @@ option(KM_G031_HOLD_KI "stm32g031: a pushed hold's integrator refinements (ki_ho
 if(NOT KM_G031_HOLD_KI)
   list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_FEATURE_HOLD_KI=0)
 endif()
+# control/'s compact forms (one division body over a table of divisors,
+# clamps not inlined, the profile's braking root through km_isqrt): fewer
+# bytes, more tick instructions (docs/footprint.md). On in the 32 KiB
+# build only.
+if(KM_G031_FEATURE_DEFAULT)
+  set(KM_G031_CONTROL_COMPACT_DEFAULT OFF)
+else()
+  set(KM_G031_CONTROL_COMPACT_DEFAULT ON)
+endif()
+option(KM_G031_CONTROL_COMPACT "stm32g031: control/'s compact forms (KM_CONTROL_COMPACT)"
+       ${KM_G031_CONTROL_COMPACT_DEFAULT})
+if(KM_G031_CONTROL_COMPACT)
+  list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_CONTROL_COMPACT=1)
+endif()
 # The application links the bootloader's compact run-time routines
 # (boot/boot_rt.c: byte-loop mem*, bit-serial division) instead of
 # newlib's and libgcc's unrolled ones: smaller, slower. Off in the 64 KiB
