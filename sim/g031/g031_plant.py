@@ -38,12 +38,18 @@ def _sources():
         os.path.join(PLANT_DIR, n) for n in os.listdir(PLANT_DIR) if n.endswith((".c", ".h")))
 
 
+def _read(path):
+    """A file's bytes (closed at once)."""
+    with open(path, "rb") as f:
+        return f.read()
+
+
 def library():
     """The plant library, built on first use (cc); cached by source hash."""
     if _LIB:
         return _LIB[0]
     srcs = _sources()
-    digest = hashlib.sha256(b"".join(open(p, "rb").read() for p in srcs)).hexdigest()[:16]
+    digest = hashlib.sha256(b"".join(_read(p) for p in srcs)).hexdigest()[:16]
     path = os.path.join(tempfile.gettempdir(), "vg031-plant-%s-%d.so" % (digest, os.getuid()))
     if not os.path.exists(path):
         tmp = "%s.%d" % (path, os.getpid())
