@@ -87,9 +87,9 @@ set_property(TEST g031_bus_protect APPEND PROPERTY ENVIRONMENT_MODIFICATION
 set_tests_properties(g031_update_on_bus g031_bus_protect PROPERTIES LABELS "g031;bus" TIMEOUT 2400 RUN_SERIAL TRUE
   PASS_REGULAR_EXPRESSION "all checks passed")
 # The held-shaft stall of that bench replayed in virtual time on one virtual
-# G031, with the 0x65 before it shifted by 0-3 ms (the spread the master's
-# timing gives it on the bus): the bench's hold-phase load must trip the
-# stall at every shift (docs/virtual-g031.md "Found: the held-shaft stall
+# G031, with the 0x65 before it shifted by 0-3 ms (on the bus the master's
+# timing moves it from run to run): the bench's hold-phase load must trip
+# the stall at every shift (docs/virtual-g031.md "Found: the held-shaft stall
 # that did not trip").
 add_test(NAME g031_protect_hold_stall_any_phase
   COMMAND ${KM_DEBIAN_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/g031/test_protect_hold_stall.py ${KM_G031_IMAGES})

@@ -7,8 +7,8 @@ STM32G031 running the shipped bootloader + application (docs/protocol.md
 docs/virtual-g031.md "Found: the held-shaft stall that did not trip").
 
 The bus test reaches that stall with a history its master's timing
-shapes: the 0x65 that brings the shaft back from its end stop lands a few
-ms earlier or later in the servo's time from run to run (the master is a
+shapes: the 0x65 that brings the shaft back from its end stop lands
+earlier or later in the servo's time from run to run (the master is a
 process of the host, the bus runs on virtual time). Here the same history
 is played at fixed virtual times, with that 0x65 shifted by 0-3 ms; the
 hold-phase load of protect.txt must trip the stall (hold action, release
