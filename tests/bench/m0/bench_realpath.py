@@ -20,8 +20,13 @@ from a handler into sleep-on-exit:
                 km_hal_timer_at (the answer timer armed), or to the next WFI
                 for a frame with no answer;
   control tick  the segment that runs km_control_step (SysTick wake-up,
-                sensor read, step, live values, motor drive), with the
-                inclusive counts of the sensor read and the motor drive.
+                sensor read, step, live values, motor drive), for every
+                tick of a span on a fresh machine whose shaft is the plant
+                (sim/plant): 800 ms torque off, 800 ms from a 0x65 move's
+                arrival (speeding up, cruise, braking, settling, hold), a
+                200 ms 0x68 stream; the worst, its tick and phase, the
+                mean, and where the worst tick's instructions go by
+                (innermost, inlining told apart) source function.
 
 Cycles: each instruction's Cortex-M0+ count (ARM DDI 0484C §3.3: loads and
 stores 2, taken branches 2, BL 3, PUSH/POP 1+N, POP {pc} 3+N, MSR/MRS/DMB
@@ -51,6 +56,7 @@ except ImportError:
              " PYTHONPATH=sim/g031 /usr/bin/python3 ... (docs/benchmarks.md)")
 g031_deps.require()
 import vg031  # noqa: E402
+import g031_plant  # noqa: E402
 from unicorn import UC_HOOK_CODE  # noqa: E402
 
 MS = 1_000_000
@@ -140,9 +146,9 @@ class Disasm:
 class Bench:
     """The machine, its recorder and the image's landmarks."""
 
-    def __init__(self, elf):
+    def __init__(self, elf, plant=None):
         self.d = Disasm(elf)
-        self.m = vg031.Machine(vg031.flash_from_images(elf=elf), elves=[elf])
+        self.m = vg031.Machine(vg031.flash_from_images(elf=elf), elves=[elf], plant=plant)
         self.trace = []         # executed PCs, while recording
         self.entries = []       # trace index of each exception entry while recording
         self.sleeps = []        # trace index after each return into sleep-on-exit while recording
@@ -387,54 +393,194 @@ def lists(b, rows, figs, step):
                          "<= %d%s" % (TARGET_LAST, "" if ours else " / <= 2")))
 
 
-def part(b, name, counts):
-    """A tick part's instruction count, or why there is none: under LTO the
-    function may be inlined into the main loop, leaving no symbol to cut at."""
-    if counts:
-        return "%d" % counts[0]
-    return "inlined" if name not in b.d.sym else "not reached"
+TICK_SPAN_MS = 800   # a move of 500 ms, its arrival and settling, then hold
+MOVE_MS = 500
+STREAM_MS = 200      # 0x68 set-points, one every STREAM_EVERY_MS
+STREAM_EVERY_MS = 10
 
 
-def ticks(b, rows, figs):
-    """Control ticks, torque off and moving, with the real sensor read and
-    motor drive."""
-    for label, setup in (("torque off", []),
-                         ("moving (0x64 = 2, 0x65 to +45.0 deg in 500 ms)",
-                          [frame(OWN_ID, 0x03, b"\x64\x02"), frame(OWN_ID, 0x03, b"\x65\xc2\x01\xf4\x01")])):
-        for f in setup:
-            b.exchange(f, 2)
-        b.record(True)
-        b.m.run_until(b.m.now + 20 * MS)
-        b.record(False)
-        got = []
-        step_at = b.d.sym[TICK[0]] if TICK[0] in b.d.sym else b.d.sym[TICK[1]]
-        counts = {seg: sum(1 for i in range(seg[0], seg[1]) if b.trace[i] == step_at) for seg in b.segments()}
-        ks = [k for k in counts.values() if k]
-        # ticks per wake-up: 1, or 2 where a late tick caught up (docs/benchmarks.md)
-        per = max(set(ks), key=ks.count) if ks else None
-        for (lo, hi), k in counts.items():
-            if k == 0 or k != per:
-                continue
-            ins_, cyc_ = b.cost(lo, hi)
-            all_ = (ins_ // k, cyc_ // k)
-            sens = b.inclusive("km_hal_sensors_read", lo, hi)
-            step = b.inclusive("km_control_step", lo, hi)
-            divs = sum(1 for i in range(lo, hi) if b.trace[i] in b.divs) / k
-            got.append((all_, sens, step, divs))
-        if not got:
-            sys.exit("bench_realpath: no control tick measured (%s)" % label)
-        w = max(got, key=lambda g: g[0][0])
-        if per and per > 1:
-            label += ", %d ticks per wake-up: the mean" % per
-        key = "tick_" + label.split()[0] + "_" + label.split()[1].strip("(,")
-        divs = max(g[3] for g in got)
-        figs[key] = {"instructions": w[0][0], "cycles": w[0][1], "library_divisions": divs,
-                     "sensors": list(w[1]) if w[1] else None, "step": list(w[2]) if w[2] else None}
-        rows.append(("control tick all in, idle to idle, %s, worst of %d (sensor read %s, "
-                     "km_control_step %s; library divisions per tick %g)" % (label, len(got),
-                                                                    part(b, "km_hal_sensors_read", w[1]),
-                                                                    part(b, "km_control_step", w[2]), divs),
-                     "%d" % w[0][0], "%d" % w[0][1], "<= %d" % TARGET_TICK))
+class Funcs:
+    """The function each address runs: the innermost source function, with
+    what the compiler inlined told apart (addr2line -i on the image)."""
+
+    def __init__(self, elf):
+        self.elf = elf
+        self.name = {}
+
+    def of(self, addrs):
+        """{address: innermost function} for the addresses (one addr2line run)."""
+        need = sorted(set(addrs) - set(self.name))
+        if need:
+            out = subprocess.run(["arm-none-eabi-addr2line", "-a", "-i", "-f", "-e", self.elf]
+                                 + ["%x" % a for a in need], check=True, capture_output=True, text=True).stdout
+            lines = out.splitlines()
+            for j, line in enumerate(lines):
+                if line.startswith("0x") and j + 1 < len(lines):
+                    self.name[int(line, 16)] = lines[j + 1]   # the innermost: first after the address
+        return {a: self.name[a] for a in addrs}
+
+
+def tick_segments(b):
+    """Every control tick in the recording, in order: [lo, hi, ticks in the
+    segment, shared with a frame's dispatch, tick number, frames dispatched
+    before it, ticks since the last of them], numbered from the first tick
+    after the first frame's dispatch (1), or from the recording's start
+    without a frame."""
+    step_at = b.d.sym[TICK[0]] if TICK[0] in b.d.sym else b.d.sym[TICK[1]]
+    out, frames, since = [], 0, 0
+    for lo, hi in b.segments():
+        k = sum(1 for i in range(lo, hi) if b.trace[i] == step_at)
+        if b.first(DISPATCH, lo, hi) is not None:
+            frames, since = frames + 1, 0
+        if k:
+            since += 1
+            out.append([lo, hi, k, since == 1 and frames > 0 and b.first(DISPATCH, lo, hi) is not None,
+                        0, frames, since])
+    first = next((n for n, seg in enumerate(out) if seg[5]), 0)
+    for n, seg in enumerate(out):
+        seg[4] = n + 1 - first
+    return out
+
+
+PHASES = ("start", "accelerating", "cruise", "braking", "settling", "hold")
+
+
+def tick_divisions(b, seg):
+    """Library divisions the tick itself calls in a segment: from the entry
+    of prv_control_tick (or km_control_step) to its return; the rest of the
+    wake-up (idle store work in the main loop) is not the tick."""
+    lo, hi = seg[0], seg[1]
+    n, i = 0, lo
+    while i < hi:
+        j = b.first(TICK[::-1], i, hi)
+        if j is None:
+            break
+        ret = b.trace[j - 1] + 4
+        end = next((k for k in range(j, hi) if b.trace[k] == ret), hi)
+        n += sum(1 for k in range(j, end) if b.trace[k] in b.divs)
+        i = end
+    return n
+
+
+def phase_of(pos, n, target):
+    """The phase of the move at tick n (1-based) from the shaft's position
+    (0.1 deg) at each tick: by its speed over +-5 ticks against the peak."""
+    v = [abs(pos[min(len(pos) - 1, i + 5)] - pos[max(0, i - 5)]) for i in range(len(pos))]
+    vmax = max(v) or 1
+    peak = v.index(vmax)
+    i = max(0, min(len(pos) - 1, n - 1))
+    moved_later = any(abs(pos[j] - pos[i]) > 2 for j in range(i, min(len(pos), i + 20)))
+    if v[i] >= 0.9 * vmax:
+        return "cruise"
+    if i < peak:
+        return "accelerating" if v[i] > 0 or moved_later else "start"
+    if abs(pos[i] - target) > 10:
+        return "braking"
+    return "settling" if moved_later else "hold"
+
+
+def tick_run(b, ms, send=(), every_ms=0):
+    """Records `ms` ms, sending the frames of `send` (one every `every_ms`,
+    the first at once, each clear of a tick): every tick in it, with the
+    shaft position at each."""
+    pos = []
+    plant = b.m.plant
+    b.m.take_output()
+    b.record(True)
+    t0 = b.m.now
+    for j, f in enumerate(send):
+        if j:
+            b.m.run_until(t0 + j * every_ms * MS)
+        b.clear_of_tick(f)
+        b.m.run_until(b.m.send(f, BAUD) + MS // 2)
+    # the shaft at each ms, sampled as the run goes
+    step = MS
+    while b.m.now < t0 + ms * MS:
+        b.m.run_until(min(t0 + ms * MS, b.m.now + step))
+        pos.append(plant.readings[0])
+    b.record(False)
+    return pos
+
+
+def worst_by_phase(b, costs, pos, target):
+    """{phase: the worst tick's instructions in it} of a move."""
+    out = {}
+    for (ins, _cyc), seg in costs:
+        ph = phase_of(pos, seg[4], target)
+        out[ph] = max(out.get(ph, 0), ins)
+    return out
+
+
+def by_function(b, funcs, seg, top=8):
+    """The functions a tick's segment spent most instructions in:
+    [(innermost source function, instructions)], the most first."""
+    names = funcs.of(b.trace[seg[0]:seg[1]])
+    count = {}
+    for i in range(seg[0], seg[1]):
+        f = names[b.trace[i]]
+        count[f] = count.get(f, 0) + 1
+    return sorted(count.items(), key=lambda kv: -kv[1])[:top]
+
+
+def tick_figures(b, funcs, label, key, pos, target, rows, figs, every_ms=0):
+    """The worst, mean and worst's place of every tick recorded, and where
+    the worst tick's instructions go."""
+    segs = tick_segments(b)
+    if not segs:
+        sys.exit("bench_realpath: no control tick measured (%s)" % label)
+    alone = [s for s in segs if s[2] == 1 and not s[3]]
+    costs = [(b.cost(s[0], s[1]), s) for s in alone]
+    (ins, cyc), ws = max(costs, key=lambda c: c[0][0])
+    mean = sum(c[0][0] for c in costs) / len(costs)
+    n = ws[4]
+    if target is not None:
+        phase = phase_of(pos, n, target)
+    elif every_ms:
+        phase = "tick %d after set-point %d" % (ws[6], ws[5])
+    else:
+        phase = "idle"
+    divs = max(tick_divisions(b, s) for s in segs)
+    wake_divs = max(sum(1 for i in range(s[0], s[1]) if b.trace[i] in b.divs) for s in segs)
+    per_phase = worst_by_phase(b, costs, pos, target) if target is not None else {}
+    top = by_function(b, funcs, ws)
+    figs[key] = {"instructions": ins, "cycles": cyc, "library_divisions": divs, "wake_up_divisions": wake_divs,
+                 "ticks": len(segs), "measured": len(alone), "mean": round(mean, 1), "worst_tick": n,
+                 "worst_phase": phase, "shared": sum(1 for s in segs if s[3]),
+                 "double": sum(1 for s in segs if s[2] > 1), "worst_functions": top,
+                 "worst_by_phase": per_phase, "shaft_end_ddeg": pos[-1]}
+    rows.append(("control tick all in, idle to idle, %s: worst of every tick (%d; %d shared a frame's"
+                 " wake-up, %d ran 2 ticks, left out), at tick %d (%s) / mean (library divisions: in a tick %d,"
+                 " in a tick's wake-up %d)"
+                 % (label, len(alone), figs[key]["shared"], figs[key]["double"], n, phase, divs, wake_divs),
+                 "%d / %.0f" % (ins, mean), "%d" % cyc, "<= %d" % TARGET_TICK))
+    if per_phase:
+        rows.append(("  worst tick by phase: " + ", ".join("%s %d" % (ph, per_phase[ph]) for ph in PHASES
+                                                            if ph in per_phase), "", "", ""))
+    rows.append(("  worst tick's instructions by function: " +
+                 ", ".join("%s %d" % kv for kv in top), "", "", ""))
+
+
+def ticks(elf, rows, figs):
+    """Every control tick, torque off and through a whole move (the
+    command's arrival, speeding up, cruise, braking, settling, hold) and
+    under a 0x68 stream, on a fresh machine with the plant (sim/plant) as
+    the shaft: the same ticks whatever else the bench measured."""
+    b = Bench(elf, plant=g031_plant.Plant("realistic"))
+    b.boot()
+    funcs = Funcs(elf)
+    pos = tick_run(b, TICK_SPAN_MS)
+    tick_figures(b, funcs, "torque off, %d ms" % TICK_SPAN_MS, "tick_torque_off", pos, None, rows, figs)
+    b.exchange(frame(OWN_ID, 0x03, b"\x64\x02"), 20)
+    move = frame(OWN_ID, 0x03, b"\x65\xc2\x01\xf4\x01")
+    start = b.m.plant.readings[0]
+    pos = tick_run(b, TICK_SPAN_MS, [move])
+    tick_figures(b, funcs, "moving (0x64 = 2, 0x65 to +45.0 deg in %d ms from %+.1f deg), %d ms from the"
+                 " command's arrival" % (MOVE_MS, start / 10, TICK_SPAN_MS), "tick_moving", pos, 450, rows, figs)
+    pts = [frame(OWN_ID, 0x03, b"\x68" + (450 - 20 * j).to_bytes(2, "little", signed=True))
+           for j in range(STREAM_MS // STREAM_EVERY_MS)]
+    pos = tick_run(b, STREAM_MS, pts, STREAM_EVERY_MS)
+    tick_figures(b, funcs, "0x68 stream (a set-point every %d ms, 45.0 -> 7.0 deg), %d ms"
+                 % (STREAM_EVERY_MS, STREAM_MS), "tick_stream", pos, None, rows, figs, STREAM_EVERY_MS)
 
 
 def measure(elf, only=("byte", "tick", "lists"), step=1):
@@ -446,7 +592,7 @@ def measure(elf, only=("byte", "tick", "lists"), step=1):
     if "byte" in only:
         per_byte(b, rows, figs)
     if "tick" in only:
-        ticks(b, rows, figs)
+        ticks(elf, rows, figs)
     if "lists" in only:
         lists(b, rows, figs, step)
     return rows, figs
