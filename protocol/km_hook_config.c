@@ -30,32 +30,22 @@ void km_wr_restart(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t le
     }
 }
 
-/* A default packed as km_reg_default() packs it (the wire bytes of a
- * fixed layout shorter than 4). Always inlined: with a constant layout it
- * folds to a mask or nothing. */
-static inline __attribute__((always_inline)) uint32_t prv_pack_default(uint32_t v, km_layout_t layout)
-{
-    const uint8_t size = km_reg_fixed_size_const(layout);
-    return size > 0u && size < 4u ? v & ((1u << (8u * size)) - 1u) : v;
-}
-
-/* The registers a user-data reset writes back and their defaults; returns how many ("User-data reset"). */
+/* The registers a user-data reset writes back and their defaults, in
+ * table order; returns how many ("User-data reset"). */
 static uint8_t prv_reset_list(const km_product_t *p, uint8_t level, uint8_t *regs, uint8_t *addrs,
                               uint32_t *values)
 {
     uint8_t n = 0;
-    const bool keep_ids = level == 1;
-#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr)     \
-    if ((persisted) && ((access)&KM_W) &&                                              \
-        !(keep_ids && (KM_REG_##ident == KM_REG_ID || KM_REG_##ident == KM_REG_BAUD || \
-                       KM_REG_##ident == KM_REG_ZERO_OFFSET2))) {                      \
-        regs[n] = (uint8_t)KM_REG_##ident;                                             \
-        addrs[n] = (addr);                                                             \
-        values[n] = prv_pack_default((uint32_t)(def), (layout));                       \
-        n++;                                                                           \
+    for (uint8_t i = 0; i < (uint8_t)KM_REG_COUNT; i++) {
+        const km_reg_t *t = &km_reg_table[i];
+        const bool kept = level == 1u && (i == KM_REG_ID || i == KM_REG_BAUD || i == KM_REG_ZERO_OFFSET2);
+        if (t->persisted && (t->access & KM_W) && !kept) {
+            regs[n] = i;
+            addrs[n] = t->addr;
+            values[n] = km_reg_default((km_reg_index_t)i, p);
+            n++;
+        }
     }
-#include "km_registers.def"
-#undef KM_REG
     return n;
 }
 
