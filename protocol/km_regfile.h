@@ -12,15 +12,17 @@
 #include "km_registers.h"
 #include "km_status.h"
 
+/* Byte fields first: every hook reaches them with one short load or store
+ * (docs/footprint.md "Smaller without a change of behaviour"). */
 typedef struct {
     const km_product_t *product;
-    uint32_t value[KM_REG_COUNT]; /* wire bytes packed LE */
-    uint32_t gen;                 /* bumped on every applied register change */
-    km_live_t live;               /* control's last report */
     uint8_t hw_latched;           /* 0x35, latched until restart */
     uint8_t flags;                /* bits 5/6 of the command being handled */
     uint8_t unreported;           /* bits 5/6 no status answer has carried yet */
     uint32_t prng;                /* xorshift32 state for the 0x01 random byte */
+    uint32_t gen;                 /* bumped on every applied register change */
+    km_live_t live;               /* control's last report */
+    uint32_t value[KM_REG_COUNT]; /* wire bytes packed LE */
 } km_regfile_t;
 
 /* Defaults, then the persisted values (in table order of the P registers;
