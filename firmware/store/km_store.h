@@ -41,21 +41,23 @@ typedef enum {
     KM_STORE_ERR_FLASH, /* program/erase error or read-back mismatch: old values stay */
 } km_store_status_t;
 
-/* All RAM of the store; contents are private. */
+/* All RAM of the store; contents are private. The array last: the
+ * scalars stay within reach of one short load or store. */
 typedef struct {
     const km_flash_t *flash;
     const km_store_schema_t *schema;
-    uint32_t values[KM_STORE_MAX_KEYS]; /* committed values, schema order */
-    uint32_t hash;                      /* of the schema's key list */
-    uint32_t gen;                       /* generation of the active page's snapshot (the highest read) */
-    uint32_t tail;                      /* next byte offset to program in the active page, once own */
-    uint32_t suspect;                   /* pages without a valid snapshot: erased by the first commit */
-    uint32_t erased;                    /* pages erased and blank-checked in this session, untouched since */
-    uint8_t active;                     /* page the values come from, or KM_STORE_NO_PAGE */
-    uint8_t target;                     /* page the session's first commit erases and writes */
+    uint32_t hash;    /* of the schema's key list */
+    uint32_t gen;     /* generation of the active page's snapshot (the highest read) */
+    uint32_t tail;    /* next byte offset to program in the active page, once own */
+    uint32_t suspect; /* pages without a valid snapshot: erased by the first commit */
+    uint32_t erased;  /* pages erased and blank-checked in this session, untouched since */
+    uint8_t active;   /* page the values come from, or KM_STORE_NO_PAGE */
+    uint8_t target;   /* page the session's first commit erases and writes */
     bool mounted;
-    bool own; /* this session erased the active page and confirmed its snapshot:
-                 deltas go after tail; before that every commit compacts */
+    /* this session erased the active page and confirmed its snapshot:
+     * deltas go after tail; before that every commit compacts */
+    bool own;
+    uint32_t values[KM_STORE_MAX_KEYS]; /* committed values, schema order */
 } km_store_t;
 
 /* Reads the flash and loads values (schema order) into values_out (may be
