@@ -7,7 +7,7 @@
 
 const km_reg_t km_reg_table[KM_REG_COUNT] = {
 #define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) \
-    {addr, access, persisted, layout, (uint8_t)(multi)},
+    {addr, layout, access, persisted, (uint8_t)(multi)},
 #include "km_registers.def"
 #undef KM_REG
 };

@@ -48,12 +48,13 @@ enum {
  * (the .def's `multi` column; 0 = not multi-writable). */
 #define KM_K(n) (1u << (n))
 
+/* Three bytes a row: access, persisted and layout share one. */
 typedef struct {
     uint8_t addr;
-    uint8_t access;    /* km_access_t */
-    uint8_t persisted; /* 1 = user data */
-    uint8_t layout;    /* km_layout_t */
-    uint8_t multi;     /* KM_K() bits: sizes an 0x83 entry may have, 0 = none */
+    uint8_t layout : 5;    /* km_layout_t */
+    uint8_t access : 2;    /* km_access_t */
+    uint8_t persisted : 1; /* 1 = user data */
+    uint8_t multi;         /* KM_K() bits: sizes an 0x83 entry may have, 0 = none */
 } km_reg_t;
 
 extern const km_reg_t km_reg_table[KM_REG_COUNT];
