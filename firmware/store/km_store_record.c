@@ -240,16 +240,7 @@ void km_rec_entry(const km_rec_t *rec, uint32_t *at, uint8_t *id, uint32_t *valu
 
 bool km_rec_cell_erased(const km_flash_t *f, uint32_t addr)
 {
-    uint8_t cell[KM_REC_MAX_CELL];
-    if (f->read(f->ctx, addr, cell, f->prog_size) != KM_FLASH_OK) {
-        return false;
-    }
-    for (uint32_t i = 0; i < f->prog_size; i++) {
-        if (cell[i] != 0xFFu) {
-            return false;
-        }
-    }
-    return true;
+    return km_rec_range_erased(f, addr, f->prog_size);
 }
 
 bool km_rec_range_erased(const km_flash_t *f, uint32_t addr, uint32_t len)
