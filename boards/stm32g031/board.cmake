@@ -46,6 +46,10 @@ if(KM_G031_FLASH_KB EQUAL 32)
   # RAM is the same (3,100 B of .bss either way).
   list(TRANSFORM KM_BOARD_COMPILE_OPTIONS REPLACE "^-fdata-sections$" "-fsection-anchors")
   list(TRANSFORM KM_BOARD_LINK_OPTIONS REPLACE "^-fdata-sections$" "-fsection-anchors")
+  # Loops stay loops: with the compact run-time routines a call to memset
+  # or memcpy saves nothing and costs the call.
+  list(APPEND KM_BOARD_COMPILE_OPTIONS -fno-tree-loop-distribute-patterns)
+  list(APPEND KM_BOARD_LINK_OPTIONS -fno-tree-loop-distribute-patterns)
 elseif(KM_G031_FLASH_KB EQUAL 64)
   set(KM_G031_BOOT_KB 8)
 else()
