@@ -50,6 +50,8 @@ if(KM_G031_FLASH_KB EQUAL 32)
   # or memcpy saves nothing and costs the call.
   list(APPEND KM_BOARD_COMPILE_OPTIONS -fno-tree-loop-distribute-patterns)
   list(APPEND KM_BOARD_LINK_OPTIONS -fno-tree-loop-distribute-patterns)
+  # Input sections sorted by alignment: less padding between them.
+  list(APPEND KM_BOARD_LINK_OPTIONS -Wl,--sort-section=alignment)
 elseif(KM_G031_FLASH_KB EQUAL 64)
   set(KM_G031_BOOT_KB 8)
 else()
