@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: Apache-2.0
 # The STM32G031 servo board's declaration (cmake/km_boards.cmake): a
 # Cortex-M0+ built with Debian's arm-none-eabi-gcc. Every object of its
-# build gets one section per function/object so --gc-sections drops what
+# build gets one section per function/object (the 32 KiB build: per
+# function, data by section anchors) so --gc-sections drops what
 # is unused, and -fstack-usage: a .su file per object, the frames
 # tools/check/image-check sums over the call graph to bound the stack. Links with
 # newlib-nano without the C start-up files (startup.c is ours) and no heap.
