@@ -42,8 +42,9 @@ typedef struct {
 } km_reply_t;
 
 typedef struct km_servo {
-    km_regfile_t reg; /* values, status bits, control's report */
     const km_servo_ops_t *ops;
+    bool restarting;        /* a restart was requested: nothing more runs */
+    km_regfile_t reg;       /* values, status bits, control's report */
     uint32_t active_baud;   /* bps in force until restart (0x10 applies then) */
     uint32_t slot_floor_us; /* least answer slot (emulated boards; 0 = the rule) */
     /* 1e7 / active_baud (the microseconds of 10 bits x 1e6) as quotient,
@@ -52,7 +53,6 @@ typedef struct km_servo {
     uint32_t byte_us_q;
     uint32_t byte_us_r;
     uint32_t byte_us_f;
-    bool restarting;         /* a restart was requested: nothing more runs */
     uint8_t userdata_source; /* KM_USERDATA_*, extension register 0x01 */
     uint8_t reset_cause;     /* km_reset_cause_t of this boot, extension 0x02 */
     struct {
