@@ -272,11 +272,21 @@ void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_u
     p->done = false;
 }
 
+/* vel / 1000 toward zero, divided only when vel changed since the last. */
+static int32_t prv_vel_q(km_profile_t *p)
+{
+    if (p->vel != p->vel_q_of) {
+        p->vel_q_of = p->vel;
+        p->vel_q = km_sdiv1000(p->vel);
+    }
+    return p->vel_q;
+}
+
 /* pos += vel * dt / 1e6 exactly, remainder carried (dt <= 2000; |pos_rem|
  * < 4e6 before normalising). Returns vel / 1000. */
 static int32_t prv_advance(km_profile_t *p, uint32_t dt_us)
 {
-    const int32_t q = km_sdiv1000(p->vel), r = p->vel - q * 1000;
+    const int32_t q = prv_vel_q(p), r = p->vel - q * 1000;
     if (dt_us == 1000u) {
         p->pos += q;
         p->pos_rem += r * 1000;
@@ -411,7 +421,7 @@ static void prv_step(km_profile_t *p, uint32_t dt_us)
     }
     const int32_t dv = prv_dv(p, dt_us);
     /* the braking speed from where this piece ends */
-    const int32_t vq = prv_abs(km_sdiv1000(p->vel));
+    const int32_t vq = prv_abs(prv_vel_q(p));
     int32_t d = prv_abs(e) - (dt_us == 1000u ? vq : km_sdiv1000(vq * (int32_t)dt_us));
     if (d < 0) {
         d = 0;
@@ -453,5 +463,5 @@ int32_t km_profile_pos_ddeg(const km_profile_t *p)
 
 int32_t km_profile_vel_ddps(const km_profile_t *p)
 {
-    return km_sdiv1000(p->vel);
+    return p->vel == p->vel_q_of ? p->vel_q : km_sdiv1000(p->vel);
 }

@@ -17,15 +17,17 @@
 #define KM_PROFILE_SPAN_DDEG 900000 /* +-90,000 deg, 250 turns */
 
 typedef struct {
-    int32_t origin;  /* 0.1 deg, a multiple of ORIGIN: pos and target are u from it */
-    int32_t pos;     /* set-point, u from origin */
-    int32_t vel;     /* set-point speed, u/s */
-    int32_t target;  /* u from origin */
-    int32_t vmax;    /* u/s, > 0 */
-    int32_t accel;   /* u/s per ms, > 0 */
-    int32_t pos_rem; /* position remainder, u/1e6 */
-    int32_t vel_rem; /* speed remainder, u/s per 1000 */
-    uint32_t vsq_hi; /* vmax^2, high and low word, for the braking test */
+    int32_t origin;   /* 0.1 deg, a multiple of ORIGIN: pos and target are u from it */
+    int32_t pos;      /* set-point, u from origin */
+    int32_t vel;      /* set-point speed, u/s */
+    int32_t target;   /* u from origin */
+    int32_t vmax;     /* u/s, > 0 */
+    int32_t accel;    /* u/s per ms, > 0 */
+    int32_t pos_rem;  /* position remainder, u/1e6 */
+    int32_t vel_rem;  /* speed remainder, u/s per 1000 */
+    int32_t vel_q_of; /* the vel whose vel / 1000 vel_q holds (a tick's cache) */
+    int32_t vel_q;    /* vel_q_of / 1000 toward zero */
+    uint32_t vsq_hi;  /* vmax^2, high and low word, for the braking test */
     uint32_t vsq_lo;
     int32_t s_vel;    /* stream: the targets' speed, u/s */
     int32_t s_period; /* stream: the filtered frame period, us (0 = none yet) */
