@@ -260,6 +260,7 @@ void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_u
     p->vmax = km_clamp(vlimit_ups, 1, VMAX_MAX);
     p->accel = km_clamp(accel, 1, ACCEL_MAX);
     p->s_vel = prv_speed_us(tgt - p->target, n * p->s_period, p->vmax);
+    p->s_vel_q = km_sdiv1000(p->s_vel);
     p->s_step = (tgt - p->target) / n;
     p->s_lag = 2 * p->s_period +
                (p->s_period / 2 > KM_PROFILE_STREAM_SLACK_US ? p->s_period / 2 : KM_PROFILE_STREAM_SLACK_US);
@@ -373,7 +374,7 @@ static void prv_stream_end(km_profile_t *p)
 static int32_t prv_stream_want(const km_profile_t *p, int32_t ahead)
 {
     const int32_t vff = p->s_vel;
-    const int32_t ref = p->target - km_sdiv1000(vff) * km_sdiv1000(ahead);
+    const int32_t ref = p->target - p->s_vel_q * km_sdiv1000(ahead);
     int32_t err = ref - p->pos;
     const int32_t emax = p->vmax / 32 + 1, near = KM_PROFILE_STREAM_NEAR_U;
     err = km_sat(err, emax);

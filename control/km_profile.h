@@ -30,6 +30,7 @@ typedef struct {
     uint32_t vsq_hi;  /* vmax^2, high and low word, for the braking test */
     uint32_t vsq_lo;
     int32_t s_vel;    /* stream: the targets' speed, u/s */
+    int32_t s_vel_q;  /* stream: s_vel / 1000 toward zero, set with it */
     int32_t s_period; /* stream: the filtered frame period, us (0 = none yet) */
     int32_t s_since;  /* stream: us since the filtered arrival of the newest target */
     int32_t s_lag;    /* stream: how far behind the newest target the set-point runs, us */
