@@ -7,10 +7,22 @@
 void km_position_loop_init(km_position_loop_t *l)
 {
     l->i_acc = 0;
+    l->i_pwm_of = 0;
+    l->i_pwm = 0;
     l->still_ms = 0;
     l->rest_pos = 0;
     l->last_sp_ddps = 0;
     l->last_sp_sub = 0;
+}
+
+/* The integrator's PWM, i_acc / 256000, divided only when i_acc changed. */
+static int32_t prv_i_pwm(km_position_loop_t *l)
+{
+    if (l->i_acc != l->i_pwm_of) {
+        l->i_pwm_of = l->i_acc;
+        l->i_pwm = km_sdiv256000(l->i_acc);
+    }
+    return l->i_pwm;
 }
 
 /* Whether a settled hold was pushed away from where it rested (ki_hold's case). */
@@ -27,7 +39,7 @@ static int32_t prv_hold_ki(km_position_loop_t *l, const km_control_gains_t *g,
                            const km_position_loop_in_t *in, int32_t e_u, int32_t e_d, bool in_band)
 {
     if (in_band) {
-        const int32_t small = 2 * (int32_t)g->friction_pwm, i_pwm = km_sdiv256000(l->i_acc);
+        const int32_t small = 2 * (int32_t)g->friction_pwm, i_pwm = prv_i_pwm(l);
         if (i_pwm <= small && i_pwm >= -small) {
             l->i_acc -= l->i_acc / 128;
         }
@@ -63,14 +75,14 @@ static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
                              const km_position_loop_in_t *in, int32_t e_u, bool in_band, int32_t before,
                              uint32_t dt_us)
 {
-    int32_t i_pwm = km_sdiv256000(l->i_acc);
+    int32_t i_pwm = prv_i_pwm(l);
     /* 10 deg: the integrator is for small errors */
     const int32_t e_d = km_clamp(km_sdiv1000(e_u), -100, 100);
     int32_t ki = (int32_t)g->ki_q8;
     if (KM_FEATURE_HOLD_KI && in->still) {
         ki = prv_hold_ki(l, g, in, e_u, e_d, in_band);
         if (ki < 0) {
-            return km_sdiv256000(l->i_acc);
+            return prv_i_pwm(l);
         }
     }
     const int32_t i_max = (g->i_max_pwm > 1000u ? 1000 : (int32_t)g->i_max_pwm) * 256000;
@@ -78,7 +90,7 @@ static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
     before += i_pwm;
     if (!((before >= in->pwm_max && di > 0) || (before <= -in->pwm_max && di < 0))) {
         l->i_acc = km_clamp(l->i_acc + di, -i_max, i_max);
-        i_pwm = km_sdiv256000(l->i_acc);
+        i_pwm = prv_i_pwm(l);
     }
     return i_pwm;
 }
@@ -160,7 +172,7 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     if (in->integrate) {
         out += prv_integrate(l, g, in, e_u, in_band, out, dt_us);
     } else {
-        out += km_sdiv256000(l->i_acc);
+        out += prv_i_pwm(l);
     }
     return km_clamp(out, -in->pwm_max, in->pwm_max);
 }
