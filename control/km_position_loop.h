@@ -32,7 +32,7 @@
 
 typedef struct {
     int32_t i_acc;        /* integrator, PWM x 256000 */
-    int32_t i_pwm_of;     /* the i_acc whose / 256000 i_pwm holds (a tick's cache) */
+    int32_t i_pwm_of;     /* the i_acc whose / 256000 i_pwm holds (the fast build's cache) */
     int32_t i_pwm;        /* i_pwm_of / 256000 toward zero */
     int32_t last_sp_ddps; /* set-point speed of the last tick, for its acceleration */
     int32_t last_sp_sub;  /* and its part below 0.1 deg/s (a stream's), 0.001 x 0.1 deg/s */

@@ -25,7 +25,7 @@ typedef struct {
     int32_t accel;    /* u/s per ms, > 0 */
     int32_t pos_rem;  /* position remainder, u/1e6 */
     int32_t vel_rem;  /* speed remainder, u/s per 1000 */
-    int32_t vel_q_of; /* the vel whose vel / 1000 vel_q holds (a tick's cache) */
+    int32_t vel_q_of; /* the vel whose vel / 1000 vel_q holds (the fast build's cache) */
     int32_t vel_q;    /* vel_q_of / 1000 toward zero */
     uint32_t vsq_hi;  /* vmax^2, high and low word, for the braking test */
     uint32_t vsq_lo;
