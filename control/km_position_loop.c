@@ -7,8 +7,10 @@
 void km_position_loop_init(km_position_loop_t *l)
 {
     l->i_acc = 0;
+#if !KM_CONTROL_COMPACT
     l->i_pwm_of = 0;
     l->i_pwm = 0;
+#endif
     l->still_ms = 0;
     l->rest_pos = 0;
     l->last_sp_ddps = 0;
