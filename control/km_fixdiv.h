@@ -10,7 +10,8 @@
 
 /* 1 in the 32 KiB STM32G031F6 build (boards/stm32g031/board.cmake): the
  * forms that spend tick instructions to save flash (docs/footprint.md
- * "Control: compact forms"); 0 keeps the faster ones. Same results. */
+ * "control/ in the 32 KiB build (2026-11-27, branch f6ctl)"); 0 keeps the
+ * faster ones. Same results. */
 #ifndef KM_CONTROL_COMPACT
 #define KM_CONTROL_COMPACT 0
 #endif
