@@ -60,10 +60,13 @@ else()
 endif()
 # Features a 32 KiB build leaves out (docs/footprint.md "What gives way"):
 # ON in the 64 KiB build, OFF in the 32 KiB one unless set on the command line.
+# The compact forms (smaller, slower) are the opposite: ON only in 32 KiB.
 if(KM_G031_FLASH_KB EQUAL 32)
   set(KM_G031_FEATURE_DEFAULT OFF)
+  set(KM_G031_COMPACT_DEFAULT ON)
 else()
   set(KM_G031_FEATURE_DEFAULT ON)
+  set(KM_G031_COMPACT_DEFAULT OFF)
 endif()
 # The bootloader reads the store for the servo's ID and baud; without it,
 # update mode answers where the application left it, else ID 1 at 115200
@@ -93,13 +96,8 @@ endif()
 # clamps not inlined, the profile's braking root through km_isqrt): fewer
 # bytes, more tick instructions (docs/footprint.md). On in the 32 KiB
 # build only.
-if(KM_G031_FEATURE_DEFAULT)
-  set(KM_G031_CONTROL_COMPACT_DEFAULT OFF)
-else()
-  set(KM_G031_CONTROL_COMPACT_DEFAULT ON)
-endif()
 option(KM_G031_CONTROL_COMPACT "stm32g031: control/'s compact forms (KM_CONTROL_COMPACT)"
-       ${KM_G031_CONTROL_COMPACT_DEFAULT})
+       ${KM_G031_COMPACT_DEFAULT})
 if(KM_G031_CONTROL_COMPACT)
   list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_CONTROL_COMPACT=1)
 endif()
@@ -107,13 +105,8 @@ endif()
 # (boot/boot_rt.c: byte-loop mem*, bit-serial division) instead of
 # newlib's and libgcc's unrolled ones: smaller, slower. Off in the 64 KiB
 # build, on in the 32 KiB one.
-if(KM_G031_FEATURE_DEFAULT)
-  set(KM_G031_COMPACT_RT_DEFAULT OFF)
-else()
-  set(KM_G031_COMPACT_RT_DEFAULT ON)
-endif()
 option(KM_G031_COMPACT_RT "stm32g031 application: compact mem* and division (boot/boot_rt.c)"
-       ${KM_G031_COMPACT_RT_DEFAULT})
+       ${KM_G031_COMPACT_DEFAULT})
 list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_G031_FLASH_KB=${KM_G031_FLASH_KB}u -DKM_G031_BOOT_KB=${KM_G031_BOOT_KB}u)
 list(APPEND KM_BOARD_LINK_OPTIONS -Wl,--defsym=KM_FLASH_SIZE=${KM_G031_FLASH_KB}K
      -Wl,--defsym=KM_BOOT_SIZE=${KM_G031_BOOT_KB}K)
