@@ -234,20 +234,20 @@ class Bench:
         i = self.first(("prv_arm_answer", "prv_try_schedule_answer"), lo, hi)
         if i is None:
             return None
-        ret = self.trace[i - 1] + 4
+        return self.returned(i, hi)
+
+    def returned(self, i, hi):
+        """Trace index, before hi, where the function entered at trace[i]
+        returns (the instruction after the bl that called it), or None."""
+        ret = self.trace[i - 1] + 4  # after the bl that called it
         return next((j for j in range(i, hi) if self.trace[j] == ret), None)
 
     def inclusive(self, name, lo, hi):
         """Instructions and cycles from the entry of `name` to its return
         (the instruction after its call site), inside trace[lo:hi]."""
         i = self.first(name, lo, hi)
-        if i is None:
-            return None
-        ret = self.trace[i - 1] + 4  # after the bl that called it
-        for j in range(i, hi):
-            if self.trace[j] == ret:
-                return self.cost(i, j)
-        return None
+        j = None if i is None else self.returned(i, hi)
+        return None if j is None else self.cost(i, j)
 
     def clear_of_tick(self, data):
         """Waits (not recording) so that `data`, sent next, ends 0.4 ms
@@ -455,8 +455,8 @@ def tick_divisions(b, seg):
         j = b.first(TICK[::-1], i, hi)
         if j is None:
             break
-        ret = b.trace[j - 1] + 4
-        end = next((k for k in range(j, hi) if b.trace[k] == ret), hi)
+        end = b.returned(j, hi)
+        end = hi if end is None else end
         n += sum(1 for k in range(j, end) if b.trace[k] in b.divs)
         i = end
     return n
