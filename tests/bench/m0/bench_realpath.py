@@ -46,6 +46,7 @@ import argparse
 import json
 import os
 import re
+import statistics
 import subprocess
 import sys
 
@@ -338,10 +339,7 @@ def per_entry(pts):
     not with the list)."""
     if len(pts) < 2:
         return 0.0
-    mx = sum(n for n, _ in pts) / len(pts)
-    my = sum(v for _, v in pts) / len(pts)
-    den = sum((n - mx) ** 2 for n, _ in pts)
-    return sum((n - mx) * (v - my) for n, v in pts) / den if den else 0.0
+    return statistics.linear_regression([n for n, _ in pts], [v for _, v in pts]).slope
 
 
 def lists(b, rows, figs, step):
