@@ -6,9 +6,10 @@ of each class ran and what they cost on an M0+ (ARM DDI 0484C, Cortex-M0+
 TRM §3.3), with the flash wait states of the application's clock and the
 exception entries and returns. docs/figures.md prints the table
 (tests/bench/m0/figures.py calls markdown()); the recorder, the cut into
-idle-to-idle segments and the cycle model with its wait states are
+idle-to-idle segments and the flash wait states are
 tests/bench/m0/bench_realpath.py's (docs/benchmarks.md "Cycles"), handed
-in as `bench` so this file adds only the classes.
+in as `bench`; its cycle model takes each instruction's cycles without
+wait states from classify() here.
 
     markdown(bench, ELF) -> the section's lines
     paths(bench, ELF)    -> [(path, tally)]"""
@@ -18,7 +19,7 @@ import re
 CLASSES = ("ALU", "MUL", "load/store", "LDM/STM/PUSH/POP", "branch taken", "branch not taken",
            "BL", "BX/BLX", "system")
 _COND = re.compile(r"b(eq|ne|cs|cc|hs|lo|mi|pl|vs|vc|hi|ls|ge|lt|gt|le)")
-_FOUR_BYTES = ("bl", "mrs", "msr", "dmb", "dsb", "isb")
+FOUR_BYTES = ("bl", "mrs", "msr", "dmb", "dsb", "isb")
 
 
 def classify(op, args, addr, nxt):
@@ -27,7 +28,7 @@ def classify(op, args, addr, nxt):
     multiplier), LDR/STR 2, LDM/STM/PUSH 1+N, POP {.., pc} 3+N, a branch
     2 taken and 1 not, BL 3, BX/BLX 2, MRS/MSR/DMB/DSB/ISB 3, WFI 2, CPS 1.
     nxt is the address executed next (taken or not)."""
-    jumped = nxt is not None and nxt != addr + (4 if op in _FOUR_BYTES else 2)
+    jumped = nxt is not None and nxt != addr + (4 if op in FOUR_BYTES else 2)
     if op in ("push", "pop", "ldmia", "stmia", "ldm", "stm"):
         n = len([r for r in args[args.find("{") + 1:args.find("}")].split(",") if r.strip()])
         return "LDM/STM/PUSH/POP", (3 + n) if op == "pop" and "pc" in args else 1 + n

@@ -57,6 +57,7 @@ except ImportError:
              " PYTHONPATH=sim/g031 /usr/bin/python3 ... (docs/benchmarks.md)")
 g031_deps.require()
 import vg031  # noqa: E402
+import g031_cycles  # noqa: E402
 import g031_plant  # noqa: E402
 from unicorn import UC_HOOK_CODE  # noqa: E402
 
@@ -116,32 +117,19 @@ class Disasm:
 
     def cycles(self, addr, nxt):
         """Estimated M0+ cycles of the instruction at addr, the next one
-        executed being at nxt."""
+        executed being at nxt: its class's cycles (sim/g031/g031_cycles.py,
+        TRM §3.3) and the flash wait states, a literal load from flash and
+        the refill after a jump that writes the pc into flash."""
         op, args = self.op.get(addr, ("?", ""))
-        in_flash = FLASH_LO <= addr < FLASH_HI
-        jumped = nxt is not None and nxt != addr + (4 if op in ("bl", "mrs", "msr", "dmb", "dsb", "isb") else 2)
-        refill = FLASH_WS if (jumped and nxt is not None and FLASH_LO <= nxt < FLASH_HI) else 0
-        if op in ("push", "pop", "ldmia", "stmia", "ldm", "stm"):
-            n = len([r for r in args[args.find("{") + 1:args.find("}")].split(",") if r.strip()])
-            if op == "pop" and "pc" in args:
-                return 3 + n + refill
-            return 1 + n
-        if op.startswith(("ldr", "str")):
-            lit = FLASH_WS if (op.startswith("ldr") and _LIT.search(args) and in_flash) else 0
-            if op.startswith("ldr") and "pc" in args.split(",")[0]:
-                return 2 + lit + refill
-            return 2 + lit
-        if op == "bl":
-            return 3 + refill
-        if op in ("bx", "blx"):
-            return 2 + refill
-        if op == "b" or re.fullmatch(r"b(eq|ne|cs|cc|hs|lo|mi|pl|vs|vc|hi|ls|ge|lt|gt|le)", op):
-            return (2 + refill) if jumped else 1
-        if op in ("mrs", "msr", "dmb", "dsb", "isb"):
-            return 3
-        if op == "wfi":
-            return 2
-        return 1
+        cls, cyc = g031_cycles.classify(op, args, addr, nxt)
+        if op.startswith("ldr") and _LIT.search(args) and FLASH_LO <= addr < FLASH_HI:
+            cyc += FLASH_WS
+        writes_pc = (cls in ("branch taken", "BL", "BX/BLX") or (op == "pop" and "pc" in args)
+                     or (op.startswith("ldr") and "pc" in args.split(",")[0]))
+        jumped = nxt is not None and nxt != addr + (4 if op in g031_cycles.FOUR_BYTES else 2)
+        if writes_pc and jumped and FLASH_LO <= nxt < FLASH_HI:
+            cyc += FLASH_WS
+        return cyc
 
 
 class Bench:
