@@ -21,12 +21,10 @@
 static kt_fx_t fx;
 static uint32_t s_rnd = 2463534242u;
 
-/* xorshift32: the bodies' bytes. */
+/* xorshift32 (km_test_support.h): the bodies' bytes. */
 static uint32_t rnd(void)
 {
-    s_rnd ^= s_rnd << 13;
-    s_rnd ^= s_rnd >> 17;
-    s_rnd ^= s_rnd << 5;
+    s_rnd = kt_xorshift32(s_rnd);
     return s_rnd;
 }
 
