@@ -41,8 +41,9 @@ answers like QEMU's human monitor to the one command tools/servo-update
 --resets sends, "system_reset": a reset from the NRST pin (RM0444 §5.1.2:
 core and peripherals to their reset values, SRAM and flash kept, PINRSTF).
 
---clock-file PATH: the bus's virtual time in PATH (8 bytes, little-endian
-ns), for a master that counts its timeouts in it (sim/g031/vclock.py);
+--clock-file PATH: the bus's virtual time in PATH (16 bytes: the time in
+little-endian ns, then the master's hold), for a master that counts its
+timeouts in it (sim/g031/vclock.py);
 the wire stops at the end of the master's sleep until its next bytes, so
 its pauses on the wire are exact however slowly the host runs it.
 
