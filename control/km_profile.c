@@ -339,6 +339,18 @@ static int32_t prv_dv(km_profile_t *p, uint32_t dt_us)
     return dvq;
 }
 
+/* `v` moved toward `want` by at most `dv` (>= 0): a speed's rate limit. */
+static int32_t prv_toward(int32_t v, int32_t want, int32_t dv)
+{
+    if (v < want) {
+        return v + dv < want ? v + dv : want;
+    }
+    if (v > want) {
+        return v - dv > want ? v - dv : want;
+    }
+    return v;
+}
+
 /* One step of a stream speed's low pass from `v` toward `to` (exactly there once within a step). */
 static int32_t prv_smooth(int32_t v, int32_t to)
 {
@@ -403,11 +415,7 @@ static void prv_step_stream(km_profile_t *p, uint32_t dt_us)
     }
     const int32_t want = prv_stream_want(p, ahead);
     const int32_t dv = prv_dv(p, dt_us);
-    if (p->s_vr < want) {
-        p->s_vr = p->s_vr + dv < want ? p->s_vr + dv : want;
-    } else if (p->s_vr > want) {
-        p->s_vr = p->s_vr - dv > want ? p->s_vr - dv : want;
-    }
+    p->s_vr = prv_toward(p->s_vr, want, dv);
     p->s_vf = prv_smooth(p->s_vf, p->s_vr);
     p->vel = prv_smooth(p->vel, p->s_vf);
     (void)prv_advance(p, dt_us);
@@ -433,11 +441,7 @@ static void prv_step(km_profile_t *p, uint32_t dt_us)
     }
     const int32_t vb = prv_brake_speed(p, 2000u * (uint32_t)p->accel, (uint32_t)d);
     const int32_t want = e >= 0 ? vb : -vb;
-    if (p->vel < want) {
-        p->vel = p->vel + dv < want ? p->vel + dv : want;
-    } else if (p->vel > want) {
-        p->vel = p->vel - dv > want ? p->vel - dv : want;
-    }
+    p->vel = prv_toward(p->vel, want, dv);
     const int32_t q = prv_abs(prv_advance(p, dt_us));
     const int32_t left = p->target - p->pos;
     /* arrived or crossed: stop on the target */
