@@ -115,29 +115,23 @@ static void prv_count(km_motor_mode_t *m, int32_t position, uint32_t dt_us)
     }
 }
 
-/* `v` bounded to +-`bound`. */
-static int32_t prv_bound(int32_t v, int32_t bound)
-{
-    return km_sat(v, bound);
-}
-
 /* The speed loop (0.1 deg/s): feedforward kv x speed and friction, kd x
  * the speed error and a bounded integrator; the PWM in +-1000. */
 static int32_t prv_speed_loop(km_motor_mode_t *m, const km_control_gains_t *g, int32_t sp_ddps,
                               int32_t speed_ddps, uint32_t dt_us)
 {
-    const int32_t sp = prv_bound(sp_ddps, 200000);
-    const int32_t err = prv_bound(sp - prv_bound(speed_ddps, 1000000), 20000);
+    const int32_t sp = km_sat(sp_ddps, 200000);
+    const int32_t err = km_sat(sp - km_sat(speed_ddps, 1000000), 20000);
     const uint32_t dt = dt_us > 2000u ? 2000u : dt_us;
     m->i_acc += km_sdiv10(km_sdiv1000(KM_MOTOR_KI_Q8 * err) * (int32_t)dt); /* PWM x 256000 */
     const int32_t imax = (int32_t)(g->i_max_pwm > 1000u ? 1000u : g->i_max_pwm) * 256000;
-    m->i_acc = prv_bound(m->i_acc, imax);
+    m->i_acc = km_sat(m->i_acc, imax);
     const int32_t kv = g->kv_q8 > 10000u ? 10000 : (int32_t)g->kv_q8; /* kv x 200000 stays in int32 */
     int32_t pwm = km_sdiv2560(kv * sp);
     pwm += sp > 0 ? (int32_t)g->friction_pwm : (sp < 0 ? -(int32_t)g->friction_pwm : 0);
     pwm += km_sdiv2560((int32_t)g->kd_q8 * err);
     pwm += km_sdiv256000(m->i_acc);
-    return prv_bound(pwm, 1000);
+    return km_sat(pwm, 1000);
 }
 
 /* The room (0.1 deg) the run has left in its direction `dir`: to the end
