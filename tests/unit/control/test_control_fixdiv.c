@@ -150,7 +150,6 @@ static void ref_advance(km_profile_t *p, uint32_t dt_us)
     p->pos_rem %= 1000000;
 }
 
-/* The stream interpolator's piece (km_profile.h) with C's divisions. */
 /* One step of a stream speed's two low passes (km_profile.c's prv_smooth). */
 static int32_t ref_smooth(int32_t v, int32_t to)
 {
@@ -158,6 +157,7 @@ static int32_t ref_smooth(int32_t v, int32_t to)
     return v + ((to - v) / n != 0 ? (to - v) / n : to - v);
 }
 
+/* The stream interpolator's piece (km_profile.h) with C's divisions. */
 static void ref_stream_piece(km_profile_t *p, uint32_t dt_us)
 {
     const int32_t ahead = p->s_lag - p->s_since;
