@@ -85,9 +85,7 @@ static void ISR_rx_byte(void *ctx, uint8_t byte, uint32_t tick, bool lost)
     (void)ctx;
     __typeof__(&s_rx) rx = &s_rx;
     __asm__("" : "+r"(rx)); /* one base register for every field, not a literal each */
-    if (lost || !km_rx_queue_try_push(&rx->q, byte, tick)) {
-        km_rx_queue_push_marked(&rx->q, byte, tick, lost);
-    }
+    km_rx_queue_push(&rx->q, byte, tick, lost);
     if (km_rx_track_byte(&rx->track, byte, tick, lost)) {
         ISR_rx_wake();
     }

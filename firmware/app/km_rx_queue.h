@@ -68,8 +68,10 @@ static inline __attribute__((always_inline)) bool km_rx_queue_try_push(km_rx_que
     return true;
 }
 
-/* Interrupt context, every byte: a full queue drops it and marks the next. */
-static inline void km_rx_queue_push(km_rx_queue_t *q, uint8_t byte, uint32_t tick, bool lost)
+/* Interrupt context, every byte: a full queue drops it and marks the next.
+ * always_inline: the receive interrupt's code stays where the board puts it. */
+static inline __attribute__((always_inline)) void km_rx_queue_push(km_rx_queue_t *q, uint8_t byte,
+                                                                   uint32_t tick, bool lost)
 {
     if (lost || !km_rx_queue_try_push(q, byte, tick)) {
         km_rx_queue_push_marked(q, byte, tick, lost);
