@@ -25,6 +25,17 @@ typedef uint32_t __attribute__((may_alias)) prv_word_t;
  * on the M0 a division is a library call. */
 static const uint16_t s_recip_2048[9] = {0u, 2048u, 1024u, 683u, 512u, 410u, 342u, 293u, 256u};
 
+/* The first entry of `own` among the entries of `stride` bytes from p up
+ * to end (the ID first in each), or end: one by one. */
+static inline __attribute__((always_inline)) const uint8_t *
+prv_find_each(const uint8_t *p, const uint8_t *const end, const uint8_t own, const size_t stride)
+{
+    while (p < end && *p != own) {
+        p += stride;
+    }
+    return p < end ? p : end;
+}
+
 /* The first word from q up to q_end (q < q_end, whole blocks of four) in which a byte that k
  * marks (bit 0 of each entry's ID byte) equals the byte of pat (own, four
  * times), or q_end. SWAR: with x = word ^ pat, (x - k) & ~x has a bit 7
@@ -76,10 +87,7 @@ static __attribute__((noinline)) const uint8_t *prv_find_words(const uint8_t *p,
             p = (const uint8_t *)prv_find_block(q, q_end, own * 0x01010101u, k) + phase;
         }
     }
-    while (p < end && *p != own) {
-        p += stride;
-    }
-    return p < end ? p : end;
+    return prv_find_each(p, end, own, stride);
 }
 
 /* Whether one of the six entries of `stride` bytes from p is `own`'s. */
@@ -108,10 +116,7 @@ prv_find_bytes(const uint8_t *p, const uint8_t *const end, const uint8_t own, co
             p += pass;
         } while (p <= last);
     }
-    while (p < end && *p != own) {
-        p += stride;
-    }
-    return p < end ? p : end;
+    return prv_find_each(p, end, own, stride);
 }
 
 /* The first entry of `own` among 0x83's entries from p up to end, or end,
@@ -129,10 +134,7 @@ prv_find_multi(const uint8_t *p, const uint8_t *const end, const uint8_t own, co
     case 5u:
         return prv_find_bytes(p, end, own, 5u);
     default: /* no register takes another size today */
-        while (p < end && *p != own) {
-            p += stride;
-        }
-        return p < end ? p : end;
+        return prv_find_each(p, end, own, stride);
     }
 }
 
