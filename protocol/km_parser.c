@@ -252,6 +252,7 @@ static inline unsigned prv_feed_one(km_parser_t *p, uint8_t byte, uint32_t now, 
     return prv_settle(p, out);
 }
 
+#if !KM_PARSER_COMPACT
 /* Copies n >= 1 bytes to w[] and their prefix sums to w[KM_FRAME_MAX + i]; returns the running sum. */
 __attribute__((noinline)) static uint32_t prv_copy_sum(uint8_t *w, const uint8_t *src, uint32_t n,
                                                        uint32_t acc)
@@ -451,11 +452,19 @@ static inline __attribute__((always_inline)) uint32_t prv_run(km_parser_t *p, co
     return 0u;
 }
 
+#endif
+
 unsigned km_parser_feed_bytes(km_parser_t *p, const uint8_t *bytes, const uint32_t *ticks, uint32_t n,
                               uint32_t *used, km_parser_out_t *out)
 {
     uint32_t i = 0u;
     unsigned events = 0u;
+#if KM_PARSER_COMPACT
+    while (i < n && (events & KM_PARSE_FRAME) == 0u) {
+        events |= prv_feed_one(p, bytes[i], ticks[i], out);
+        i++;
+    }
+#else
     while (i < n) {
         if (p->fill == 0u) {
             /* Idle: skip to the next F9 (no tick matters before it). */
@@ -492,6 +501,7 @@ unsigned km_parser_feed_bytes(km_parser_t *p, const uint8_t *bytes, const uint32
             break;
         }
     }
+#endif
     *used = i;
     return events;
 }

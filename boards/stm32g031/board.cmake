@@ -101,6 +101,14 @@ option(KM_G031_CONTROL_COMPACT "stm32g031: control/'s compact forms (KM_CONTROL_
 if(KM_G031_CONTROL_COMPACT)
   list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_CONTROL_COMPACT=1)
 endif()
+# The parser's compact form: its batch entry runs the byte rule on each
+# byte instead of judging whole frames in place (docs/footprint.md): fewer
+# bytes, more instructions per frame. On in the 32 KiB build only.
+option(KM_G031_PARSER_COMPACT "stm32g031: the parser's batch entry byte by byte (KM_PARSER_COMPACT)"
+       ${KM_G031_COMPACT_DEFAULT})
+if(KM_G031_PARSER_COMPACT)
+  list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_PARSER_COMPACT=1)
+endif()
 # The application links the bootloader's compact run-time routines
 # (boot/boot_rt.c: byte-loop mem*, bit-serial division) instead of
 # newlib's and libgcc's unrolled ones: smaller, slower. Off in the 64 KiB
