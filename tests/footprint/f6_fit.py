@@ -4,9 +4,13 @@
 fitting: configures `cmake --preset stm32g031 -DKM_G031_FLASH_KB=32` in its
 own build directory, builds the images that fit today with their
 image-check, which in that build enforces the budget (--enforce-budget:
-bootloader <= 4,096 B, RAM <= 6 KiB), and runs that bootloader alone on
-the virtual G031 (sim/g031): with no application and no store reader it
-answers at ID 1, 115200 (docs/update.md §3), and at no other ID.
+bootloader <= 4,096 B, an image without bootloader <= 26,624 B beside the
+store, RAM <= 6 KiB), and runs them on the virtual G031 (sim/g031): the
+bootloader alone, with no application and no store reader, answers at ID
+1, 115200 (docs/update.md §3), and at no other ID; the servo image without
+bootloader (the 32 KiB build's compact parser, control and run-time
+routines) answers a ping at its default ID 0 after the longest frame to
+another servo, and reports a checksum-failed frame to it once (§2, §4).
 
     PYTHONPATH=sim/g031 f6_fit.py SOURCE_DIR BUILD_DIR   (CTest board_stm32g031_f6_fit)
 """
@@ -16,7 +20,7 @@ import sys
 
 # The images of the 32 KiB build held to its budget. The application joins
 # when it fits (docs/footprint.md "What gives way").
-CHECKED = ["km-boot-stm32g031-check"]
+CHECKED = ["km-boot-stm32g031-check", "km-servo-stm32g031-check"]
 MS = 1_000_000
 
 
@@ -70,6 +74,35 @@ def bootloader_alone(source, images):
     return fails
 
 
+def servo_alone(images):
+    """The stand-alone 32 KiB servo image: pings at ID 0 through a long frame and a bad checksum."""
+    import g031_deps  # sim/g031, on PYTHONPATH
+    g031_deps.require()
+    import argparse
+    import vg031
+    a = argparse.Namespace(boot=None, app=None, elf=os.path.join(images, "km-servo-stm32g031.elf"),
+                           app_elf=None)
+    m = vg031.make(a)
+    m.run_until(m.now + 50 * MS)
+    # The longest frame (length 252: 256 bytes) to servo 7, a 0x03 write, then a ping to ID 0.
+    long_body = bytes([7, 252, 0x03]) + bytes(range(250))
+    long_frame = b"\xf9\xff" + long_body + bytes([~sum(long_body) & 0xFF])
+    bad = bytearray(frame(0, 0x01))
+    bad[-1] ^= 0xFF
+    ok, exception = bytes.fromhex("F9F5000200FD"), bytes.fromhex("F9F5000220DD")
+    fails = []
+    for what, data, want in (("ping", frame(0, 0x01), ok), ("longest frame, ping", long_frame + frame(0, 0x01), ok),
+                             ("bad checksum", bytes(bad), b""), ("ping after it", frame(0, 0x01), exception),
+                             ("ping again", frame(0, 0x01), ok)):
+        got = ask(m, data)
+        print("servo image, %s: %s" % (what, got.hex(" ") or "no answer"))
+        if got != want:
+            fails.append("servo image, %s: answered %r, expected %r" % (what, got.hex(" "), want.hex(" ")))
+    if m.faults or m.resets:
+        fails.append("servo image: faults %s resets %s" % (m.faults, m.resets))
+    return fails
+
+
 def main():
     source, build = sys.argv[1], sys.argv[2]
     run(["cmake", "--preset", "stm32g031", "-B", build, "-DKM_G031_FLASH_KB=32"], source)
@@ -79,6 +112,7 @@ def main():
     print("km-boot-stm32g031.bin: %d B of 4,096" % boot)
     fails = [] if boot <= 4096 else ["bootloader %d B > 4,096" % boot]
     fails += bootloader_alone(source, images)
+    fails += servo_alone(images)
     for f in fails:
         print("FAIL:", f)
     sys.exit(1 if fails else 0)
