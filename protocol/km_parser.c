@@ -247,13 +247,13 @@ static inline unsigned prv_feed_one(km_parser_t *p, uint8_t byte, uint32_t now, 
     if (p->fill < p->need) {
         return 0u; /* inside a candidate of known length */
     }
-    if (!KM_PARSER_COMPACT && !p->pending && p->stale == 0u && prv_header_grows(p, byte)) {
+    if (!KM_PROTOCOL_COMPACT && !p->pending && p->stale == 0u && prv_header_grows(p, byte)) {
         return 0u; /* a header byte that keeps the candidate viable */
     }
     return prv_settle(p, out);
 }
 
-#if !KM_PARSER_COMPACT
+#if !KM_PROTOCOL_COMPACT
 /* Copies n >= 1 bytes to w[] and their prefix sums to w[KM_FRAME_MAX + i]; returns the running sum. */
 __attribute__((noinline)) static uint32_t prv_copy_sum(uint8_t *w, const uint8_t *src, uint32_t n,
                                                        uint32_t acc)
@@ -460,7 +460,7 @@ unsigned km_parser_feed_bytes(km_parser_t *p, const uint8_t *bytes, const uint32
 {
     uint32_t i = 0u;
     unsigned events = 0u;
-#if KM_PARSER_COMPACT
+#if KM_PROTOCOL_COMPACT
     while (i < n && (events & KM_PARSE_FRAME) == 0u) {
         events |= prv_feed_one(p, bytes[i], ticks[i], out);
         i++;

@@ -9,11 +9,11 @@
 
 #include "km_frame.h"
 
-/* KM_PARSER_COMPACT=1 (the 32 KiB STM32G031F6 build, docs/footprint.md): the batch entry feeds its bytes to
+/* KM_PROTOCOL_COMPACT=1 (the 32 KiB STM32G031F6 build, docs/footprint.md): the batch entry feeds its bytes to
  * the byte rule one by one, every frame a view into the ring; 0: whole frames are judged in place and runs
  * appended in bulk (fewer instructions, more code). */
-#ifndef KM_PARSER_COMPACT
-#define KM_PARSER_COMPACT 0
+#ifndef KM_PROTOCOL_COMPACT
+#define KM_PROTOCOL_COMPACT 0
 #endif
 
 /* Diagnostic counters; they saturate rather than wrap. */
@@ -66,7 +66,7 @@ void km_parser_set_gap(km_parser_t *p, uint32_t gap_ticks);
 unsigned km_parser_feed(km_parser_t *p, uint8_t byte, uint32_t now, km_frame_t *out);
 
 /* Batch entry: km_parser_feed() on bytes[0..n-1] in turn, stopping at a frame; *used = bytes consumed. A
- * frame that came whole in this call may be a view of `bytes` (not with KM_PARSER_COMPACT). */
+ * frame that came whole in this call may be a view of `bytes` (not with KM_PROTOCOL_COMPACT). */
 unsigned km_parser_feed_bytes(km_parser_t *p, const uint8_t *bytes, const uint32_t *ticks, uint32_t n,
                               uint32_t *used, km_parser_out_t *out);
 

@@ -12,12 +12,33 @@ const km_reg_t km_reg_table[KM_REG_COUNT] = {
 #undef KM_REG
 };
 
+#if KM_PROTOCOL_COMPACT
+int km_reg_find(uint8_t addr)
+{
+    uint32_t lo = 0u;           /* every row below lo has a smaller address */
+    uint32_t hi = KM_REG_COUNT; /* every row from hi on has a larger one */
+    while (lo < hi) {
+        const uint32_t mid = (lo + hi) / 2u;
+        const uint8_t at = km_reg_table[mid].addr;
+        if (at == addr) {
+            return (int)mid;
+        }
+        if (at < addr) {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    return -1;
+}
+#else
 const uint8_t km_reg_by_addr[KM_REG_ADDR_SPAN] = {
 #define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) \
     [addr] = KM_REG_##ident + 1,
 #include "km_registers.def"
 #undef KM_REG
 };
+#endif
 
 #define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) \
     _Static_assert((addr) < KM_REG_ADDR_SPAN, "register address beyond km_reg_by_addr");

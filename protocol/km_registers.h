@@ -63,8 +63,19 @@ extern const km_reg_t km_reg_table[KM_REG_COUNT];
  * firmware does not link it). */
 extern const char *const km_reg_names[KM_REG_COUNT];
 
-/* Register index + 1 by address, 0 where there is none. */
+/* KM_PROTOCOL_COMPACT=1 (the 32 KiB STM32G031F6 build, docs/footprint.md): the smaller, slower forms of the
+ * protocol code (the parser's batch entry byte by byte, the register look-up by a search). */
+#ifndef KM_PROTOCOL_COMPACT
+#define KM_PROTOCOL_COMPACT 0
+#endif
+
 #define KM_REG_ADDR_SPAN 128u
+#if KM_PROTOCOL_COMPACT
+/* Table index of an address, or -1 for a reserved/unknown address: a binary search of km_reg_table (in
+ * address order, as km_registers.def lists it). */
+int km_reg_find(uint8_t addr);
+#else
+/* Register index + 1 by address, 0 where there is none. */
 extern const uint8_t km_reg_by_addr[KM_REG_ADDR_SPAN];
 
 /* Table index of an address, or -1 for a reserved/unknown address: one
@@ -73,6 +84,7 @@ static inline int km_reg_find(uint8_t addr)
 {
     return addr < KM_REG_ADDR_SPAN ? (int)km_reg_by_addr[addr] - 1 : -1;
 }
+#endif
 
 uint32_t km_reg_default(km_reg_index_t reg, const km_product_t *p);
 

@@ -101,13 +101,14 @@ option(KM_G031_CONTROL_COMPACT "stm32g031: control/'s compact forms (KM_CONTROL_
 if(KM_G031_CONTROL_COMPACT)
   list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_CONTROL_COMPACT=1)
 endif()
-# The parser's compact form: its batch entry runs the byte rule on each
-# byte instead of judging whole frames in place (docs/footprint.md): fewer
-# bytes, more instructions per frame. On in the 32 KiB build only.
-option(KM_G031_PARSER_COMPACT "stm32g031: the parser's batch entry byte by byte (KM_PARSER_COMPACT)"
+# protocol/'s compact forms: the parser's batch entry runs the byte rule
+# on each byte instead of judging whole frames in place, and a register is
+# found by a binary search instead of a 128-byte table (docs/footprint.md):
+# fewer bytes, more instructions per frame. On in the 32 KiB build only.
+option(KM_G031_PROTOCOL_COMPACT "stm32g031: protocol/'s compact forms (KM_PROTOCOL_COMPACT)"
        ${KM_G031_COMPACT_DEFAULT})
-if(KM_G031_PARSER_COMPACT)
-  list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_PARSER_COMPACT=1)
+if(KM_G031_PROTOCOL_COMPACT)
+  list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_PROTOCOL_COMPACT=1)
 endif()
 # The application links the bootloader's compact run-time routines
 # (boot/boot_rt.c: byte-loop mem*, bit-serial division) instead of

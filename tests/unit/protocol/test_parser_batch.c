@@ -154,7 +154,7 @@ static void test_s2_s7_batch_equals_byte_by_byte_long_runs(void **state)
 }
 
 /* §2: a frame that comes whole in one call is handed out as a view of the
- * caller's bytes (the compact form, KM_PARSER_COMPACT: into the ring as
+ * caller's bytes (the compact form, KM_PROTOCOL_COMPACT: into the ring as
  * every frame); one that comes in pieces is a view into the parser's
  * ring (an empty window restarts at slot 0, so it does not wrap). */
 static void test_s2_batch_views(void **state)
@@ -176,7 +176,7 @@ static void test_s2_batch_views(void **state)
         unsigned ev = km_parser_feed_bytes(&p, f, ticks, (uint32_t)n, &used, &out);
         assert_int_equal(ev, KM_PARSE_FRAME);
         assert_int_equal(used, n);
-#if KM_PARSER_COMPACT
+#if KM_PROTOCOL_COMPACT
         assert_ptr_equal(out.frame.body, &p.window[5]);
 #else
         assert_ptr_equal(out.frame.body, &f[5]);
