@@ -35,22 +35,30 @@ typedef struct {
     km_command_fn run;
 } prv_command_t;
 
+/* clang-format off */
+#if KM_PROTOCOL_COMPACT
+/* §3 and this firmware's own commands, searched in order (the compact build). */
+#define PRV_SLOT(cmd)
+static const prv_command_t s_commands[] = {
+#else
 /* §3 and this firmware's own commands, indexed by the command byte's bit 7 and low three bits. */
-#define PRV_SLOT(cmd) ((((unsigned)(cmd) >> 4) & 8u) | ((unsigned)(cmd)&7u))
+#define PRV_SLOT(cmd) [((((unsigned)(cmd) >> 4) & 8u) | ((unsigned)(cmd)&7u))] =
 
 static const prv_command_t s_commands[16] = {
-    [PRV_SLOT(CMD_PING)] = {CMD_PING, RULE_SUPER, km_cmd_ping},
-    [PRV_SLOT(CMD_READ)] = {CMD_READ, RULE_SUPER, km_cmd_read},
-    [PRV_SLOT(CMD_WRITE)] = {CMD_WRITE, 0, km_cmd_write},
-    [PRV_SLOT(CMD_SYNC_WRITE)] = {CMD_SYNC_WRITE, RULE_KEEPS_SYNC, km_cmd_sync_write},
-    [PRV_SLOT(CMD_SYNC_EXECUTE)] = {CMD_SYNC_EXECUTE, RULE_KEEPS_SYNC, km_cmd_sync_execute},
-    [PRV_SLOT(CMD_MULTI_READ)] = {CMD_MULTI_READ, RULE_BROADCAST | RULE_KEEPS_SYNC, km_cmd_multi_read},
-    [PRV_SLOT(CMD_MULTI_WRITE)] = {CMD_MULTI_WRITE, RULE_BROADCAST | RULE_KEEPS_SYNC, km_cmd_multi_write},
-#if KM_FEATURE_EXT
-    [PRV_SLOT(KM_CMD_EXT)] = {KM_CMD_EXT, RULE_SUPER, km_cmd_ext},
 #endif
-    [PRV_SLOT(KM_CMD_UPDATE_FW)] = {KM_CMD_UPDATE_FW, 0, km_cmd_update},
+    PRV_SLOT(CMD_PING) {CMD_PING, RULE_SUPER, km_cmd_ping},
+    PRV_SLOT(CMD_READ) {CMD_READ, RULE_SUPER, km_cmd_read},
+    PRV_SLOT(CMD_WRITE) {CMD_WRITE, 0, km_cmd_write},
+    PRV_SLOT(CMD_SYNC_WRITE) {CMD_SYNC_WRITE, RULE_KEEPS_SYNC, km_cmd_sync_write},
+    PRV_SLOT(CMD_SYNC_EXECUTE) {CMD_SYNC_EXECUTE, RULE_KEEPS_SYNC, km_cmd_sync_execute},
+    PRV_SLOT(CMD_MULTI_READ) {CMD_MULTI_READ, RULE_BROADCAST | RULE_KEEPS_SYNC, km_cmd_multi_read},
+    PRV_SLOT(CMD_MULTI_WRITE) {CMD_MULTI_WRITE, RULE_BROADCAST | RULE_KEEPS_SYNC, km_cmd_multi_write},
+#if KM_FEATURE_EXT
+    PRV_SLOT(KM_CMD_EXT) {KM_CMD_EXT, RULE_SUPER, km_cmd_ext},
+#endif
+    PRV_SLOT(KM_CMD_UPDATE_FW) {KM_CMD_UPDATE_FW, 0, km_cmd_update},
 };
+/* clang-format on */
 
 /* ---- answer timing ------------------------------------------------------ */
 
@@ -314,8 +322,18 @@ km_report_t km_cmd_sync_execute(km_servo_t *s, const km_frame_view_t *f, km_repl
 /* The table's entry for `cmd`, or NULL: not a command of this firmware. */
 static const prv_command_t *prv_command(uint8_t cmd)
 {
-    const prv_command_t *c = &s_commands[PRV_SLOT(cmd)];
+#if KM_PROTOCOL_COMPACT
+    for (const prv_command_t *c = s_commands; c != &s_commands[sizeof s_commands / sizeof s_commands[0]];
+         c++) {
+        if (c->cmd == cmd) {
+            return c;
+        }
+    }
+    return NULL;
+#else
+    const prv_command_t *c = &s_commands[(((unsigned)cmd >> 4) & 8u) | ((unsigned)cmd & 7u)];
     return c->cmd == cmd && c->run != NULL ? c : NULL;
+#endif
 }
 
 /* The ID rules of the super and broadcast IDs (§3, "Super ID", "Multi-ID
