@@ -358,6 +358,7 @@ static void prv_drive_servo(km_control_t *c, const km_control_params_t *p, int32
             .pwm_max = limit,
             /* not under a protection's hold or a closing current limit */
             .integrate = sm.holding && c->action == KM_PROT_ACT_NONE && c->ilim.cap >= KM_CURRENT_LIMIT_OPEN,
+            .unwind = sm.holding && c->ilim.cap >= KM_CURRENT_LIMIT_OPEN,
             .still = c->hold.on && c->action == KM_PROT_ACT_NONE,
             .stream = stream,
         };

@@ -101,6 +101,15 @@ static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
     return i_pwm;
 }
 
+/* Whether the shaft stands past the target, beyond KM_HOLD_PAST_DDEG, the
+ * way the integrator pushes: it holds more than any load (docs/tuning.md
+ * "A load let go"). */
+static bool prv_pushed_past(const km_position_loop_t *l, int32_t e_u)
+{
+    const int32_t past_u = KM_HOLD_PAST_DDEG * 1000;
+    return (l->i_acc > 0 && e_u < -past_u) || (l->i_acc < 0 && e_u > past_u);
+}
+
 /* Holding still: the hold band as a dead band and the settled clock;
  * returns kp (kp_hold once settled). */
 static int32_t prv_hold_terms(km_position_loop_t *l, const km_control_gains_t *g,
@@ -175,7 +184,10 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     if (vs != 0) {
         out += vs > 0 ? (int32_t)g->friction_pwm : -(int32_t)g->friction_pwm;
     }
-    if (in->integrate) {
+    if (in->unwind && prv_pushed_past(l, e_u)) {
+        l->i_acc = l->i_acc / KM_HOLD_PAST_BLEED * (KM_HOLD_PAST_BLEED - 1); /* reaches 0 */
+        out += prv_i_pwm(l);
+    } else if (in->integrate) {
         out += prv_integrate(l, g, in, e_u, in_band, out, dt_us);
     } else {
         out += prv_i_pwm(l);

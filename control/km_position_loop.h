@@ -17,6 +17,8 @@
 #define KM_HOLD_KI_GROW_Q6 5      /* ki_hold grows by 5/64 of itself per 0.1 deg of error */
 #define KM_HOLD_BLEED_DDEG 4      /* a push returning this close: its integrator bleeds */
 #define KM_HOLD_RETURN_BLEED_Q9 5 /* ... by 5/512 a tick */
+#define KM_HOLD_PAST_DDEG 2       /* the shaft this far past the target the way the integrator pushes: */
+#define KM_HOLD_PAST_BLEED 8      /* ... it bleeds 1/8 a tick instead of integrating */
 
 /* kp and kd shifted down while a 0x68 stream runs (docs/tuning.md "0x68 streams"). */
 /* A pushed hold's integrator refinements (1, the default): ki_hold growing
@@ -48,6 +50,7 @@ typedef struct {
     int32_t speed_ddps;    /* measured, 0.1 deg/s */
     int32_t pwm_max;       /* output bound, 0..1000 */
     bool integrate;        /* the integrator runs (holding: the set-point is at rest) */
+    bool unwind;           /* it may shrink (holding, also under a protection's hold) */
     bool still;            /* the move has ended: the hold band and kp_hold apply */
     bool stream;           /* a 0x68 stream runs: kp and kd lowered (KM_STREAM_KP_SHIFT, _KD_) */
 } km_position_loop_in_t;

@@ -907,6 +907,12 @@ static const row_t k_rows[] = {
      .rel_hi = 2001,
      .ts_after = 3},
     {.name = "stall_action_hold_servo_holds_near_trip_position",
+     /* released 500 ms after the stall condition last held: the drive
+      * is >= 600 for some ticks after the load goes (515 ms while the
+      * hold's integrator was frozen both ways; 525 ms since it may shrink:
+      * the shaft stops 2.4 deg past instead of running on, and the hold
+      * pulls it back at >= 600 PWM 34-39 ms after the load went;
+      * docs/tuning.md "A load let go") */
      .cmd = CMD_HOLD,
      .pre_ms = 300,
      SET(0x0D, 0x00, A34(2, 1, 1, 0), 1500, 20, 600, 5),
@@ -919,7 +925,7 @@ static const row_t k_rows[] = {
      .act = ACT_HOLD,
      .rel = REL_AUTO,
      .rel_lo = 500,
-     .rel_hi = 520,
+     .rel_hi = 530,
      .ts_after = 2},
     {.name = "stall_hold_release_by_command_refused_while_stalled",
      .cmd = CMD_HOLD,
