@@ -280,9 +280,9 @@ static int32_t spring_after_release(int32_t target, int32_t load_unm, bool stall
  * then none. The integrator held the load; once the shaft stands past
  * the target the way it pushes, it bleeds, so the shaft goes at most
  * 2.5 deg past (1.1-2.2 deg) and rests within 0.2 deg 2.5 s later
- * (before the bleed: 2.1-3.3 deg past, resting up to 0.55 deg off). Of that, up to ~1.6 deg is the gear train's own wind-up
- * springing back within the first ms (docs/plant.md), which no control
- * can catch. */
+ * (before the bleed: 2.1-3.3 deg past, resting up to 0.55 deg off).
+ * Up to ~1.6 deg of it is the gear train's own wind-up springing back
+ * within the first ms (docs/plant.md), which no control can catch. */
 static void test_hold_let_go_after_a_load_at_the_limit(void **state)
 {
     (void)state;
