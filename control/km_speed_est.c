@@ -10,6 +10,7 @@
 _Static_assert(100000u % KM_SPEED_WINDOW_US == 0u, "the window's exact fast path");
 
 #define PRV_FAST_SPAN_US ((KM_SPEED_FAST_N - 1u) * 1000u) /* the ring's span at the 1 kHz tick */
+_Static_assert(PRV_FAST_SPAN_US == 7000u, "prv_per_fast_span's constants");
 
 static const km_recip_near_t s_span_recip = KM_RECIP_NEAR(PRV_FAST_SPAN_US);
 static const km_recip_near_t s_window_recip = KM_RECIP_NEAR(KM_SPEED_WINDOW_US);
@@ -21,6 +22,18 @@ static int32_t prv_sdiv_near(int32_t n, uint32_t d, const km_recip_near_t *c)
     const uint32_t q = km_udiv_near(n < 0 ? 0u - (uint32_t)n : (uint32_t)n, d, c);
     return n < 0 ? -(int32_t)q : (int32_t)q;
 }
+
+#if !KM_CONTROL_COMPACT
+/* d x 1e6 / PRV_FAST_SPAN_US (7,000 us) toward zero for |d| <= 2000:
+ * 1e6 / 7000 = 142 + 6/7, and 6|d| / 7 by a 16-bit reciprocal (exact for
+ * every such d: tests/unit/control/test_control_fixdiv.c checks each). */
+static int32_t prv_per_fast_span(int32_t d)
+{
+    const uint32_t m = d < 0 ? 0u - (uint32_t)d : (uint32_t)d;
+    const uint32_t q = m * 142u + ((m * 6u * 9363u) >> 16);
+    return d < 0 ? -(int32_t)q : (int32_t)q;
+}
+#endif
 
 void km_speed_window_init(km_speed_window_t *w)
 {
@@ -74,8 +87,14 @@ int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
     const uint32_t span = f->span_us;
     const uint8_t i = (uint8_t)((f->head + KM_SPEED_FAST_N + 1u - f->count) % KM_SPEED_FAST_N);
     int32_t d = km_pos_diff(position, f->pos[i]);
-    d = km_sat(d, 2000);                                       /* keeps d x 1e6 in 32 bits */
-    f->ddps = prv_sdiv_near(d * 1000000, span, &s_span_recip); /* 7,000 us: no Newton step */
+    d = km_sat(d, 2000); /* keeps d x 1e6 in 32 bits */
+#if !KM_CONTROL_COMPACT
+    if (span == PRV_FAST_SPAN_US) { /* the steady 1 kHz tick */
+        f->ddps = prv_per_fast_span(d);
+        return f->ddps;
+    }
+#endif
+    f->ddps = prv_sdiv_near(d * 1000000, span, &s_span_recip); /* near 7,000 us: no Newton step */
     return f->ddps;
 }
 
