@@ -189,6 +189,26 @@ static void prv_settle_clock(km_servo_mode_t *m, const km_control_params_t *p, i
     m->settle_us += dt_us;
 }
 
+/* 0x4D's clock: whole ms of the motion, the rest carried (a subtraction
+ * at the 1 kHz tick, a divide only after a late one). */
+static void prv_count_rotation(km_servo_mode_t *m, uint32_t dt_us)
+{
+    uint32_t rem = m->rotation_rem_us + dt_us;
+#if !KM_CONTROL_COMPACT
+    if (rem < 2000u) {
+        if (rem >= 1000u) {
+            m->rotation_ms++;
+            rem -= 1000u;
+        }
+        m->rotation_rem_us = rem;
+        return;
+    }
+#endif
+    const uint32_t ms = km_udiv1000(rem); /* no second copy: flash */
+    m->rotation_ms += ms;
+    m->rotation_rem_us = rem - ms * 1000u;
+}
+
 void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_t position,
                         int32_t speed_ddps, uint32_t dt_us, km_servo_mode_out_t *out)
 {
@@ -211,10 +231,7 @@ void km_servo_mode_step(km_servo_mode_t *m, const km_control_params_t *p, int32_
         out->holding = done;
         m->reset_loop = false;
         if (m->running) {
-            m->rotation_rem_us += dt_us;
-            const uint32_t ms = km_udiv1000(m->rotation_rem_us);
-            m->rotation_ms += ms;
-            m->rotation_rem_us -= ms * 1000u;
+            prv_count_rotation(m, dt_us);
             if (done) {
                 prv_settle_clock(m, p, position, dt_us);
                 const int32_t dev = km_pos_diff(position, m->target);
