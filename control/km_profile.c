@@ -327,12 +327,52 @@ static int32_t prv_brake_speed(const km_profile_t *p, uint32_t k, uint32_t d)
     return (int32_t)km_isqrt(hi, lo);
 }
 
-/* The speed change a piece allows, remainder carried. */
+#if !KM_CONTROL_COMPACT
+/* A tick this many us off 1 ms still takes prv_dv's divide-free path. */
+#define PRV_JITTER_US 4
+
+/* accel / 1000, divided only when accel changed (once a plan). */
+static int32_t prv_accel_q(km_profile_t *p)
+{
+    if (p->accel != p->accel_of) {
+        p->accel_of = p->accel;
+        p->accel_q = km_sdiv1000(p->accel);
+    }
+    return p->accel_q;
+}
+
+/* prv_dv of a piece 1000 + j us (|j| <= PRV_JITTER_US) from accel's
+ * quotient and remainder by 1000: dv > 0, so its quotient is the floor. */
+static int32_t prv_dv_jitter(km_profile_t *p, int32_t j)
+{
+    const int32_t aq = prv_accel_q(p);
+    int32_t rem = j * (p->accel - aq * 1000) + p->vel_rem; /* -4000 < rem < 5000 */
+    int32_t dvq = p->accel + j * aq;
+    while (rem >= 1000) {
+        dvq++;
+        rem -= 1000;
+    }
+    while (rem < 0) {
+        dvq--;
+        rem += 1000;
+    }
+    p->vel_rem = rem;
+    return dvq;
+}
+#endif
+
+/* The speed change a piece allows, remainder carried (0 <= vel_rem < 1000). */
 static int32_t prv_dv(km_profile_t *p, uint32_t dt_us)
 {
     if (dt_us == 1000u && p->vel_rem >= 0) {
         return p->accel; /* 0 <= rem < 1000: rem stays */
     }
+#if !KM_CONTROL_COMPACT
+    const int32_t j = (int32_t)dt_us - 1000;
+    if (j >= -PRV_JITTER_US && j <= PRV_JITTER_US && p->vel_rem >= 0) {
+        return prv_dv_jitter(p, j);
+    }
+#endif
     const int32_t dv = p->accel * (int32_t)dt_us + p->vel_rem;
     const int32_t dvq = km_sdiv1000(dv);
     p->vel_rem = dv - dvq * 1000;
@@ -384,13 +424,34 @@ static void prv_stream_end(km_profile_t *p)
     p->vsq_lo = (uint32_t)p->vmax * (uint32_t)p->vmax;
 }
 
+/* ahead / 1000 for ahead > 0: the last quotient, or one less, while the
+ * reference moves on by up to 1 ms a tick; a divide only after a jump (a
+ * set-point). */
+static int32_t prv_ahead_ms(km_profile_t *p, int32_t ahead)
+{
+#if KM_CONTROL_COMPACT
+    (void)p;
+    return km_sdiv1000(ahead); /* no copy: flash */
+#else
+    int32_t q = p->s_ahead_q;
+    const int32_t r = ahead - q * 1000;
+    if (r < 0 && r >= -1000) {
+        q--;
+    } else if (r < 0 || r >= 1000) {
+        q = km_sdiv1000(ahead);
+    }
+    p->s_ahead_q = q;
+    return q;
+#endif
+}
+
 /* The speed a stream heads for: the targets' speed plus 1/128 ms of the
  * distance to the reference within KM_PROFILE_STREAM_NEAR_U, 1/64 ms
  * beyond; at most vmax. */
-static int32_t prv_stream_want(const km_profile_t *p, int32_t ahead)
+static int32_t prv_stream_want(km_profile_t *p, int32_t ahead)
 {
     const int32_t vff = p->s_vel;
-    const int32_t ref = p->target - p->s_vel_q * km_sdiv1000(ahead);
+    const int32_t ref = p->target - p->s_vel_q * prv_ahead_ms(p, ahead);
     int32_t err = ref - p->pos;
     const int32_t emax = p->vmax / 32 + 1, near = KM_PROFILE_STREAM_NEAR_U;
     err = km_sat(err, emax);

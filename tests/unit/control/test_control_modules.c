@@ -306,6 +306,58 @@ static void test_servo_mode_clamp(void **state)
     assert_int_equal(km_servo_mode_clamp(&p, -32768), -1350);
 }
 
+/* Ticks a few us off 1 ms (the tick's timestamps jitter; control/km_profile.c
+ * prv_dv takes them without a divide): speeding up from rest far from the
+ * target, the speed after each piece is exactly floor(accel x elapsed us /
+ * 1000), the remainder carried, for every accel shape and jitter. */
+static void test_profile_jittered_ticks_speed_exact(void **state)
+{
+    (void)state;
+    static const uint32_t dts[] = {1000u, 999u,  1001u, 996u, 1004u, 1003u, 997u, 1000u,
+                                   2000u, 1500u, 1005u, 995u, 1u,    998u,  1002u};
+    static const int32_t accels[] = {1, 7, 999, 1000, 1001, 9601, 123457, 1000000};
+    for (size_t a = 0; a < sizeof accels / sizeof accels[0]; a++) {
+        km_profile_t p;
+        km_profile_reset(&p, 0);
+        km_profile_move(&p, 800000, 0x3FFFFFFF, accels[a]); /* 80,000 deg away: no braking */
+        int64_t us = 0;
+        for (size_t k = 0; k < sizeof dts / sizeof dts[0]; k++) {
+            (void)km_profile_step(&p, dts[k]);
+            us += dts[k];
+            assert_int_equal(p.vel, (int32_t)((int64_t)accels[a] * us / 1000));
+        }
+    }
+}
+
+/* 0x4D's clock counts whole ms of a motion whatever the ticks' lengths
+ * (control/km_servo_mode.c prv_count_rotation: a late tick of several ms
+ * as well as jittered 1 ms ones). */
+static void test_servo_mode_rotation_clock(void **state)
+{
+    (void)state;
+    km_control_params_t p;
+    memset(&p, 0, sizeof p);
+    p.torque_switch = KM_TORQUE_ON;
+    p.travel_min = -1350;
+    p.travel_max = 1350;
+    p.gains.accel_dps2 = 4000u;
+    p.gains.fastest_dps = 360u;
+    p.gains.settle_ms = 60000u;
+    km_servo_mode_t m;
+    km_servo_mode_init(&m, &p);
+    const km_move_t mv = {.kind = KM_MOVE_TIME, .target = 900, .time_or_speed = 30000u, .pwm_cap = 1000u};
+    assert_true(km_servo_mode_move(&m, &mv, &p, 0));
+    static const uint32_t dts[] = {1000u, 999u, 1001u, 2500u, 999u, 3999u, 1u, 1000u, 65000u, 1003u, 997u};
+    uint32_t us = 0;
+    for (size_t k = 0; k < sizeof dts / sizeof dts[0]; k++) {
+        km_servo_mode_out_t out;
+        km_servo_mode_step(&m, &p, 0, 0, dts[k], &out);
+        us += dts[k];
+        assert_int_equal(m.rotation_ms, us / 1000u);
+        assert_int_equal(m.rotation_rem_us, us % 1000u);
+    }
+}
+
 /* Extremes from the wire stay defined (the sanitizer build of this test,
  * and the fuzz_servo target, would trip on an overflow): the widest i16
  * targets in 1 ms, speed limits up to 65535 deg/s, streams at any
@@ -369,6 +421,8 @@ int main(void)
         cmocka_unit_test(test_output_direction_limit_modes),
         cmocka_unit_test(test_speed_fast_estimator),
         cmocka_unit_test(test_servo_mode_clamp),
+        cmocka_unit_test(test_profile_jittered_ticks_speed_exact),
+        cmocka_unit_test(test_servo_mode_rotation_clock),
         cmocka_unit_test(test_extremes_stay_bounded),
     };
     return cmocka_run_group_tests_name("control modules", tests, NULL, NULL);
