@@ -59,10 +59,10 @@ typedef struct {
     }
 uint32_t km_udiv_near(uint32_t n, uint32_t d, const km_recip_near_t *c);
 
-/* Four bits of the radicand, two of the root, a step; 32-bit for roots
- * below 2^28 (docs/control-design.md "Arithmetic"). */
-#define KM_SQRT_NIBBLES(w, n)                               \
-    for (; (n) > 0u; (n)--) {                               \
+/* Four bits of the radicand, two of the root: one step (KM_SQRT_NIBBLES's
+ * body); 32-bit for roots below 2^28 (docs/control-design.md "Arithmetic"). */
+#define KM_SQRT_NIBBLE(w)                                   \
+    do {                                                    \
         const uint32_t x = (rem << 4) | ((w) >> 28);        \
         (w) <<= 4;                                          \
         const uint32_t r8 = root << 3, t2 = (r8 << 1) + 4u; \
@@ -82,6 +82,12 @@ uint32_t km_udiv_near(uint32_t n, uint32_t d, const km_recip_near_t *c);
         } else {                                            \
             rem = x;                                        \
         }                                                   \
+    } while (0)
+
+/* n steps of KM_SQRT_NIBBLE on the word w. */
+#define KM_SQRT_NIBBLES(w, n) \
+    for (; (n) > 0u; (n)--) { \
+        KM_SQRT_NIBBLE(w);    \
     }
 
 /* floor(sqrt(hi:lo)) for hi:lo < 2^56, leading zero nibbles skipped
@@ -109,6 +115,37 @@ static inline uint32_t km_isqrt56(uint32_t hi, uint32_t lo)
     KM_SQRT_NIBBLES(lo, m)
     return root;
 }
+
+#if !KM_CONTROL_COMPACT
+/* km_isqrt56 with the low word's eight steps written out (no loop counter:
+ * the profile's braking speed, every braking tick, in the fast build). */
+static inline uint32_t km_isqrt56_fast(uint32_t hi, uint32_t lo)
+{
+    if (hi == 0u) {
+        return km_isqrt56(0u, lo);
+    }
+    uint32_t root = 0, rem = 0;
+    unsigned n = 8u; /* nibbles left in hi */
+    while ((hi >> 24) == 0u) {
+        hi <<= 8;
+        n -= 2u;
+    }
+    while ((hi >> 28) == 0u) {
+        hi <<= 4;
+        n--;
+    }
+    KM_SQRT_NIBBLES(hi, n)
+    KM_SQRT_NIBBLE(lo);
+    KM_SQRT_NIBBLE(lo);
+    KM_SQRT_NIBBLE(lo);
+    KM_SQRT_NIBBLE(lo);
+    KM_SQRT_NIBBLE(lo);
+    KM_SQRT_NIBBLE(lo);
+    KM_SQRT_NIBBLE(lo);
+    KM_SQRT_NIBBLE(lo);
+    return root;
+}
+#endif
 
 /* floor(sqrt(hi:lo)) for hi:lo < 2^62, 32-bit operations only
  * (docs/control-design.md "Arithmetic"). */

@@ -355,6 +355,33 @@ static void test_isqrt_matches_64_bit_root(void **state)
     assert_int_equal(km_isqrt(0x3FFFFFFFu, 0xFFFFFFFFu), ref_isqrt64(((uint64_t)1 << 62) - 1u));
 }
 
+#if !KM_CONTROL_COMPACT
+/* km_isqrt56_fast (the fast build's braking root, its low word's steps
+ * written out) is floor(sqrt) for every value below 2^56: around every
+ * square of a root below 2^28, and random values of every length. */
+static void test_isqrt56_fast_matches_64_bit_root(void **state)
+{
+    (void)state;
+    for (uint32_t b = 0; b < 28u; b++) {
+        for (uint32_t k = 0; k < 256u; k++) {
+            const uint64_t r = ((uint64_t)1 << b) + k * (((uint64_t)1 << b) / 256u + 1u);
+            for (int d = -1; d <= 1; d++) {
+                const uint64_t x = r * r + (uint64_t)(int64_t)d;
+                if (x >= ((uint64_t)1 << 56)) {
+                    continue;
+                }
+                assert_int_equal(km_isqrt56_fast((uint32_t)(x >> 32), (uint32_t)x), ref_isqrt64(x));
+            }
+        }
+    }
+    for (unsigned k = 0; k < 1000000u; k++) {
+        const uint64_t x = (((uint64_t)rnd() << 32) | rnd()) >> (8u + rnd() % 56u);
+        assert_int_equal(km_isqrt56_fast((uint32_t)(x >> 32), (uint32_t)x), ref_isqrt64(x));
+    }
+    assert_int_equal(km_isqrt56_fast(0xFFFFFFu, 0xFFFFFFFFu), ref_isqrt64(((uint64_t)1 << 56) - 1u));
+}
+#endif
+
 /* Long moves (up to 80,000 deg) at speeds from 2^28 to 2^30 u/s and hard
  * accelerations: their braking roots are of values from 2^56 up, the root
  * taken from a shifted one and stepped up; equal to the 64-bit root at
@@ -537,6 +564,27 @@ static void test_speed_fast_steady_tick_every_displacement(void **state)
     }
 }
 
+/* Spans a few us off 7,000 (a tick a few us off 1 ms still in the ring:
+ * control/km_speed_est.c prv_per_near_span, reciprocal and correction
+ * steps) give C's quotient for every displacement, and so do spans just
+ * outside that window (the general division). */
+static void test_speed_fast_near_span_every_displacement(void **state)
+{
+    (void)state;
+    for (int32_t s = -20; s <= 20; s++) {
+        for (int32_t d = -2000; d <= 2000; d++) {
+            km_speed_fast_t f;
+            km_speed_fast_init(&f, 0);
+            for (unsigned t = 1; t < KM_SPEED_FAST_N - 1u; t++) {
+                (void)km_speed_fast_step(&f, 0, 1000u);
+            }
+            const int32_t v = km_speed_fast_step(&f, d, (uint32_t)(1000 + s));
+            assert_int_equal(f.span_us, (uint32_t)(7000 + s));
+            assert_int_equal(v, d * 1000000 / (7000 + s));
+        }
+    }
+}
+
 static void test_speed_fast_running_span_equals_sum(void **state)
 {
     (void)state;
@@ -609,6 +657,10 @@ int main(void)
         cmocka_unit_test(test_retime_cruise_equals_64_bit_reference),
         cmocka_unit_test(test_udiv_near_matches_c),
         cmocka_unit_test(test_speed_fast_steady_tick_every_displacement),
+        cmocka_unit_test(test_speed_fast_near_span_every_displacement),
+#if !KM_CONTROL_COMPACT
+        cmocka_unit_test(test_isqrt56_fast_matches_64_bit_root),
+#endif
         cmocka_unit_test(test_speed_fast_running_span_equals_sum),
         cmocka_unit_test(test_speed_window_equals_division),
     };
