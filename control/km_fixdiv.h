@@ -118,23 +118,24 @@ static inline uint32_t km_isqrt56(uint32_t hi, uint32_t lo)
 
 #if !KM_CONTROL_COMPACT
 /* km_isqrt56 with the low word's eight steps written out (no loop counter:
- * the profile's braking speed, every braking tick, in the fast build). */
+ * the profile's braking speed, every braking tick, in the fast build); a
+ * low word's leading zero nibbles are stepped through (root and rest stay
+ * 0), which bounds the tick's cost below 2^32 too. */
 static inline uint32_t km_isqrt56_fast(uint32_t hi, uint32_t lo)
 {
-    if (hi == 0u) {
-        return km_isqrt56(0u, lo);
-    }
     uint32_t root = 0, rem = 0;
-    unsigned n = 8u; /* nibbles left in hi */
-    while ((hi >> 24) == 0u) {
-        hi <<= 8;
-        n -= 2u;
+    if (hi != 0u) {
+        unsigned n = 8u; /* nibbles left in hi */
+        while ((hi >> 24) == 0u) {
+            hi <<= 8;
+            n -= 2u;
+        }
+        while ((hi >> 28) == 0u) {
+            hi <<= 4;
+            n--;
+        }
+        KM_SQRT_NIBBLES(hi, n)
     }
-    while ((hi >> 28) == 0u) {
-        hi <<= 4;
-        n--;
-    }
-    KM_SQRT_NIBBLES(hi, n)
     KM_SQRT_NIBBLE(lo);
     KM_SQRT_NIBBLE(lo);
     KM_SQRT_NIBBLE(lo);
