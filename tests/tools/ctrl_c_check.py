@@ -134,6 +134,13 @@ def finish(p, errfile, timeout=30):
     return out, errfile.read(), timed_out
 
 
+def failed_run_stderr(err):
+    """A failed run's whole stderr (servo-bus's and its servos', which share
+    it), indented: the reason a servo died is rarely its last line."""
+    lines = err.rstrip().splitlines() or ["(nothing on stderr)"]
+    return "\n".join("    | " + ln for ln in lines)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--backend", default="host-sim", choices=("host-sim", "qemu"))
@@ -230,6 +237,8 @@ def main():
         races += raced
         print("run %2d: SIG%s at %.3f s, drawn %.3f (%s): %s"
               % (n, a.signal, sent, delay, stage, "; ".join(problems) if problems else "clean"), flush=True)
+        if problems:
+            print(failed_run_stderr(err), flush=True)
         bad += bool(problems)
         children()  # reap
     print("%d runs, %d left processes behind or failed (%d interrupted Python's own start-up, "
