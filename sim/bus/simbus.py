@@ -13,8 +13,10 @@ the cache variable of that name) points at another build tree.
         ... bus.spec (tcp:127.0.0.1:PORT), bus.port ...
 """
 import collections
+import functools
 import os
 import shutil
+import signal
 import subprocess
 import sys
 
@@ -29,18 +31,38 @@ class BuildMissing(Exception):
     """No board or no build for a backend; the message says what to run."""
 
 
+STOP_SIGNALS = {signal.SIGINT, signal.SIGTERM}
+
+
+def run_unsignalled(argv):
+    """subprocess.run(argv) that a Ctrl-C or SIGTERM to the caller's process
+    group never kills: its own session, and SIGINT and SIGTERM blocked in it.
+    A session alone leaves a window (the child is in the caller's group from
+    fork to setsid, and one signal in 7 of a stream of them killed it,
+    docs/architecture.md "Signals during servo-bus's start-up"); the blocked
+    mask is inherited across exec, so a signal caught in that window stays
+    pending, never delivered. The caller's own mask is restored at once: it
+    sees the signal itself (servo-bus then stops at its next check)."""
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
+    try:
+        proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                start_new_session=True)
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+    out, err = proc.communicate()
+    return subprocess.CompletedProcess(argv, proc.returncode, out, err)
+
+
+@functools.lru_cache(maxsize=None)
 def bus_boards():
     """{backend: Board} for every board that names a bus backend (cmake/km_boards.cmake)."""
     cmake = shutil.which("cmake")
     if not cmake:
         raise BuildMissing("cmake is not on PATH: it finds the boards (cmake/km_boards.cmake)")
-    # A session of its own: a Ctrl-C to the caller's process group must not
-    # kill the query (servo-bus then stops cleanly on its own).
-    r = subprocess.run([cmake, "-DKM_BOARDS_QUERY=bus", "-P", KM_BOARDS], capture_output=True, text=True,
-                       start_new_session=True)
+    r = run_unsignalled([cmake, "-DKM_BOARDS_QUERY=bus", "-P", KM_BOARDS])
     if r.returncode != 0:
         raise BuildMissing("board discovery failed (cmake -DKM_BOARDS_QUERY=bus -P %s): %s"
-                           % (KM_BOARDS, r.stderr.strip()))
+                           % (KM_BOARDS, r.stderr.strip() or "exit status %d" % r.returncode))
     boards = {}
     for line in r.stdout.splitlines():
         words = line.split()

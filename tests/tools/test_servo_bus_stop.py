@@ -117,6 +117,40 @@ class SignalBeforeReady(unittest.TestCase):
         self.run_until_signal("held", "SIGINT")
 
 
+# A cmake for servo-bus's board discovery (sim/bus/simbus.py) that is caught
+# by a terminal's Ctrl-C to servo-bus's process group before it left that
+# group: it sends SIGINT to servo-bus and to itself (what the group's signal
+# does to both at once), then runs the real cmake.
+CMAKE_CAUGHT_BY_CTRL_C = """#!%s
+import os, signal, sys
+os.kill(os.getppid(), signal.SIGINT)
+os.kill(os.getpid(), signal.SIGINT)
+os.execv(%r, [%r] + sys.argv[1:])
+"""
+
+
+class SignalDuringBoardDiscovery(unittest.TestCase):
+    """A Ctrl-C that reaches servo-bus's board query (cmake) too, in the
+    moment between its fork and its own session, stops start-up cleanly
+    (exit 0, "stopping"), not as a failed discovery (exit 2): one run in
+    five of ctrl_c_check.py on a loaded host failed so."""
+
+    def test_ctrl_c_caught_by_the_board_query(self):
+        host_sim_image()
+        with tempfile.TemporaryDirectory() as d:
+            real = shutil.which("cmake")
+            fake = os.path.join(d, "cmake")
+            with open(fake, "w") as f:
+                f.write(CMAKE_CAUGHT_BY_CTRL_C % (sys.executable, real, real))
+            os.chmod(fake, 0o755)
+            env = dict(os.environ, PATH=d + os.pathsep + os.environ["PATH"])
+            r = subprocess.run([sys.executable, SERVO_BUS, "--ids", "1", "--port", "0", "--backend", "host-sim"],
+                               capture_output=True, text=True, timeout=60, env=env)
+        self.assertEqual((r.returncode, r.stdout), (0, ""), r.stderr)
+        self.assertEqual(r.stderr.splitlines()[-1], "servo-bus: stopping", r.stderr)
+        self.assertNotIn("pid", r.stderr)  # stopped before any servo started
+
+
 class Lifecycle(unittest.TestCase):
     def start(self, *args):
         p = subprocess.Popen([sys.executable, SERVO_BUS, "--port", "0", "--backend", "host-sim", *args],
