@@ -32,6 +32,7 @@ static int prv_usage(const char *argv0)
             "usage: %s (--listen HOST:PORT | --pty) --flash FILE [--baud N] [--gap-floor-us N]\n"
             "          [--product pot|encoder] [--plant realistic|ideal] [--scenario FILE]\n"
             "          [--inject PATH]\n"
+            "  --listen HOST:0   a port the kernel picks, printed \"port N\" on stdout\n"
             "  --gap-floor-us N  least silence inside a frame that drops it, in us, when it\n"
             "                    exceeds the parser's max(10 byte times, 1 ms); default %u\n"
             "                    (host scheduling stalls); 0 = the real rule\n"

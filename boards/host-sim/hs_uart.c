@@ -94,6 +94,25 @@ bool hs_uart_adopt(void)
     return true;
 }
 
+/* --listen HOST:0: print the port the kernel chose, "port N" on stdout, for
+ * sim/bus/servo-bus, which connects to it (docs/architecture.md "host-sim's
+ * options"). */
+static bool prv_report_chosen_port(const char *port_text)
+{
+    if (strcmp(port_text, "0") != 0) {
+        return true;
+    }
+    struct sockaddr_in bound;
+    socklen_t len = sizeof bound;
+    if (getsockname(s_listen_fd, (struct sockaddr *)&bound, &len) != 0) {
+        fprintf(stderr, "host-sim: cannot read the port chosen: %s\n", strerror(errno));
+        return false;
+    }
+    printf("port %u\n", (unsigned)ntohs(bound.sin_port));
+    fflush(stdout);
+    return true;
+}
+
 bool hs_uart_open_tcp(const char *host_port)
 {
     char host[128];
@@ -119,7 +138,7 @@ bool hs_uart_open_tcp(const char *host_port)
         return false;
     }
     freeaddrinfo(res);
-    return true;
+    return prv_report_chosen_port(colon + 1);
 }
 
 bool hs_uart_open_pty(void)

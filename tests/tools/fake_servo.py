@@ -5,7 +5,8 @@ without QEMU or the firmware. It speaks the host-sim command-line contract:
 
     fake_servo.py --listen 127.0.0.1:PORT --flash FILE [--baud N] [--report-baud]
 
-listens on PORT for one bus connection at a time, keeps its ID in FILE
+listens on PORT for one bus connection at a time (PORT 0: one the kernel
+picks, printed "port N" on stdout), keeps its ID in FILE
 (blank or missing file = fresh servo = ID 0), and answers per docs/protocol.md
 §2/§3: ping (own ID or super ID), read of 0x01 (status, random) and 0x0F (ID),
 write of 0x0F (ID; no answer at response level 0). Frames with a bad checksum
@@ -97,6 +98,8 @@ def main():
     srv.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
     srv.bind((host, int(port)))
     srv.listen(1)
+    if int(port) == 0:  # the host-sim contract: the port chosen, on stdout
+        print("port %d" % srv.getsockname()[1], flush=True)
     if args.report_baud:
         print("baud %d" % args.baud, flush=True)
     rx_log = None

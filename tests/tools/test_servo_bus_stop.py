@@ -151,6 +151,56 @@ class SignalDuringBoardDiscovery(unittest.TestCase):
         self.assertNotIn("pid", r.stderr)  # stopped before any servo started
 
 
+# Runs sim/bus/servo-bus as __main__, unchanged, in a world where every port
+# it lets go of is taken at once by another process: a socket it bound to
+# port 0 (the kernel's choice) and closes is followed, in the same instant,
+# by a listener of someone else's on that port. Says "took port N" on stderr.
+PORTS_TAKEN_AT_ONCE = r"""
+import runpy, socket, sys
+script = sys.argv[1]
+squatters, chosen_by = [], {}  # id(socket) -> the address the kernel chose
+bind, close = socket.socket.bind, socket.socket.close
+def bind_noting(self, address):
+    bind(self, address)
+    if isinstance(address, tuple) and address[1] == 0:
+        chosen_by[id(self)] = self.getsockname()
+def close_and_take(self):
+    chosen = chosen_by.pop(id(self), None)
+    close(self)
+    if chosen is not None:
+        squatter = socket.socket()
+        bind(squatter, chosen)
+        squatter.listen(1)
+        squatters.append(squatter)
+        print("took port %d" % chosen[1], file=sys.stderr, flush=True)
+socket.socket.bind, socket.socket.close = bind_noting, close_and_take
+sys.argv = [script] + sys.argv[2:]
+runpy.run_path(script, run_name="__main__")
+"""
+
+
+class PortTakenMeanwhile(unittest.TestCase):
+    """A host-sim servo listens on a port it bound itself, so another process
+    taking a port in the meantime cannot kill it: servo-bus once chose each
+    servo's port (bind to port 0, close) and host-sim bound it later, and a
+    port taken in between made that servo exit 1 at start-up."""
+
+    def test_host_sim_bus_starts_when_released_ports_are_taken(self):
+        host_sim_image()
+        p = subprocess.Popen([sys.executable, "-c", PORTS_TAKEN_AT_ONCE, os.path.realpath(SERVO_BUS),
+                              "--ids", "1,2", "--port", "0", "--backend", "host-sim"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            ready = p.stdout.readline()
+            answered = ready.startswith("ready ") and kmx("tcp:" + ready.split()[1], "ping", "2").returncode
+        finally:
+            p.terminate()
+            _, err = p.communicate(timeout=30)
+        self.assertTrue(ready.startswith("ready "), err)
+        self.assertEqual(answered, 0, err)
+        self.assertEqual(p.returncode, 0, err)
+
+
 class Lifecycle(unittest.TestCase):
     def start(self, *args):
         p = subprocess.Popen([sys.executable, SERVO_BUS, "--port", "0", "--backend", "host-sim", *args],
