@@ -340,22 +340,11 @@ class HostSim:
             line = self.proc.stdout.readline().split()
             assert line[:1] == ["pty"], line
             self.spec = "pty:" + line[1]
-        else:
-            s = socket.socket()
-            s.bind(("127.0.0.1", 0))
-            port = s.getsockname()[1]
-            s.close()
-            self.proc = subprocess.Popen(argv + ["--listen", "127.0.0.1:%d" % port])
-            self.spec = "tcp:127.0.0.1:%d" % port
-            deadline = time.monotonic() + 5
-            while True:
-                try:
-                    socket.create_connection(("127.0.0.1", port), timeout=1).close()
-                    break
-                except OSError:
-                    if time.monotonic() > deadline or self.proc.poll() is not None:
-                        raise
-                    time.sleep(0.02)
+        else:  # a port it binds itself, said on stdout once it listens
+            self.proc = subprocess.Popen(argv + ["--listen", "127.0.0.1:0"], stdout=subprocess.PIPE, text=True)
+            line = self.proc.stdout.readline().split()
+            assert line[:1] == ["port"], line
+            self.spec = "tcp:127.0.0.1:" + line[1]
 
     def close(self):
         self.proc.kill()
