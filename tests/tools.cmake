@@ -9,8 +9,10 @@
 # host-sim servos, about 23 s; test_servo_bus_stop.py: Ctrl-C at random
 # moments of servo-bus's start-up, 20 runs on host-sim and 20 on QEMU (when
 # built) with no process left (tests/tools/ctrl_c_check.py, by PID), a
-# signal at the last moments of start-up ends it without "ready", SIGKILL,
-# --flash-dir relaunch, one-line refusals, about 20 s; test_kmx_shared_id.py:
+# signal at the last moments of start-up ends it without "ready", a Ctrl-C
+# that reaches the board query too, host-sim servos starting while every
+# port servo-bus releases is taken, SIGKILL, --flash-dir relaunch, one-line
+# refusals, about 20 s; test_kmx_shared_id.py:
 # every path that writes an ID refuses a taken or shared one, scan flags an ID
 # two servos answer on and its command separates them, about 10 s;
 # test_kmx_url_ctrl_c.py: rfc2217:// and socket:// buses, Ctrl-C anywhere in

@@ -37,11 +37,10 @@ STOP_SIGNALS = {signal.SIGINT, signal.SIGTERM}
 def run_unsignalled(argv):
     """subprocess.run(argv) that a Ctrl-C or SIGTERM to the caller's process
     group never kills: its own session, and SIGINT and SIGTERM blocked in it.
-    A session alone leaves a window (the child is in the caller's group from
-    fork to setsid, and one signal in 7 of a stream of them killed it,
-    docs/architecture.md "Signals during servo-bus's start-up"); the blocked
-    mask is inherited across exec, so a signal caught in that window stays
-    pending, never delivered. The caller's own mask is restored at once: it
+    A session alone leaves a window: the child is in the caller's group from
+    fork to setsid (docs/architecture.md "servo-bus's start-up: ports and
+    signals"). The blocked mask is inherited across exec, so a signal caught
+    in that window stays pending, never delivered. The caller's own mask is restored at once: it
     sees the signal itself (servo-bus then stops at its next check)."""
     old = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
     try:

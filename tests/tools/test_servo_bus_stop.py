@@ -6,7 +6,9 @@ image and qemu-system-arm are there, about 15 s); a signal that comes at
 the last moments of start-up, after the last servo answered, ends it
 without "ready" (issue 18 item 10: placed there by a profile hook on the
 real script, once before the final check and once inside it while the
-signals are held back); a servo-bus killed with
+signals are held back); a Ctrl-C that also reaches the board query (cmake)
+stops start-up cleanly; host-sim servos start while every port servo-bus
+lets go of is taken at once by someone else; a servo-bus killed with
 SIGKILL takes its servos with it (PR_SET_PDEATHSIG); relaunching with
 --flash-dir after an ID change finds the servo at its stored ID; and the
 start-up refusals are one line each: a missing qemu-system-arm (naming the
