@@ -156,7 +156,8 @@ class SignalDuringBoardDiscovery(unittest.TestCase):
 # Runs sim/bus/servo-bus as __main__, unchanged, in a world where every port
 # it lets go of is taken at once by another process: a socket it bound to
 # port 0 (the kernel's choice) and closes is followed, in the same instant,
-# by a listener of someone else's on that port. Says "took port N" on stderr.
+# by a listener of someone else's on that port, unless another process (a
+# servo) still holds it. Says "took port N" on stderr.
 PORTS_TAKEN_AT_ONCE = r"""
 import runpy, socket, sys
 script = sys.argv[1]
@@ -171,7 +172,10 @@ def close_and_take(self):
     close(self)
     if chosen is not None:
         squatter = socket.socket()
-        bind(squatter, chosen)
+        try:
+            bind(squatter, chosen)  # refused while another holds the port (a servo)
+        except OSError:
+            return
         squatter.listen(1)
         squatters.append(squatter)
         print("took port %d" % chosen[1], file=sys.stderr, flush=True)
@@ -182,15 +186,14 @@ runpy.run_path(script, run_name="__main__")
 
 
 class PortTakenMeanwhile(unittest.TestCase):
-    """A host-sim servo listens on a port it bound itself, so another process
-    taking a port in the meantime cannot kill it: servo-bus once chose each
-    servo's port (bind to port 0, close) and host-sim bound it later, and a
-    port taken in between made that servo exit 1 at start-up."""
+    """A servo listens on a port no other process can take first (host-sim
+    binds one itself, QEMU inherits a listening socket): servo-bus once chose
+    each servo's port (bind to port 0, close) and the servo bound it later,
+    and a port taken in between made that servo exit 1 at start-up."""
 
-    def test_host_sim_bus_starts_when_released_ports_are_taken(self):
-        host_sim_image()
+    def start_with_released_ports_taken(self, backend):
         p = subprocess.Popen([sys.executable, "-c", PORTS_TAKEN_AT_ONCE, os.path.realpath(SERVO_BUS),
-                              "--ids", "1,2", "--port", "0", "--backend", "host-sim"],
+                              "--ids", "1,2", "--port", "0", "--backend", backend],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         try:
             ready = p.stdout.readline()
@@ -201,6 +204,15 @@ class PortTakenMeanwhile(unittest.TestCase):
         self.assertTrue(ready.startswith("ready "), err)
         self.assertEqual(answered, 0, err)
         self.assertEqual(p.returncode, 0, err)
+
+    def test_host_sim_bus_starts_when_released_ports_are_taken(self):
+        host_sim_image()
+        self.start_with_released_ports_taken("host-sim")
+
+    @unittest.skipUnless(os.path.isfile(QEMU_IMAGE) and shutil.which("qemu-system-arm"),
+                         "no QEMU image or qemu-system-arm")
+    def test_qemu_bus_starts_when_released_ports_are_taken(self):
+        self.start_with_released_ports_taken("qemu")
 
 
 class Lifecycle(unittest.TestCase):
