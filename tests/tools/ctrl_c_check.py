@@ -24,12 +24,14 @@ lost: it would have printed "ready" and served the bus). A ready line
 written after the signal was sent is counted apart ("ready raced the
 signal"): the signal came after servo-bus's final check, in the moment
 before the line went out, and the bus then stops at once. A SIGINT that
-comes while the interpreter checks whether argv[0] is an import path
-entry, before servo-bus's first line, is printed by Python with its
-KeyboardInterrupt and then dropped (the script runs all the same, never
-having seen it): the group is then signalled once more, as a user presses
-Ctrl-C again, and the run counted apart; it must still end with status 0
-and nothing left. A failed run prints servo-bus's whole stderr (its
+comes before servo-bus's handlers are in place is at times printed by
+Python with its KeyboardInterrupt and then dropped, and servo-bus runs all
+the same, never having seen it (seen: while the interpreter checks
+whether argv[0] is an import path entry, "Failed checking if argv[0] is an
+import path entry", and in an import lock's weakref callback, "Exception
+ignored in"): once servo-bus's own lines follow such a KeyboardInterrupt,
+the group is signalled once more, as a user presses Ctrl-C again, and the
+run counted apart; it must still end with status 0 and nothing left. A failed run prints servo-bus's whole stderr (its
 servos' too). Prints one line per run and a summary "N runs, M left processes behind or failed (...)";
 exit status 1 if any did."""
 import argparse
@@ -50,9 +52,6 @@ PR_SET_CHILD_SUBREAPER = 36
 # place (line 0 is the interpreter compiling it; before the handlers, the
 # "import signal" itself).
 SERVO_BUS_FRAME = re.compile(r'File ".*servo-bus", line (\d+)')
-# CPython's start-up (Modules/main.c, pymain_get_importer) prints this and the
-# KeyboardInterrupt's traceback, then runs the script all the same.
-PYTHON_DROPPED = "Failed checking if argv[0] is an import path entry"
 
 
 def handlers_line():
@@ -127,12 +126,25 @@ def ready_written(p):
     return bool(select.select([p.stdout], [], [], 0)[0])
 
 
-def dropped_by_python(errfile):
-    """True when the interpreter printed and then dropped the KeyboardInterrupt
-    of a SIGINT that came while it looked at argv[0] (before servo-bus's first
-    line): it goes on to run the script, which never saw the signal."""
-    errfile.seek(0)
-    return PYTHON_DROPPED in errfile.read()
+def text_so_far(errfile):
+    """What servo-bus and its servos wrote to `errfile` so far, read without
+    moving the file offset they share with this process (a seek here would
+    make their next writes overwrite what is there)."""
+    chunks, at = [], 0
+    while True:
+        chunk = os.pread(errfile.fileno(), 65536, at)
+        if not chunk:
+            return b"".join(chunks).decode(errors="replace")
+        chunks.append(chunk)
+        at += len(chunk)
+
+
+def dropped_by_python(text):
+    """True when the interpreter printed the KeyboardInterrupt of a SIGINT
+    that came before servo-bus's handlers and then dropped it, going on to
+    run servo-bus, which never saw the signal: its own lines follow."""
+    at = text.find("KeyboardInterrupt")
+    return at >= 0 and "servo-bus: " in text[at:]
 
 
 def finish(p, errfile, sig, timeout=30):
@@ -146,7 +158,7 @@ def finish(p, errfile, sig, timeout=30):
             timed_out = True
             p.kill()
             break
-        if not again and dropped_by_python(errfile):
+        if not again and dropped_by_python(text_so_far(errfile)):
             again = True
             os.killpg(p.pid, sig)
         time.sleep(0.05)
@@ -233,7 +245,7 @@ def main():
                 except ProcessLookupError:
                     pass
         if again:  # Python's report of the signal it dropped is no failure of servo-bus's
-            err = err[err.index("KeyboardInterrupt", err.index(PYTHON_DROPPED)) + len("KeyboardInterrupt"):]
+            err = err[err.index("\n", err.index("KeyboardInterrupt")) + 1:]
         where = [ln.strip() for ln in err.splitlines() if ln.strip().startswith("File ")]
         # Python's own start-up, before servo-bus's first line (its signal
         # handlers) runs: the default SIGINT action, or KeyboardInterrupt
