@@ -189,6 +189,27 @@ class ServoBus(unittest.TestCase):
         for pid in pids:
             self.assertFalse(pid_alive(pid), "servo pid %d still running" % pid)
 
+    def test_a_client_gone_before_the_hub_saw_it_leaves_the_bus_free(self):
+        """A client that connected and left while servo-bus was not running
+        (a loaded host) does not hold the bus against the next one: the hub
+        once accepted it, then the next client before reading the first
+        one's end, and told the next one the bus was busy."""
+        launcher = Launcher([1])
+        try:
+            _, addr = launcher.wait_ready()
+            os.kill(launcher.proc.pid, signal.SIGSTOP)  # the hub does not run meanwhile
+            try:
+                socket.create_connection(addr, timeout=5).close()
+                second = socket.create_connection(addr, timeout=5)
+            finally:
+                os.kill(launcher.proc.pid, signal.SIGCONT)
+            with second:
+                frames = exchange(second, kmframe.ping(1), timeout=5)
+        finally:
+            code, _, err = launcher.stop()
+        self.assertEqual([f.id for f in frames], [1], err)
+        self.assertIn("client disconnected", err)
+
     def test_flash_dir_keeps_ids_across_runs(self):
         with tempfile.TemporaryDirectory() as flash_dir:
             for run in (1, 2):
