@@ -102,7 +102,7 @@ static bool prv_report_chosen_port(const char *port_text)
     if (strcmp(port_text, "0") != 0) {
         return true;
     }
-    struct sockaddr_in bound;
+    struct sockaddr_in bound = {0};
     socklen_t len = sizeof bound;
     if (getsockname(s_listen_fd, (struct sockaddr *)&bound, &len) != 0) {
         fprintf(stderr, "host-sim: cannot read the port chosen: %s\n", strerror(errno));

@@ -52,6 +52,9 @@ PR_SET_CHILD_SUBREAPER = 36
 # place (line 0 is the interpreter compiling it; before the handlers, the
 # "import signal" itself).
 SERVO_BUS_FRAME = re.compile(r'File ".*servo-bus", line (\d+)')
+# CPython's whole stderr when a SIGINT interrupts it while it sets up the
+# script's __main__ module, before the script's first line (exit 1).
+PYTHON_NO_LOADER = "python: failed to set __main__.__loader__"
 
 
 def handlers_line():
@@ -251,14 +254,16 @@ def main():
         # handlers) runs: the default SIGINT action, or KeyboardInterrupt
         # while the interpreter initialises, imports site or compiles the
         # script (printed with a traceback, in a "Fatal Python error", or
-        # alone: exit 1 with "KeyboardInterrupt" only, 2 in 200 early runs).
+        # alone: exit 1 with "KeyboardInterrupt" only, 2 in 200 early runs;
+        # or exit 1 with PYTHON_NO_LOADER alone, once in 900 runs).
         # Nothing is started then; counted apart, not a failure.
         if a.demo and p.returncode in (0, 130, -sig):
             p.returncode = 0  # the demo's own goodbye, or killed before its trap
         interrupted = err.strip().endswith("KeyboardInterrupt")
         in_python_startup = not a.demo and not left and (
             (p.returncode == -sig and not err.strip()) or
-            (interrupted and not after_handlers(where, handlers_at)))
+            (interrupted and not after_handlers(where, handlers_at)) or
+            (p.returncode == 1 and err.strip() == PYTHON_NO_LOADER))
         if not in_python_startup:
             if p.returncode != 0:
                 last = err.strip().splitlines()[-1:] or ["(nothing on stderr)"]
