@@ -830,8 +830,9 @@ def selftest(backend, opts):
             st = ping_status(bus, d)
             hw = read_show(bus, d, 0x35)
             pos = read_show(bus, d, 0x46)
-            # the pot reading's noise (docs/plant.md, ~0.04 deg): one count either way
-            check(st == 0 and hw == 0 and pos is not None and rest is not None and abs(pos - rest) <= 1,
+            # the pot reading's noise (docs/plant.md, ~0.04 deg) moves each reading by one
+            # 0.1 deg count either way, so two readings of a still shaft differ by up to 2
+            check(st == 0 and hw == 0 and pos is not None and rest is not None and abs(pos - rest) <= 2,
                   "§5.2 0x35 after restart %d with the shaft resting on its stop (0x46 %s): 0x35 reads "
                   "%s, status %s (no position fault: a rail reading is an open wiper, the stop is not)"
                   % (n, pos, hw, None if st is None else "0x%02x" % st))
