@@ -530,6 +530,32 @@ static void prv_sleep(uint32_t irq)
     } while (!s_wake && !s_answer_started && !prv_tick_due(km_hal_time_now()));
 }
 
+/* The control tick due at `now`, the watchdog and the boot's confirmation;
+ * true when the pass may go on to idle work and sleep: nothing that only
+ * the top of a pass handles came meanwhile (a frame's end by its gap, an
+ * answer started), so a tick's wake-up is one pass (docs/benchmarks.md
+ * "Control tick"). */
+static bool prv_tick(uint32_t now)
+{
+    prv_next_tick(now);
+    prv_control_tick(now);
+    km_hal_watchdog_kick();
+    prv_confirm_boot(now);
+    return km_parser_empty(&s_parser) && !s_answer_started;
+}
+
+/* Sleeps unless work came: checked under the lock, WFI still wakes on a pending IRQ. */
+static void prv_sleep_unless_work(void)
+{
+    const uint32_t irq = km_hal_irq_lock();
+    const bool rx_work = !prv_rx_blocked() && !km_rx_queue_empty(&s_rx.q);
+    const bool tx_work = s_frame_waiting && !km_hal_uart_tx_busy();
+    if (!rx_work && !tx_work && !prv_restart_ready()) {
+        prv_sleep(irq);
+    }
+    km_hal_irq_restore(irq);
+}
+
 /* One pass (noinline: watched under LTO, docs/footprint.md "LTO"). */
 __attribute__((noinline)) void km_app_poll(void)
 {
@@ -540,20 +566,11 @@ __attribute__((noinline)) void km_app_poll(void)
         km_hal_system_reset();
     }
     const uint32_t now = km_hal_time_now();
-    if (prv_tick_due(now)) {
-        prv_next_tick(now);
-        prv_control_tick(now);
-        km_hal_watchdog_kick();
-        prv_confirm_boot(now);
-    } else if (!prv_idle_flash_work(now)) {
-        /* check and sleep under the lock: WFI still wakes on a pending IRQ */
-        const uint32_t irq = km_hal_irq_lock();
-        const bool rx_work = !prv_rx_blocked() && !km_rx_queue_empty(&s_rx.q);
-        const bool tx_work = s_frame_waiting && !km_hal_uart_tx_busy();
-        if (!rx_work && !tx_work && !prv_restart_ready()) {
-            prv_sleep(irq);
-        }
-        km_hal_irq_restore(irq);
+    if (prv_tick_due(now) && !prv_tick(now)) {
+        return;
+    }
+    if (!prv_idle_flash_work(now)) {
+        prv_sleep_unless_work();
     }
 }
 

@@ -9,8 +9,13 @@
 #define PRV_DENSE_MASK 0xE0u /* a dense tag is 0b100c_cccc: count - 1 in the low five bits */
 #define PRV_IDX_LEN_SHIFT 5u
 
+/* n rounded up to a whole number of cells: a mask for a power-of-two cell
+ * (every board's), no library division (km_store_maintain runs each idle pass). */
 static uint32_t prv_round_up(uint32_t n, uint32_t cell)
 {
+    if ((cell & (cell - 1u)) == 0u) {
+        return (n + cell - 1u) & (0u - cell);
+    }
     return (n + cell - 1u) / cell * cell;
 }
 

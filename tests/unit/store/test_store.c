@@ -11,6 +11,7 @@
 #include "km_crc32.h"
 #include "km_nor_sim.h"
 #include "km_store.h"
+#include "km_store_record.h"
 #include "km_store_test_schema.h"
 
 static km_nor_sim_t s_sim;
@@ -860,9 +861,35 @@ static void test_prepare_stops_at_a_failed_step(void **state)
     assert_int_equal(s_sim.count.violations, 0);
 }
 
+/* A record's size is its bytes rounded up to whole program cells, with a
+ * power-of-two cell (masked) or any other (divided): docs/store.md. */
+static void test_record_sizes_round_up_to_whole_cells(void **state)
+{
+    (void)state;
+    static const uint32_t cells[] = {1u, 2u, 3u, 4u, 5u, 6u, 8u, 16u};
+    for (unsigned c = 0; c < sizeof cells / sizeof cells[0]; c++) {
+        const uint32_t cell = cells[c];
+        for (uint32_t count = 0; count <= 32u; count++) {
+            const uint32_t delta = 1u + count * 5u + KM_REC_CRC;
+            const uint32_t snap = KM_REC_HDR_SNAPSHOT + count * KM_REC_ENTRY + KM_REC_CRC;
+            uint32_t want_delta = 0u;
+            while (want_delta < delta) {
+                want_delta += cell;
+            }
+            uint32_t want_snap = 0u;
+            while (want_snap < snap) {
+                want_snap += cell;
+            }
+            assert_int_equal(km_rec_delta_max_size(count, cell), want_delta);
+            assert_int_equal(km_rec_snapshot_size(count, cell), want_snap + cell);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_record_sizes_round_up_to_whole_cells),
         cmocka_unit_test(test_blank_mount_loads_defaults_with_no_flash_op),
         cmocka_unit_test(test_qemu_zero_pages_are_invalid_until_first_commit),
         cmocka_unit_test(test_commit_persists_and_unchanged_is_free),
