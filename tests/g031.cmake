@@ -27,7 +27,8 @@ foreach(t test_standalone_image_reaches_main_loop test_bootloader_starts_app_to_
           test_register_write_survives_system_reset test_no_unaligned_access_through_boot_and_bus
           test_first_sensor_read_after_a_full_adc_scan test_received_byte_reaches_rx_queue
           test_byte_inside_a_frame_runs_no_main_loop test_framing_error_drops_its_frame_then_bytes_flow
-          test_hardfault_frees_bridge_and_leaves_record test_update_mode_bootloader_sleeps_between_bytes
+          test_hardfault_frees_bridge_and_leaves_record test_stack_guard_written_resets_with_record
+          test_update_mode_bootloader_sleeps_between_bytes
           test_master_pause_exact_on_the_wire)
   string(REPLACE "test_" "g031_" name ${t})
   add_test(NAME ${name}

@@ -16,7 +16,7 @@ void g0_stack_paint(void);
 void g0_reset_capture(void);
 
 /* False once the guard band (KM_STACK_GUARD bytes, a multiple of 32) was
- * written; each call checks the next quarter. */
+ * written; each call checks the next four words (fault.c). */
 bool g0_stack_guard_intact(void);
 
 /* Bridge free, record {kind, pc, lr}, SYSRESETREQ; on a fresh stack. */

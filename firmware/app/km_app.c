@@ -60,12 +60,14 @@ static volatile uint32_t s_answer_start; /* tick the answer's first byte was han
 static volatile bool s_answer_started;
 static volatile uint32_t s_tx_refused; /* answers the UART would not take (diagnostic) */
 
-/* A frame that may be answered, waiting for the answer on the wire to end
- * (no frame is parsed meanwhile); its queue bytes, released once handled. */
-static bool s_frame_waiting;
-static uint32_t s_frame_release;
-static bool s_restart_pending;
-static bool s_boot_confirmed; /* km_board_boot_confirm() was called */
+/* Why the parser is held, one byte so that "held at all" is one load: a
+ * frame that may be answered, waiting for the answer on the wire to end (no
+ * frame is parsed meanwhile), and a 0x02 restart pending. */
+#define PRV_HOLD_FRAME 1u
+#define PRV_HOLD_RESTART 2u
+static uint8_t s_rx_hold;
+static uint32_t s_frame_release; /* the waiting frame's queue bytes, released once handled */
+static bool s_boot_confirmed;    /* km_board_boot_confirm() was called */
 /* The store needs preparing in idle time this session. */
 static bool s_store_prepare;
 static uint32_t s_confirm_at; /* tick at which the start is confirmed */
@@ -185,21 +187,21 @@ static void prv_on_events(unsigned events)
         km_servo_note_checksum_error(&s_servo);
     }
     if ((events & KM_PARSE_FRAME) && !prv_on_frame()) {
-        s_frame_waiting = true;
+        s_rx_hold |= PRV_HOLD_FRAME;
     }
 }
 
 /* True while the parser must not be fed: a restart or a waiting frame. */
 static inline __attribute__((always_inline)) bool prv_rx_blocked(void)
 {
-    return s_restart_pending || s_frame_waiting;
+    return s_rx_hold != 0u;
 }
 
 /* The waiting frame, once the answer on the wire has ended: handled, its queue bytes released. */
 static void prv_take_waiting_frame(void)
 {
-    if (s_frame_waiting && prv_on_frame()) {
-        s_frame_waiting = false;
+    if ((s_rx_hold & PRV_HOLD_FRAME) != 0u && prv_on_frame()) {
+        s_rx_hold &= (uint8_t)~PRV_HOLD_FRAME;
         km_rx_queue_release(&s_rx.q, s_frame_release);
         s_frame_release = 0u;
     }
@@ -221,7 +223,7 @@ static void prv_drain_rx(void)
         if (events != 0u) {
             prv_on_events(events);
         }
-        if (s_frame_waiting) {
+        if ((s_rx_hold & PRV_HOLD_FRAME) != 0u) {
             s_frame_release = used; /* the frame may be a view of these bytes */
             return;
         }
@@ -239,7 +241,7 @@ static void prv_drain_rx(void)
 /* 0x02 restart: due once an earlier answer has gone out. */
 static bool prv_restart_ready(void)
 {
-    return s_restart_pending && !s_frame_waiting && !s_tx_armed && !km_hal_uart_tx_busy();
+    return s_rx_hold == PRV_HOLD_RESTART && !s_tx_armed && !km_hal_uart_tx_busy();
 }
 
 /* The control registers in engineering units, decoded again after a change. */
@@ -321,7 +323,7 @@ static bool prv_idle_flash_work(uint32_t now)
 static void prv_ops_restart(void *ctx)
 {
     (void)ctx;
-    s_restart_pending = true;
+    s_rx_hold |= PRV_HOLD_RESTART;
 }
 
 static bool prv_ops_request(void *ctx, const km_request_t *req)
@@ -437,9 +439,8 @@ __attribute__((noinline)) void km_app_init(void)
     s_tx_armed = false;
     s_answer_started = false;
     s_tx_refused = 0;
-    s_frame_waiting = false;
+    s_rx_hold = 0u;
     s_frame_release = 0u;
-    s_restart_pending = false;
     s_boot_confirmed = false;
 
     km_hal_system_init();
@@ -549,7 +550,7 @@ static void prv_sleep_unless_work(void)
 {
     const uint32_t irq = km_hal_irq_lock();
     const bool rx_work = !prv_rx_blocked() && !km_rx_queue_empty(&s_rx.q);
-    const bool tx_work = s_frame_waiting && !km_hal_uart_tx_busy();
+    const bool tx_work = (s_rx_hold & PRV_HOLD_FRAME) != 0u && !km_hal_uart_tx_busy();
     if (!rx_work && !tx_work && !prv_restart_ready()) {
         prv_sleep(irq);
     }

@@ -401,6 +401,48 @@ class Images(unittest.TestCase):
               % (at, (m.resets[0][0] - m.faults[0][0]) / MS, at, lr, answer.hex(" ")))
         self.assertEqual(answer[:7], bytes.fromhex("F9F500047F0204"), answer.hex(" "))
 
+    def test_stack_guard_written_resets_with_record(self):
+        # boards/stm32g031/fault.c: SysTick checks the stack guard band four
+        # words a millisecond, the whole 32-word band every 8 ms; a word of
+        # it overwritten (its first, one inside, its last) stops the servo:
+        # record kind G0_FAULT_STACK_GUARD (0x100), SYSRESETREQ, and the next
+        # boot reports a fault reset over 0x7F. Written 300 ms after boot, once
+        # the blank store's idle format is over: an erase delays the reset
+        # by its own length (docs/flash-busy.md, g0_fault_stop).
+        elf = os.path.join(IMAGES, "km-servo-stm32g031.elf")
+        poll = vg031.symbol(elf, "km_app_poll")
+        lo, hi = vg031.symbol(elf, "__stack_limit"), vg031.symbol(elf, "__stack_guard_end")
+        self.assertEqual(hi - lo, 128, "the guard band this test was written for")
+        for word in (0, 13, 31):
+            with self.subTest(word=word):
+                m = vg031.make(argparse.Namespace(boot=None, app=None, elf=elf, app_elf=None), watch=[poll])
+                self.assertTrue(to_main_loop(m, poll))
+                m.run_until(m.now + (300 + word) * MS)
+                self.assertEqual(m.resets, [], "reset before the band was touched")
+                at = lo + 4 * word
+                self.assertEqual(bytes(m.uc.mem_read(at, 4)), (0x5AFE57AC).to_bytes(4, "little"), "unpainted")
+                m.uc.mem_write(at, (0x12345678).to_bytes(4, "little"))
+                written = m.now
+                self.assertTrue(m.run_until(m.now + 20 * MS, stop=lambda: bool(m.resets)), "no reset")
+                seen_ms = (m.resets[0][0] - written) / MS
+                self.assertLessEqual(seen_ms, 9.0, "the band is checked whole every 8 ms")
+                self.assertEqual(m.resets[0][1], "sysresetreq")
+                hits = len(m.watches[poll])
+                self.assertTrue(m.run_until(m.now + 200 * MS, stop=lambda: len(m.watches[poll]) > hits))
+                m.run_until(m.now + 2 * MS)
+                # the record in .noinit: kind 0x100, pc 0, lr, check = ~(magic ^ kind ^ pc ^ lr)
+                ram = bytes(m.uc.mem_read(0x20000000, 8192))
+                records = [i for i in range(4, len(ram) - 16, 4)
+                           if ram[i:i + 8] == (0x100).to_bytes(8, "little")
+                           and int.from_bytes(ram[i + 12:i + 16], "little")
+                           == ~(0xFA017EC0 ^ 0x100 ^ int.from_bytes(ram[i + 8:i + 12], "little")) & 0xFFFFFFFF]
+                self.assertTrue(records, "no fault record of kind 0x100 in SRAM")
+                answer, _ = exchange(m, frame(0, 0x7F, 0x02))
+                print("stack guard word %d written: reset %.3f ms later; 0x7F reset cause answer %s"
+                      % (word, seen_ms, answer.hex(" ")))
+                self.assertEqual(answer[:7], bytes.fromhex("F9F500047F0204"), answer.hex(" "))
+
+
 def bridge_free(m):
     """PA6 and PA7 low outputs and TIM3's outputs off (boards/stm32g031/fault.c)."""
     moder, odr = m.gpioa.r[0x00], m.gpioa.r[0x14]
