@@ -24,6 +24,10 @@
 #define KM_APP_WATCHDOG_MS 500u
 #define KM_APP_FLASH_QUIET_US 50000u /* bus silence before idle flash work */
 #define KM_APP_CONFIRM_US 1000000u   /* service before the boot is confirmed (docs/update.md §3a) */
+/* A tick's wake-up looks for idle flash work on one tick in 4 (the 3rd),
+ * the boards' slower jobs on others (docs/benchmarks.md "Control tick"). */
+#define KM_APP_FLASH_EVERY_MASK 3u
+#define KM_APP_FLASH_SLOT 2u
 
 /* The receive interrupt's state: its frame tracker (docs/benchmarks.md "Per
  * byte") and the queue, one base address for a byte's fast path. */
@@ -48,6 +52,7 @@ static uint32_t s_params_gen; /* km_servo_params_gen() they were decoded at */
 static uint32_t s_last_control_tick;
 static uint32_t s_next_tick;
 static uint32_t s_tick_period;
+static uint32_t s_ticks; /* control ticks run since init */
 
 static uint16_t s_tx_len; /* bytes of s_reply armed or being sent */
 static volatile bool s_tx_armed;
@@ -315,9 +320,11 @@ static bool prv_idle_flash_work(uint32_t now)
     }
     if (s_store_prepare) {
         s_store_prepare = km_app_userdata_prepare();
-        return true;
+        if (s_store_prepare) {
+            return true;
+        }
     }
-    return km_app_userdata_maintain();
+    return km_app_userdata_maintain(); /* prepared (or given up): compaction ahead at once */
 }
 
 static void prv_ops_restart(void *ctx)
@@ -479,6 +486,7 @@ __attribute__((noinline)) void km_app_init(void)
     km_parser_init(&s_parser, prv_us_to_ticks(km_parser_default_gap_us(baud)));
     s_rx.track.gap_ticks = s_parser.gap_ticks;
 
+    s_ticks = 0u;
     s_last_control_tick = km_hal_time_now();
     s_tick_period = prv_us_to_ticks(KM_APP_TICK_US);
     s_next_tick = s_last_control_tick;
@@ -539,6 +547,7 @@ static void prv_sleep(uint32_t irq)
 static bool prv_tick(uint32_t now)
 {
     prv_next_tick(now);
+    s_ticks++;
     prv_control_tick(now);
     km_hal_watchdog_kick();
     prv_confirm_boot(now);
@@ -567,10 +576,14 @@ __attribute__((noinline)) void km_app_poll(void)
         km_hal_system_reset();
     }
     const uint32_t now = km_hal_time_now();
-    if (prv_tick_due(now) && !prv_tick(now)) {
-        return;
+    bool flash_slot = true; /* a wake-up without a tick may always look */
+    if (prv_tick_due(now)) {
+        if (!prv_tick(now)) {
+            return;
+        }
+        flash_slot = (s_ticks & KM_APP_FLASH_EVERY_MASK) == KM_APP_FLASH_SLOT;
     }
-    if (!prv_idle_flash_work(now)) {
+    if (!flash_slot || !prv_idle_flash_work(now)) {
         prv_sleep_unless_work();
     }
 }
