@@ -96,20 +96,31 @@ static km_conv_ratio_t prv_ratio(uint32_t num, uint32_t den, uint32_t max_x)
     return r;
 }
 
-/* (x * num / den) rounded to nearest, x <= the ratio's max_x. */
-static uint32_t prv_apply_round(km_conv_ratio_t r, uint32_t x)
+/* The position line as one multiply, add and shift: x = raw - pot_min (the
+ * other way for a reversed pot) times mul, plus half a unit, floored; within
+ * 1 of km_conv_position (half a unit below the travel's start rounds up, not
+ * away from zero). The ratio is made for twice the ADC's range, so |x| * mul
+ * and raw_min * mul stay below 2^30, half a unit below 2^29: no sum overflows. */
+static void prv_prepare_position(const km_board_config_t *cfg, km_conv_t *conv)
 {
-    const uint32_t half = r.shift ? 1u << (r.shift - 1u) : 0u;
-    return (x * r.mul + half) >> r.shift;
+    const int32_t span = (int32_t)cfg->pot_raw_max - (int32_t)cfg->pot_raw_min;
+    if (span == 0) {
+        conv->pot_mul = 0;
+        conv->pot_base = 1350; /* position 0 */
+        conv->pot_shift = 0u;
+        return;
+    }
+    const km_conv_ratio_t r = prv_ratio(2700u, (uint32_t)(span < 0 ? -span : span), 2u * KM_ADC_FULL_SCALE);
+    const int32_t mul = span < 0 ? -(int32_t)r.mul : (int32_t)r.mul;
+    const int32_t half = r.shift ? (int32_t)(1u << (r.shift - 1u)) : 0;
+    conv->pot_mul = mul;
+    conv->pot_base = half - (int32_t)cfg->pot_raw_min * mul;
+    conv->pot_shift = r.shift;
 }
 
 void km_conv_prepare(const km_board_config_t *cfg, km_conv_t *conv)
 {
-    int32_t span = (int32_t)cfg->pot_raw_max - (int32_t)cfg->pot_raw_min;
-    conv->pot_none = span == 0;
-    conv->pot_reversed = span < 0;
-    conv->pot_min = cfg->pot_raw_min;
-    conv->pot = prv_ratio(2700u, (uint32_t)(span < 0 ? -span : span), KM_ADC_FULL_SCALE);
+    prv_prepare_position(cfg, conv);
     conv->shunt_offset = cfg->shunt_offset_raw;
     /* I[mA] = raw * vref / 4095 * 1000 / (R * gain) */
     const uint32_t div = (uint32_t)cfg->shunt_mohm * cfg->shunt_gain;
@@ -131,17 +142,7 @@ void km_conv_prepare(const km_board_config_t *cfg, km_conv_t *conv)
 
 int32_t km_conv_fast_position(const km_conv_t *conv, uint16_t raw)
 {
-    if (conv->pot_none) {
-        return 0;
-    }
-    int32_t x = (int32_t)raw - conv->pot_min;
-    if (conv->pot_reversed) {
-        x = -x;
-    }
-    /* Rounded half away from zero, as km_conv_position. */
-    const int32_t q = x >= 0 ? (int32_t)prv_apply_round(conv->pot, (uint32_t)x)
-                             : -(int32_t)prv_apply_round(conv->pot, (uint32_t)-x);
-    return q - 1350;
+    return (((int32_t)raw * conv->pot_mul + conv->pot_base) >> conv->pot_shift) - 1350;
 }
 
 int32_t km_conv_fast_current_ma(const km_conv_t *conv, uint16_t raw)

@@ -48,10 +48,12 @@ typedef struct {
 #define KM_CONV_NTC_SHIFT 16u
 
 typedef struct {
-    int32_t pot_min;
-    bool pot_reversed;
-    bool pot_none; /* span 0: position 0 */
-    km_conv_ratio_t pot;
+    /* position = ((raw * pot_mul + pot_base) >> pot_shift) - 1350: the
+     * calibration's line, its sign and rounding in the two factors (signed,
+     * arithmetic shift); a span of 0 is pot_mul 0, pot_base 1350 */
+    int32_t pot_mul;
+    int32_t pot_base;
+    uint32_t pot_shift;
     uint16_t shunt_offset;
     km_conv_ratio_t current;
     km_conv_ratio_t voltage;

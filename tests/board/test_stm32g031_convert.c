@@ -113,6 +113,35 @@ static void test_prepared_conversions_match(void **state)
     check_fast_against_exact(&other);
 }
 
+/* A calibration of no span (pot_raw_min == pot_raw_max) reads position 0
+ * at every count, as km_conv_position does; a pot whose line runs past
+ * both ends of the ADC (a short span from count 0 or 4095, reversed or not)
+ * converts within 1 at every count without overflowing. */
+static void test_position_no_span_and_extreme_lines(void **state)
+{
+    (void)state;
+    km_board_config_t c = *cfg;
+    c.pot_raw_min = 2000u;
+    c.pot_raw_max = 2000u;
+    km_conv_t conv;
+    km_conv_prepare(&c, &conv);
+    for (uint32_t raw = 0; raw <= KM_ADC_FULL_SCALE; raw++) {
+        assert_int_equal(km_conv_fast_position(&conv, (uint16_t)raw), 0);
+    }
+    static const uint16_t ends[][2] = {{0u, 4095u},    {4095u, 0u}, {0u, 1u},
+                                       {4095u, 4094u}, {0u, 37u},   {4095u, 4000u}};
+    for (unsigned k = 0; k < sizeof ends / sizeof ends[0]; k++) {
+        c.pot_raw_min = ends[k][0];
+        c.pot_raw_max = ends[k][1];
+        km_conv_prepare(&c, &conv);
+        for (uint32_t raw = 0; raw <= KM_ADC_FULL_SCALE; raw++) {
+            const int32_t d =
+                km_conv_fast_position(&conv, (uint16_t)raw) - km_conv_position(&c, (uint16_t)raw);
+            assert_true(d >= -1 && d <= 1);
+        }
+    }
+}
+
 /* The NTC search starts at the previous reading's segment (conv.ntc_at):
  * readings in any order, near and far jumps, convert exactly as a fresh
  * search from the first segment does, and within 1 of the exact function. */
@@ -147,6 +176,7 @@ int main(void)
         cmocka_unit_test(test_ntc_table_and_interpolation),
         cmocka_unit_test(test_rails),
         cmocka_unit_test(test_prepared_conversions_match),
+        cmocka_unit_test(test_position_no_span_and_extreme_lines),
         cmocka_unit_test(test_ntc_search_any_order),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
