@@ -244,7 +244,7 @@ static void prv_drain_rx(void)
 }
 
 /* 0x02 restart: due once an earlier answer has gone out. */
-static bool prv_restart_ready(void)
+static inline __attribute__((always_inline)) bool prv_restart_ready(void)
 {
     return s_rx_hold == PRV_HOLD_RESTART && !s_tx_armed && !km_hal_uart_tx_busy();
 }
