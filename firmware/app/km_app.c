@@ -212,13 +212,30 @@ static void prv_take_waiting_frame(void)
     }
 }
 
+/* True while the queued bytes are a frame still arriving, not woken for:
+ * the tracker inside one (its header or counted body), its newest byte
+ * within the gap. The frame's end, its 64th byte or a cut wakes the loop,
+ * which parses the run at once; a wake-up for the tick leaves it queued
+ * (docs/benchmarks.md "Control tick"). */
+static bool prv_rx_mid_frame(void)
+{
+    const km_rx_track_t *track = &s_rx.track;
+    const unsigned state = track->state;
+    return state != KM_TRACK_HUNT && state != KM_TRACK_EVERY &&
+           km_hal_time_now() - track->last_tick <= track->gap_ticks;
+}
+
 /* Runs of bytes from the RX queue to the parser, frames as views of the queue. */
 static void prv_drain_rx(void)
 {
     uint32_t budget = KM_APP_RX_BUDGET;
     km_rx_run_t run;
+    const bool woken = s_wake;
     s_wake = false; /* before looking: a later byte's wake-up is kept */
     while (budget > 0u && !prv_rx_blocked() && km_rx_queue_peek(&s_rx.q, &run)) {
+        if (!woken && budget == KM_APP_RX_BUDGET && prv_rx_mid_frame()) {
+            return; /* the first run: a frame still arriving stays queued */
+        }
         if (run.lost) {
             km_parser_overrun(&s_parser);
         }
@@ -526,14 +543,17 @@ static void prv_next_tick(uint32_t now)
 /* Sleeps, under the caller's lock, until something needs a pass of the
  * main loop: while the parser is blocked, the next interrupt (the answer on
  * the wire may have ended); else a frame's end, an answer started or the
- * control tick (docs/benchmarks.md "Per byte"). */
-static void prv_sleep(uint32_t irq)
+ * control tick (docs/benchmarks.md "Per byte"); `queued`: a frame still
+ * arriving waits in the queue. */
+static void prv_sleep(uint32_t irq, bool queued)
 {
     if (prv_rx_blocked()) {
         km_hal_idle();
         return;
     }
-    km_rx_track_sync(&s_rx.track, &s_parser); /* the queue is empty: every byte is parsed */
+    if (!queued) { /* else a frame arriving: the tracker is ahead of the parser */
+        km_rx_track_sync(&s_rx.track, &s_parser); /* every byte is parsed */
+    }
     do {
         km_hal_sleep(irq); /* the interrupts run in it; the caller restores irq */
     } while (!s_wake && !s_answer_started && !prv_tick_due(km_hal_time_now()));
@@ -558,10 +578,11 @@ static bool prv_tick(uint32_t now)
 static void prv_sleep_unless_work(void)
 {
     const uint32_t irq = km_hal_irq_lock();
-    const bool rx_work = !prv_rx_blocked() && !km_rx_queue_empty(&s_rx.q);
+    const bool queued = !km_rx_queue_empty(&s_rx.q);
+    const bool rx_work = !prv_rx_blocked() && queued && (s_wake || !prv_rx_mid_frame());
     const bool tx_work = (s_rx_hold & PRV_HOLD_FRAME) != 0u && !km_hal_uart_tx_busy();
     if (!rx_work && !tx_work && !prv_restart_ready()) {
-        prv_sleep(irq);
+        prv_sleep(irq, queued);
     }
     km_hal_irq_restore(irq);
 }

@@ -316,6 +316,48 @@ class Images(unittest.TestCase):
             self.assertTrue(all(inner), "a byte inside %s returned to the main loop: %s" % (f.hex(), got))
             self.assertFalse(got[-1][1], "the last byte of %s did not wake the main loop" % f.hex())
 
+    def test_tick_inside_a_frame_leaves_its_bytes_queued(self):
+        # docs/benchmarks.md "Control tick": a control tick's wake-up that
+        # falls inside a frame still arriving leaves its bytes in the receive
+        # queue (the tracker is inside the frame, the last byte within the
+        # gap); the frame's end wakes the loop, which parses the whole run.
+        # A 35-byte frame lasts 3 ms at 115200: ticks run inside it. Checked
+        # at each tick's start (prv_control_tick): the queue's consumer index
+        # behind its producer inside the frame, caught up after it; the
+        # frames after it answered as usual.
+        from unicorn import UC_HOOK_CODE
+        elf = os.path.join(IMAGES, "km-servo-stm32g031.elf")
+        poll = vg031.symbol(elf, "km_app_poll")
+        m = vg031.make(argparse.Namespace(boot=None, app=None, elf=elf, app_elf=None), watch=[poll])
+        self.assertTrue(to_main_loop(m, poll))
+        m.run_until(m.now + 5 * MS)
+        from elftools.elf.elffile import ELFFile
+        with open(elf, "rb") as f:
+            rx = [(sym["st_value"], sym["st_size"]) for sym in ELFFile(f).get_section_by_name(".symtab").iter_symbols()
+                  if sym.name.split(".")[0] == "s_rx" and sym["st_size"] > 600]
+        self.assertEqual(len(rx), 1, "the receive state s_rx (tracker, then queue) not found: %s" % rx)
+        head_at = rx[0][0] + 12     # km_rx_track_t: 3 words; then the queue's head, tail
+        ticks = []                  # (time, bytes queued) at each tick's start
+
+        def at_tick(uc, _addr, _size, _user):
+            head, tail = (int.from_bytes(bytes(uc.mem_read(head_at + i, 4)), "little") for i in (0, 4))
+            ticks.append((m.now, (head - tail) & 0xFFFFFFFF))
+        tick_fn = vg031.symbol(elf, "prv_control_tick")
+        m.uc.hook_add(UC_HOOK_CODE, at_tick, None, tick_fn, tick_fn)
+        long_frame = frame(7, 0x03, 0x2A, bytes(range(1, 30)))   # another servo's: no answer
+        start = m.now
+        end = m.send(long_frame, BAUD)
+        m.run_until(end + 3 * MS)
+        inside = [q for t, q in ticks if start + 0.2 * MS < t < end - 0.2 * MS]
+        after = [q for t, q in ticks if t > end + 0.5 * MS]
+        print("bytes queued at each tick's start inside the frame %s, after it %s" % (inside, after))
+        self.assertGreaterEqual(len(inside), 2, "no tick inside the frame")
+        self.assertTrue(all(q > 0 for q in inside), "a tick inside the frame parsed its bytes: %s" % inside)
+        self.assertTrue(after and all(q == 0 for q in after), "bytes left queued after the frame: %s" % after)
+        answer, delay = exchange(m, frame(0, 0x02, 0x0B))
+        self.assertEqual(answer, bytes.fromhex("F9F50007020B00000205E4"))
+        self.assertTrue(50 <= delay <= 2000, delay)
+
     def test_framing_error_drops_its_frame_then_bytes_flow(self):
         # A byte received with FE (RM0444 §33.5.6: the data still reaches
         # RDR) is handed over as after a loss: the parser drops the frame it
