@@ -117,34 +117,73 @@ static inline uint32_t km_isqrt56(uint32_t hi, uint32_t lo)
 }
 
 #if !KM_CONTROL_COMPACT
-/* km_isqrt56 with the low word's eight steps written out (no loop counter:
- * the profile's braking speed, every braking tick, in the fast build); a
- * low word's leading zero nibbles are stepped through (root and rest stay
- * 0), which bounds the tick's cost below 2^32 too. */
+/* 1/sqrt from a value's top 8 bits: [i] = round(2^31 / sqrt((64 + i + 1/2)
+ * x 2^24)) (docs/control-design.md "Arithmetic"). */
+extern const uint16_t km_rsqrt_top8[192];
+
+/* floor(sqrt(y)) for 2^30 <= y < 2^32 from the table's 1/sqrt z: s0 = y z,
+ * one step s0 + (y - s0^2) z / 2, then at most one step up; z back in *z_out. */
+static inline __attribute__((always_inline)) uint32_t km_isqrt32_top(uint32_t y, uint32_t *z_out)
+{
+    const uint32_t z = km_rsqrt_top8[(y >> 24) - 64u];
+    uint32_t s = ((y >> 16) * z) >> 15;
+    const int32_t rest0 = (int32_t)(y - s * s);
+    s = (uint32_t)((int32_t)s + (((rest0 >> 10) * (int32_t)z) >> 22));
+    while (y - s * s > 2u * s) {
+        s++;
+    }
+    *z_out = z;
+    return s;
+}
+
+/* floor(sqrt(hi:lo)) for hi:lo < 2^56 (the profile's braking speed, every
+ * braking tick, in the fast build): the root s of the normalised top 32
+ * bits, then the low root bits d = (x - s^2 4^m) / (2 s 2^m) by the
+ * reciprocal 2^31 / s (one Newton step from the table), then +-1 against
+ * the square (docs/control-design.md "Arithmetic"). */
 static inline uint32_t km_isqrt56_fast(uint32_t hi, uint32_t lo)
 {
-    uint32_t root = 0, rem = 0;
-    if (hi != 0u) {
-        unsigned n = 8u; /* nibbles left in hi */
-        while ((hi >> 24) == 0u) {
-            hi <<= 8;
-            n -= 2u;
-        }
-        while ((hi >> 28) == 0u) {
-            hi <<= 4;
-            n--;
-        }
-        KM_SQRT_NIBBLES(hi, n)
+    uint32_t y = hi == 0u ? lo : hi, sh = 0, z;
+    if (y == 0u) {
+        return 0u;
     }
-    KM_SQRT_NIBBLE(lo);
-    KM_SQRT_NIBBLE(lo);
-    KM_SQRT_NIBBLE(lo);
-    KM_SQRT_NIBBLE(lo);
-    KM_SQRT_NIBBLE(lo);
-    KM_SQRT_NIBBLE(lo);
-    KM_SQRT_NIBBLE(lo);
-    KM_SQRT_NIBBLE(lo);
-    return root;
+    if (y < (1u << 16)) {
+        y <<= 16;
+        sh = 16u;
+    }
+    if (y < (1u << 24)) {
+        y <<= 8;
+        sh += 8u;
+    }
+    if (y < (1u << 28)) {
+        y <<= 4;
+        sh += 4u;
+    }
+    if (y < (1u << 30)) {
+        y <<= 2;
+        sh += 2u;
+    }
+    if (hi == 0u) {
+        return km_isqrt32_top(y, &z) >> (sh >> 1);
+    }
+    const uint32_t s = km_isqrt32_top(y | (lo >> (32u - sh)), &z); /* sh >= 8 */
+    const uint32_t k = sh >> 1, m = 16u - k, sq_hi = (s * s) >> sh, sq_lo = (s * s) << (32u - sh);
+    const uint32_t e_lo = lo - sq_lo, e_hi = hi - sq_hi - (lo < sq_lo ? 1u : 0u);
+    const uint32_t e_top = (e_hi << (k + 1u)) | (e_lo >> (31u - k)); /* e / 2^(m + 15) */
+    const int32_t w_err = (int32_t)((1u << 31) - s * z);
+    const uint32_t w = z + (uint32_t)(((w_err >> 8) * (int32_t)z) >> 23); /* 2^31 / s */
+    const uint32_t d = (e_top * w) >> 17;
+    uint32_t r = (s << m) + d;
+    int32_t rest = (int32_t)(e_lo - ((s * d) << (m + 1u)) - d * d); /* x - r^2 */
+    while (rest < 0) {
+        r--;
+        rest += (int32_t)(2u * r + 1u);
+    }
+    while ((uint32_t)rest > 2u * r) {
+        r++;
+        rest -= (int32_t)(2u * r - 1u);
+    }
+    return r;
 }
 #endif
 

@@ -380,6 +380,51 @@ static void test_isqrt56_fast_matches_64_bit_root(void **state)
     }
     assert_int_equal(km_isqrt56_fast(0xFFFFFFu, 0xFFFFFFFFu), ref_isqrt64(((uint64_t)1 << 56) - 1u));
 }
+
+/* km_isqrt56_fast's root of the normalised top word (2^30 .. 2^32) is
+ * floor(sqrt) at both ends of every root's range: y = s^2 - 1, s^2 and
+ * s^2 + 2s for every s in 2^15 .. 2^16. */
+static void test_isqrt32_top_every_square_boundary(void **state)
+{
+    (void)state;
+    uint32_t z;
+    for (uint32_t s = 1u << 15; s < (1u << 16); s++) {
+        const uint32_t sq = s * s;
+        if (s > (1u << 15)) {
+            assert_int_equal(km_isqrt32_top(sq - 1u, &z), s - 1u);
+        }
+        assert_int_equal(km_isqrt32_top(sq, &z), s);
+        assert_int_equal(km_isqrt32_top(sq + 2u * s, &z), s);
+    }
+    assert_int_equal(km_isqrt32_top(0xFFFFFFFFu, &z), 65535u);
+}
+
+/* km_isqrt56_fast (table, Newton steps, +-1 against the square) equals the
+ * nibble root km_isqrt56 at n^2 - 1 and n^2: every n below 2^16, and at
+ * every root length from 17 to 28 bits the first and last 4,096 roots and
+ * 65,536 spread over the length; then 4 million values of random length. */
+static void test_isqrt56_fast_equals_nibble_root_at_every_boundary(void **state)
+{
+    (void)state;
+    for (uint64_t n = 1; n < ((uint64_t)1 << 28); n++) {
+        const uint32_t b = n < 2u ? 1u : 32u - (uint32_t)__builtin_clz((uint32_t)n), lo_end = 1u << (b - 1u);
+        if (n >= 0x10000u && n >= lo_end + 4096u && n + 4096u < 2u * (uint64_t)lo_end &&
+            (n & ((lo_end >> 16) - 1u)) != 0u) {
+            continue;
+        }
+        for (uint64_t x = n * n - 1u; x <= n * n; x++) {
+            const uint32_t hi = (uint32_t)(x >> 32), lo = (uint32_t)x;
+            assert_int_equal(km_isqrt56_fast(hi, lo), km_isqrt56(hi, lo));
+        }
+    }
+    for (unsigned k = 0; k < 4000000u; k++) {
+        const uint64_t x = (((uint64_t)rnd() << 32) | rnd()) >> (8u + rnd() % 56u);
+        const uint32_t hi = (uint32_t)(x >> 32), lo = (uint32_t)x;
+        assert_int_equal(km_isqrt56_fast(hi, lo), km_isqrt56(hi, lo));
+    }
+    assert_int_equal(km_isqrt56_fast(0u, 0u), 0u);
+    assert_int_equal(km_isqrt56_fast(0xFFFFFFu, 0xFFFFFFFFu), 0xFFFFFFFu);
+}
 #endif
 
 /* Long moves (up to 80,000 deg) at speeds from 2^28 to 2^30 u/s and hard
@@ -660,6 +705,8 @@ int main(void)
         cmocka_unit_test(test_speed_fast_near_span_every_displacement),
 #if !KM_CONTROL_COMPACT
         cmocka_unit_test(test_isqrt56_fast_matches_64_bit_root),
+        cmocka_unit_test(test_isqrt32_top_every_square_boundary),
+        cmocka_unit_test(test_isqrt56_fast_equals_nibble_root_at_every_boundary),
 #endif
         cmocka_unit_test(test_speed_fast_running_span_equals_sum),
         cmocka_unit_test(test_speed_window_equals_division),
