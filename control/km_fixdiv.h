@@ -147,19 +147,19 @@ static inline uint32_t km_isqrt56_fast(uint32_t hi, uint32_t lo)
     if (y == 0u) {
         return 0u;
     }
-    if (y < (1u << 16)) {
+    if ((y >> 16) == 0u) {
         y <<= 16;
         sh = 16u;
     }
-    if (y < (1u << 24)) {
+    if ((y >> 24) == 0u) {
         y <<= 8;
         sh += 8u;
     }
-    if (y < (1u << 28)) {
+    if ((y >> 28) == 0u) {
         y <<= 4;
         sh += 4u;
     }
-    if (y < (1u << 30)) {
+    if ((y >> 30) == 0u) {
         y <<= 2;
         sh += 2u;
     }
