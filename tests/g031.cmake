@@ -26,7 +26,7 @@ foreach(t test_standalone_image_reaches_main_loop test_bootloader_starts_app_to_
           test_ping_and_register_read_answered test_hung_main_loop_ends_in_iwdg_reset
           test_register_write_survives_system_reset test_no_unaligned_access_through_boot_and_bus
           test_first_sensor_read_after_a_full_adc_scan test_received_byte_reaches_rx_queue
-          test_byte_inside_a_frame_runs_no_main_loop test_tick_inside_a_frame_leaves_its_bytes_queued
+          test_byte_inside_a_frame_runs_no_main_loop test_tick_inside_a_frame_leaves_only_a_short_rest_queued
           test_framing_error_drops_its_frame_then_bytes_flow
           test_hardfault_frees_bridge_and_leaves_record test_stack_guard_written_resets_with_record
           test_update_mode_bootloader_sleeps_between_bytes

@@ -21,6 +21,7 @@
 
 #define KM_APP_TICK_US KM_CONTROL_TICK_US /* control tick: 1 kHz */
 #define KM_APP_RX_BUDGET 64u              /* bytes parsed per loop pass: bounds tick jitter */
+#define KM_APP_RX_DEFER_MAX 12u /* a frame's end parses at most this many bytes a tick left queued */
 #define KM_APP_WATCHDOG_MS 500u
 #define KM_APP_FLASH_QUIET_US 50000u /* bus silence before idle flash work */
 #define KM_APP_CONFIRM_US 1000000u   /* service before the boot is confirmed (docs/update.md §3a) */
@@ -212,17 +213,23 @@ static void prv_take_waiting_frame(void)
     }
 }
 
-/* True while the queued bytes are a frame still arriving, not woken for:
- * the tracker inside one (its header or counted body), its newest byte
- * within the gap. The frame's end, its 64th byte or a cut wakes the loop,
- * which parses the run at once; a wake-up for the tick leaves it queued
+/* True while the queued bytes are a short frame still arriving, not woken
+ * for: the tracker inside one (its header or counted body), its newest byte
+ * within the gap, and what is queued plus what is still to come at most
+ * KM_APP_RX_DEFER_MAX bytes. The frame's end wakes the loop, which parses
+ * the run at once; a wake-up for the tick leaves it queued. A longer frame
+ * is parsed at the tick as it arrives, so its end parses little
  * (docs/benchmarks.md "Control tick"). */
 static bool prv_rx_mid_frame(void)
 {
     const km_rx_track_t *track = &s_rx.track;
     const unsigned state = track->state;
-    return state != KM_TRACK_HUNT && state != KM_TRACK_EVERY &&
-           km_hal_time_now() - track->last_tick <= track->gap_ticks;
+    if (state == KM_TRACK_HUNT || state == KM_TRACK_EVERY ||
+        km_hal_time_now() - track->last_tick > track->gap_ticks) {
+        return false;
+    }
+    const uint32_t left = state == KM_TRACK_COUNT ? track->left : 0u;
+    return left + km_rx_queue_count(&s_rx.q) <= KM_APP_RX_DEFER_MAX;
 }
 
 /* Runs of bytes from the RX queue to the parser, frames as views of the queue. */

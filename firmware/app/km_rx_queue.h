@@ -81,6 +81,13 @@ static inline __attribute__((always_inline)) void km_rx_queue_push(km_rx_queue_t
 /* Main loop: true when nothing is waiting. */
 bool km_rx_queue_empty(km_rx_queue_t *q);
 
+/* Main loop: how many bytes are waiting (a lower bound: more may arrive). */
+static inline uint32_t km_rx_queue_count(km_rx_queue_t *q)
+{
+    return atomic_load_explicit(&q->head, memory_order_relaxed) -
+           atomic_load_explicit(&q->tail, memory_order_relaxed);
+}
+
 /* Main loop. Returns false when empty. */
 bool km_rx_queue_pop(km_rx_queue_t *q, uint8_t *byte, uint32_t *tick, uint8_t *flags);
 

@@ -316,15 +316,15 @@ class Images(unittest.TestCase):
             self.assertTrue(all(inner), "a byte inside %s returned to the main loop: %s" % (f.hex(), got))
             self.assertFalse(got[-1][1], "the last byte of %s did not wake the main loop" % f.hex())
 
-    def test_tick_inside_a_frame_leaves_its_bytes_queued(self):
+    def test_tick_inside_a_frame_leaves_only_a_short_rest_queued(self):
         # docs/benchmarks.md "Control tick": a control tick's wake-up that
         # falls inside a frame still arriving leaves its bytes in the receive
-        # queue (the tracker is inside the frame, the last byte within the
-        # gap); the frame's end wakes the loop, which parses the whole run.
-        # A 35-byte frame lasts 3 ms at 115200: ticks run inside it. Checked
-        # at each tick's start (prv_control_tick): the queue's consumer index
-        # behind its producer inside the frame, caught up after it; the
-        # frames after it answered as usual.
+        # queue when what is queued plus what is still to come is at most
+        # KM_APP_RX_DEFER_MAX (12) bytes: the frame's end parses them in one
+        # run. A longer rest is parsed at the tick, so the frame's end parses
+        # little. Checked at each tick's start (prv_control_tick, after the
+        # wake-up's drain): the queue's consumer index behind its producer,
+        # or caught up; the frames after them answered as usual.
         from unicorn import UC_HOOK_CODE
         elf = os.path.join(IMAGES, "km-servo-stm32g031.elf")
         poll = vg031.symbol(elf, "km_app_poll")
@@ -344,15 +344,28 @@ class Images(unittest.TestCase):
             ticks.append((m.now, (head - tail) & 0xFFFFFFFF))
         tick_fn = vg031.symbol(elf, "prv_control_tick")
         m.uc.hook_add(UC_HOOK_CODE, at_tick, None, tick_fn, tick_fn)
-        long_frame = frame(7, 0x03, 0x2A, bytes(range(1, 30)))   # another servo's: no answer
+        # A 9-byte frame (another servo's 0x68: no answer), sent at ten phases
+        # of the tick: every tick inside one finds its bytes still queued.
+        short_inside = []
+        for k in range(10):
+            m.run_until(m.now + 1 * MS + k * MS // 10)
+            start = m.now
+            end = m.send(frame(7, 0x03, 0x68, b"\x10\x00"), BAUD)
+            m.run_until(end + 2 * MS)
+            short_inside += [q for t, q in ticks if start + 0.1 * MS < t < end - 0.05 * MS]
+        # A 35-byte frame (3 ms at 115200): a tick with 13 or more bytes
+        # still to come (> 1.2 ms before the end) parses what is queued.
         start = m.now
-        end = m.send(long_frame, BAUD)
+        end = m.send(frame(7, 0x03, 0x2A, bytes(range(1, 30))), BAUD)
         m.run_until(end + 3 * MS)
-        inside = [q for t, q in ticks if start + 0.2 * MS < t < end - 0.2 * MS]
+        long_early = [q for t, q in ticks if start + 0.2 * MS < t < end - 1.3 * MS]
         after = [q for t, q in ticks if t > end + 0.5 * MS]
-        print("bytes queued at each tick's start inside the frame %s, after it %s" % (inside, after))
-        self.assertGreaterEqual(len(inside), 2, "no tick inside the frame")
-        self.assertTrue(all(q > 0 for q in inside), "a tick inside the frame parsed its bytes: %s" % inside)
+        print("bytes queued at each tick's start: inside the short frames %s, early in the long frame %s, after"
+              " it %s" % (short_inside, long_early, after))
+        self.assertGreaterEqual(len(short_inside), 1, "no tick inside a short frame")
+        self.assertTrue(all(q > 0 for q in short_inside), "a tick inside a short frame parsed it: %s" % short_inside)
+        self.assertGreaterEqual(len(long_early), 1, "no tick early in the long frame")
+        self.assertTrue(all(q == 0 for q in long_early), "a tick left a long frame's rest queued: %s" % long_early)
         self.assertTrue(after and all(q == 0 for q in after), "bytes left queued after the frame: %s" % after)
         answer, delay = exchange(m, frame(0, 0x02, 0x0B))
         self.assertEqual(answer, bytes.fromhex("F9F50007020B00000205E4"))
