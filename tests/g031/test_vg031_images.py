@@ -39,6 +39,15 @@ def boot_and_app(watch_names=("km_app_poll",), check_alignment=False):
     return vg031.make(a, watch=watch, check_alignment=check_alignment), watch
 
 
+def standalone():
+    """A fresh machine running the stand-alone servo image: (machine, its
+    main loop's poll address, the image's path)."""
+    elf = os.path.join(IMAGES, "km-servo-stm32g031.elf")
+    poll = vg031.symbol(elf, "km_app_poll")
+    m = vg031.make(argparse.Namespace(boot=None, app=None, elf=elf, app_elf=None), watch=[poll])
+    return m, poll, elf
+
+
 def to_main_loop(m, poll, limit_ms=100):
     """Runs until the main loop's poll runs; returns whether it did."""
     return m.run_until(m.now + limit_ms * MS, stop=lambda: bool(m.watches[poll]))
@@ -79,9 +88,7 @@ def stored_snapshots(m, key=0x0F):
 
 class Images(unittest.TestCase):
     def test_standalone_image_reaches_main_loop(self):
-        elf = os.path.join(IMAGES, "km-servo-stm32g031.elf")
-        poll = vg031.symbol(elf, "km_app_poll")
-        m = vg031.make(argparse.Namespace(boot=None, app=None, elf=elf, app_elf=None), watch=[poll])
+        m, poll, elf = standalone()
         self.assertTrue(to_main_loop(m, poll), "km_app_poll never ran: %s %s" % (m.faults, m.resets))
         t, instr = m.watches[poll][0]
         print("stand-alone: main loop after %d instructions, %.3f ms virtual" % (instr, t / 1e6))
@@ -127,7 +134,6 @@ class Images(unittest.TestCase):
         import socket
         import subprocess
         import tempfile
-        import time
         import vclock
         with tempfile.TemporaryDirectory() as tmp:
             clock_path = os.path.join(tmp, "clock")
@@ -326,9 +332,7 @@ class Images(unittest.TestCase):
         # wake-up's drain): the queue's consumer index behind its producer,
         # or caught up; the frames after them answered as usual.
         from unicorn import UC_HOOK_CODE
-        elf = os.path.join(IMAGES, "km-servo-stm32g031.elf")
-        poll = vg031.symbol(elf, "km_app_poll")
-        m = vg031.make(argparse.Namespace(boot=None, app=None, elf=elf, app_elf=None), watch=[poll])
+        m, poll, elf = standalone()
         self.assertTrue(to_main_loop(m, poll))
         m.run_until(m.now + 5 * MS)
         from elftools.elf.elffile import ELFFile
@@ -420,9 +424,7 @@ class Images(unittest.TestCase):
         # boards/stm32g031/fault.c: HardFault_Handler -> g0_fault_stop: the
         # bridge's inputs to low outputs, TIM3's outputs off, the record in
         # .noinit SRAM, SYSRESETREQ; the next boot keeps it in g0_last_fault.
-        elf = os.path.join(IMAGES, "km-servo-stm32g031.elf")
-        poll = vg031.symbol(elf, "km_app_poll")
-        m = vg031.make(argparse.Namespace(boot=None, app=None, elf=elf, app_elf=None), watch=[poll])
+        m, poll, elf = standalone()
         self.assertTrue(to_main_loop(m, poll))
         m.run_until(m.now + 2 * MS)
         exchange(m, frame(0, 0x03, 0x64, b"\x01"))           # torque on: the bridge holds
