@@ -381,6 +381,19 @@ static void test_isqrt56_fast_matches_64_bit_root(void **state)
     assert_int_equal(km_isqrt56_fast(0xFFFFFFu, 0xFFFFFFFFu), ref_isqrt64(((uint64_t)1 << 56) - 1u));
 }
 
+/* km_rsqrt_top8 holds what its comment defines: [i] is the integer
+ * nearest 2^31 / sqrt(N), N = (64 + i + 1/2) 2^24 = (129 + 2i) 2^23, i.e.
+ * (2z - 1)^2 (129 + 2i) < 2^41 < (2z + 1)^2 (129 + 2i), in integers. */
+static void test_rsqrt_table_is_its_formula(void **state)
+{
+    (void)state;
+    for (uint32_t i = 0; i < 192u; i++) {
+        const uint64_t z = km_rsqrt_top8[i], n = 129u + 2u * i, two41 = (uint64_t)1 << 41;
+        assert_true((2u * z - 1u) * (2u * z - 1u) * n < two41);
+        assert_true((2u * z + 1u) * (2u * z + 1u) * n > two41);
+    }
+}
+
 /* km_isqrt56_fast's root of the normalised top word (2^30 .. 2^32) is
  * floor(sqrt) at both ends of every root's range: y = s^2 - 1, s^2 and
  * s^2 + 2s for every s in 2^15 .. 2^16. */
@@ -705,6 +718,7 @@ int main(void)
         cmocka_unit_test(test_speed_fast_near_span_every_displacement),
 #if !KM_CONTROL_COMPACT
         cmocka_unit_test(test_isqrt56_fast_matches_64_bit_root),
+        cmocka_unit_test(test_rsqrt_table_is_its_formula),
         cmocka_unit_test(test_isqrt32_top_every_square_boundary),
         cmocka_unit_test(test_isqrt56_fast_equals_nibble_root_at_every_boundary),
 #endif
