@@ -42,7 +42,8 @@ typedef struct {
 static const prv_command_t s_commands[] = {
 #else
 /* §3 and this firmware's own commands, indexed by the command byte's bit 7 and low three bits. */
-#define PRV_SLOT(cmd) [((((unsigned)(cmd) >> 4) & 8u) | ((unsigned)(cmd)&7u))] =
+#define PRV_SLOT_OF(cmd) ((((unsigned)(cmd) >> 4) & 8u) | ((unsigned)(cmd)&7u))
+#define PRV_SLOT(cmd) [PRV_SLOT_OF(cmd)] =
 
 static const prv_command_t s_commands[16] = {
 #endif
@@ -331,7 +332,7 @@ static const prv_command_t *prv_command(uint8_t cmd)
     }
     return NULL;
 #else
-    const prv_command_t *c = &s_commands[(((unsigned)cmd >> 4) & 8u) | ((unsigned)cmd & 7u)];
+    const prv_command_t *c = &s_commands[PRV_SLOT_OF(cmd)];
     return c->cmd == cmd && c->run != NULL ? c : NULL;
 #endif
 }
