@@ -224,12 +224,12 @@ static bool prv_rx_mid_frame(void)
 {
     const km_rx_track_t *track = &s_rx.track;
     const unsigned state = track->state;
-    if (state == KM_TRACK_HUNT || state == KM_TRACK_EVERY ||
-        km_hal_time_now() - track->last_tick > track->gap_ticks) {
+    if (state == KM_TRACK_HUNT || state == KM_TRACK_EVERY) {
         return false;
     }
     const uint32_t left = state == KM_TRACK_COUNT ? track->left : 0u;
-    return left + km_rx_queue_count(&s_rx.q) <= KM_APP_RX_DEFER_MAX;
+    return left + km_rx_queue_count(&s_rx.q) <= KM_APP_RX_DEFER_MAX &&
+           km_hal_time_now() - track->last_tick <= track->gap_ticks; /* the clock read last */
 }
 
 /* Runs of bytes from the RX queue to the parser, frames as views of the queue. */
