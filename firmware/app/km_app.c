@@ -50,8 +50,8 @@ static km_control_params_t s_params; /* the control registers, decoded */
 static km_fault_log_t s_fault_log __attribute__((section(".noinit")));
 #endif
 static uint32_t s_params_gen; /* km_servo_params_gen() they were decoded at */
-static uint32_t s_last_control_tick;
-static uint32_t s_next_tick;
+static uint32_t s_last_grid;  /* the last control tick's grid point */
+static uint32_t s_next_tick;  /* the next one's */
 static uint32_t s_tick_period;
 static uint32_t s_ticks; /* control ticks run since init */
 
@@ -299,15 +299,13 @@ static void prv_apply_bridge(const km_bridge_t *b)
     }
 }
 
-/* One control tick: sensors, step, live values, fault log, bridge
- * (noinline: the benches' landmark under LTO). */
-static __attribute__((noinline)) void prv_control_tick(uint32_t now)
+/* One control tick `dt_ticks` of the grid after the last: sensors, step,
+ * live values, fault log, bridge (noinline: the benches' landmark under LTO). */
+static __attribute__((noinline)) void prv_control_tick(uint32_t dt_ticks)
 {
     km_sensors_t sensors;
     km_live_t live;
     km_bridge_t bridge;
-    const uint32_t dt_ticks = now - s_last_control_tick;
-    s_last_control_tick = now;
     km_hal_sensors_read(&sensors);
     km_control_step(&s_control, &sensors, prv_params(), prv_ticks_to_us(dt_ticks), &live, &bridge);
     km_servo_set_live(&s_servo, &live);
@@ -511,10 +509,11 @@ __attribute__((noinline)) void km_app_init(void)
     s_rx.track.gap_ticks = s_parser.gap_ticks;
 
     s_ticks = 0u;
-    s_last_control_tick = km_hal_time_now();
+    const uint32_t now = km_hal_time_now();
     s_tick_period = prv_us_to_ticks(KM_APP_TICK_US);
-    s_next_tick = s_last_control_tick;
-    s_confirm_at = s_last_control_tick + prv_us_to_ticks(KM_APP_CONFIRM_US);
+    s_next_tick = now;                 /* the first tick at once, */
+    s_last_grid = now - s_tick_period; /* a period after a grid point before it */
+    s_confirm_at = now + prv_us_to_ticks(KM_APP_CONFIRM_US);
 }
 
 /* Emulated buses: the gap floor raises the parser's rule at the open baud. */
@@ -535,16 +534,20 @@ static bool prv_tick_due(uint32_t now)
     return (int32_t)(now - s_next_tick) >= 0;
 }
 
-/* The next grid point; a tick half a period late moves the grid to just
- * before this wake-up (docs/benchmarks.md "Control tick"). */
-static void prv_next_tick(uint32_t now)
+/* The grid time, in ticks, from the last control tick to this one, due at
+ * `now`, and the next grid point: a period, or, a tick half a period late,
+ * up to just before this wake-up, where the grid moves (docs/benchmarks.md
+ * "Control tick"). */
+static uint32_t prv_next_tick(uint32_t now)
 {
-    const uint32_t late = now - s_next_tick;
-    if (late >= s_tick_period / 2u) {
-        s_next_tick = now + s_tick_period - s_tick_period / 8u;
-    } else {
-        s_next_tick += s_tick_period;
+    uint32_t at = s_next_tick; /* this tick's grid point */
+    if (now - at >= s_tick_period / 2u) {
+        at = now - s_tick_period / 8u;
     }
+    const uint32_t dt_ticks = at - s_last_grid;
+    s_last_grid = at;
+    s_next_tick = at + s_tick_period;
+    return dt_ticks;
 }
 
 /* Sleeps, under the caller's lock, until something needs a pass of the
@@ -573,9 +576,9 @@ static void prv_sleep(uint32_t irq, bool queued)
  * "Control tick"). */
 static bool prv_tick(uint32_t now)
 {
-    prv_next_tick(now);
+    const uint32_t dt_ticks = prv_next_tick(now);
     s_ticks++;
-    prv_control_tick(now);
+    prv_control_tick(dt_ticks);
     km_hal_watchdog_kick();
     prv_confirm_boot(now);
     return km_parser_empty(&s_parser) && !s_answer_started;

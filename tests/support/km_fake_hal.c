@@ -435,11 +435,25 @@ km_reset_cause_t km_hal_reset_cause(void)
     return kf_world.cause;
 }
 
+/* The board's next wake-up after `now`: 1 ms on, or the jittered SysTick's next. */
+static uint32_t prv_wake_after(uint32_t now)
+{
+    if (kf_world.wake_late_n == 0u) {
+        return now + 1000u;
+    }
+    for (uint32_t k = now / 1000u;; k++) {
+        const uint32_t at = k * 1000u + kf_world.wake_late_us[k % kf_world.wake_late_n];
+        if ((int32_t)(at - now) > 0) {
+            return at;
+        }
+    }
+}
+
 void km_hal_idle(void)
 {
-    /* WFI: sleep until the next event, at most 1 ms (the board's wake-up). */
+    /* WFI: sleep until the next event, at most the board's wake-up. */
     uint32_t t;
-    uint32_t until = kf_world.now + 1000u;
+    uint32_t until = prv_wake_after(kf_world.now);
     if (prv_next_event(&t) && (int32_t)(t - until) < 0) {
         until = t;
     }

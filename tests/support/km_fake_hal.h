@@ -59,6 +59,11 @@ typedef struct {
      * each with its own tick, so a full RX queue drops bytes as it would. */
     uint32_t erase_us, program_us;
     bool prepare_each_boot; /* km_board_store_prepare_each_boot() */
+    /* The board's wake-up from sleep: 1 ms after the sleep starts
+     * (wake_late_n 0), or a free-running 1 kHz SysTick whose k-th wake-up
+     * (at k ms) comes wake_late_us[k % wake_late_n] us late: jittered wake-ups. */
+    const uint16_t *wake_late_us;
+    unsigned wake_late_n;
 
     /* the world */
     uint32_t now;
