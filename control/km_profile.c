@@ -11,9 +11,6 @@
 #define STEP_MAX_US 2000u /* a late 1 ms tick stays one piece */
 #define ACCEL_MAX 1000000 /* u/s per ms */
 #define VMAX_MAX 0x3FFFFFFF
-/* A piece this many us off 1 ms (the tick's time read jitters) still takes
- * the fast build's paths without a 32-bit divide. */
-#define PRV_JITTER_US 4
 
 static int32_t prv_abs(int32_t v)
 {
@@ -290,30 +287,6 @@ static int32_t prv_vel_q(km_profile_t *p)
 #endif
 }
 
-/* q x dt / 1000 toward zero (|q| < 2^20, dt <= 2000); a piece a few us
- * off 1 ms divides only m j for m = |q| (floor((1000 m + m j) / 1000) =
- * m + floor(m j / 1000)), and not at all while m |j| < 1000. Inlined: two
- * callers, a call a tick. */
-static inline __attribute__((always_inline)) int32_t prv_per_ms(int32_t q, uint32_t dt_us)
-{
-#if !KM_CONTROL_COMPACT
-    const int32_t j = (int32_t)dt_us - 1000;
-    if (j >= -PRV_JITTER_US && j <= PRV_JITTER_US) {
-        const int32_t m = q < 0 ? -q : q;
-        const uint32_t mj = (uint32_t)m * (uint32_t)(j < 0 ? -j : j);
-        uint32_t f; /* m |j| / 1000, rounded up for j < 0 */
-        if (mj < 1000u) {
-            f = j < 0 && mj != 0u ? 1u : 0u;
-        } else {
-            f = km_udiv1000(j < 0 ? mj + 999u : mj);
-        }
-        const int32_t r = j < 0 ? m - (int32_t)f : m + (int32_t)f;
-        return q < 0 ? -r : r;
-    }
-#endif
-    return km_sdiv1000(q * (int32_t)dt_us);
-}
-
 /* pos += vel * dt / 1e6 exactly, remainder carried (dt <= 2000; |pos_rem|
  * < 4e6 before normalising). Returns vel / 1000. */
 static int32_t prv_advance(km_profile_t *p, uint32_t dt_us)
@@ -324,7 +297,7 @@ static int32_t prv_advance(km_profile_t *p, uint32_t dt_us)
         p->pos_rem += r * 1000;
     } else {
         const int32_t qd = q * (int32_t)dt_us; /* |q| < 2^20 */
-        const int32_t qq = prv_per_ms(q, dt_us);
+        const int32_t qq = km_sdiv1000(qd);
         p->pos += qq;
         p->pos_rem += (qd - qq * 1000) * 1000 + r * (int32_t)dt_us;
     }
@@ -354,50 +327,12 @@ static int32_t prv_brake_speed(const km_profile_t *p, uint32_t k, uint32_t d)
     return (int32_t)km_isqrt(hi, lo);
 }
 
-#if !KM_CONTROL_COMPACT
-
-/* accel / 1000, divided only when accel changed (once a plan). */
-static int32_t prv_accel_q(km_profile_t *p)
-{
-    if (p->accel != p->accel_of) {
-        p->accel_of = p->accel;
-        p->accel_q = km_sdiv1000(p->accel);
-    }
-    return p->accel_q;
-}
-
-/* prv_dv of a piece 1000 + j us (|j| <= PRV_JITTER_US) from accel's
- * quotient and remainder by 1000: dv > 0, so its quotient is the floor. */
-static int32_t prv_dv_jitter(km_profile_t *p, int32_t j)
-{
-    const int32_t aq = prv_accel_q(p);
-    int32_t rem = j * (p->accel - aq * 1000) + p->vel_rem; /* -4000 < rem < 5000 */
-    int32_t dvq = p->accel + j * aq;
-    while (rem >= 1000) {
-        dvq++;
-        rem -= 1000;
-    }
-    while (rem < 0) {
-        dvq--;
-        rem += 1000;
-    }
-    p->vel_rem = rem;
-    return dvq;
-}
-#endif
-
 /* The speed change a piece allows, remainder carried (0 <= vel_rem < 1000). */
 static int32_t prv_dv(km_profile_t *p, uint32_t dt_us)
 {
     if (dt_us == 1000u && p->vel_rem >= 0) {
         return p->accel; /* 0 <= rem < 1000: rem stays */
     }
-#if !KM_CONTROL_COMPACT
-    const int32_t j = (int32_t)dt_us - 1000;
-    if (j >= -PRV_JITTER_US && j <= PRV_JITTER_US && p->vel_rem >= 0) {
-        return prv_dv_jitter(p, j);
-    }
-#endif
     const int32_t dv = p->accel * (int32_t)dt_us + p->vel_rem;
     const int32_t dvq = km_sdiv1000(dv);
     p->vel_rem = dv - dvq * 1000;
@@ -521,7 +456,7 @@ static void prv_step(km_profile_t *p, uint32_t dt_us)
     const int32_t dv = prv_dv(p, dt_us);
     /* the braking speed from where this piece ends */
     const int32_t vq = prv_abs(prv_vel_q(p));
-    int32_t d = prv_abs(e) - (dt_us == 1000u ? vq : prv_per_ms(vq, dt_us));
+    int32_t d = prv_abs(e) - (dt_us == 1000u ? vq : km_sdiv1000(vq * (int32_t)dt_us));
     if (d < 0) {
         d = 0;
     }

@@ -42,8 +42,6 @@ typedef struct {
     bool done;        /* at the target, at rest */
 #if !defined(KM_CONTROL_COMPACT) || !KM_CONTROL_COMPACT
     int32_t s_ahead_q; /* stream: the last ahead (us) / 1000, the next one's first guess (the fast build's) */
-    int32_t accel_of;  /* the accel whose / 1000 accel_q holds (the fast build's cache) */
-    int32_t accel_q;   /* accel_of / 1000 */
 #endif
 } km_profile_t;
 

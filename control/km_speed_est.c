@@ -33,30 +33,6 @@ static int32_t prv_per_fast_span(int32_t d)
     const uint32_t q = m * 142u + ((m * 6u * 9363u) >> 16);
     return d < 0 ? -(int32_t)q : (int32_t)q;
 }
-
-/* A span this close to 7,000 us (ticks a few us off 1 ms in the ring)
- * takes prv_per_near_span. */
-#define PRV_SPAN_SLACK_US 16u
-
-/* d x 1e6 / span toward zero for |d| <= 2000 and span within
- * PRV_SPAN_SLACK_US of 7,000 us: the 7,000 us quotient q0 less
- * q0 (span - 7000) / 7000 (2^22 / 7000 ~ 599), then stepped to the exact
- * floor (n = |d| x 1e6 and q x span stay below 2^32). */
-static int32_t prv_per_near_span(int32_t d, uint32_t span)
-{
-    const uint32_t m = d < 0 ? 0u - (uint32_t)d : (uint32_t)d, n = m * 1000000u;
-    const uint32_t q0 = (uint32_t)prv_per_fast_span((int32_t)m);
-    const int32_t s = (int32_t)span - (int32_t)PRV_FAST_SPAN_US;
-    const uint32_t c = ((q0 * (uint32_t)(s < 0 ? -s : s)) * 599u) >> 22;
-    uint32_t q = s < 0 ? q0 + c : q0 - c;
-    while (q * span > n) {
-        q--;
-    }
-    while ((q + 1u) * span <= n) {
-        q++;
-    }
-    return d < 0 ? -(int32_t)q : (int32_t)q;
-}
 #endif
 
 void km_speed_window_init(km_speed_window_t *w)
@@ -119,11 +95,6 @@ int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
     }
     if (span == PRV_FAST_SPAN_US) { /* the steady 1 kHz tick */
         f->ddps = prv_per_fast_span(d);
-        return f->ddps;
-    }
-    if (span - (PRV_FAST_SPAN_US - PRV_SPAN_SLACK_US) <=
-        2u * PRV_SPAN_SLACK_US) { /* a jittered tick in the ring */
-        f->ddps = prv_per_near_span(d, span);
         return f->ddps;
     }
 #endif

@@ -435,9 +435,10 @@ static void m0h_control(void)
     }
     m0h_check("control_streaming", live.running && live.position > 450 + 150);
 
-    /* The app measures each tick's dt (km_app.c): a late or early tick
-     * takes the general paths (dt != 1000 us). A move back to 0 in 300 ms
-     * with dt 990 and 1010 us in turn. */
+    /* The app passes its grid's step (km_app.c prv_next_tick): 1000 us but
+     * after a late tick that moved the grid, which takes the general paths
+     * (dt != 1000 us). A move back to 0 in 300 ms with dt 990 and 1010 us in
+     * turn. */
     const uint8_t back[5] = {0x65, 0x00, 0x00, 0x2C, 0x01};
     m0h_dispatch("write_0x65_back", M0_ID, 0x03, back, 5, false, false);
     m0h_desc("control_tick_move_jitter", "a 0x65 move in 300 ms, ticks of 990 and 1010 us in turn");

@@ -622,11 +622,10 @@ static void test_speed_fast_steady_tick_every_displacement(void **state)
     }
 }
 
-/* Spans a few us off 7,000 (a tick a few us off 1 ms still in the ring:
- * control/km_speed_est.c prv_per_near_span, reciprocal and correction
- * steps) give C's quotient for every displacement, and so do spans just
- * outside that window (the general division). */
-static void test_speed_fast_near_span_every_displacement(void **state)
+/* Spans off 7,000 us (a tick of another length still in the ring:
+ * control/km_speed_est.c's general division, km_udiv_near) give C's
+ * quotient for every displacement. */
+static void test_speed_fast_other_span_every_displacement(void **state)
 {
     (void)state;
     for (int32_t s = -20; s <= 20; s++) {
@@ -715,7 +714,7 @@ int main(void)
         cmocka_unit_test(test_retime_cruise_equals_64_bit_reference),
         cmocka_unit_test(test_udiv_near_matches_c),
         cmocka_unit_test(test_speed_fast_steady_tick_every_displacement),
-        cmocka_unit_test(test_speed_fast_near_span_every_displacement),
+        cmocka_unit_test(test_speed_fast_other_span_every_displacement),
 #if !KM_CONTROL_COMPACT
         cmocka_unit_test(test_isqrt56_fast_matches_64_bit_root),
         cmocka_unit_test(test_rsqrt_table_is_its_formula),

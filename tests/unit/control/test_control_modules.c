@@ -306,11 +306,12 @@ static void test_servo_mode_clamp(void **state)
     assert_int_equal(km_servo_mode_clamp(&p, -32768), -1350);
 }
 
-/* Ticks a few us off 1 ms (the tick's timestamps jitter; control/km_profile.c
- * prv_dv takes them without a divide): speeding up from rest far from the
- * target, the speed after each piece is exactly floor(accel x elapsed us /
- * 1000), the remainder carried, for every accel shape and jitter. */
-static void test_profile_jittered_ticks_speed_exact(void **state)
+/* Ticks of other lengths than 1 ms (a late tick re-basing the app's grid,
+ * a caller with another period; control/km_profile.c prv_dv's general
+ * path): speeding up from rest far from the target, the speed after each
+ * piece is exactly floor(accel x elapsed us / 1000), the remainder carried,
+ * for every accel shape and tick length. */
+static void test_profile_other_ticks_speed_exact(void **state)
 {
     (void)state;
     static const uint32_t dts[] = {1000u, 999u,  1001u, 996u, 1004u, 1003u, 997u, 1000u,
@@ -331,7 +332,7 @@ static void test_profile_jittered_ticks_speed_exact(void **state)
 
 /* 0x4D's clock counts whole ms of a motion whatever the ticks' lengths
  * (control/km_servo_mode.c prv_count_rotation: a late tick of several ms
- * as well as jittered 1 ms ones). */
+ * as well as ticks a few us off 1 ms). */
 static void test_servo_mode_rotation_clock(void **state)
 {
     (void)state;
@@ -421,7 +422,7 @@ int main(void)
         cmocka_unit_test(test_output_direction_limit_modes),
         cmocka_unit_test(test_speed_fast_estimator),
         cmocka_unit_test(test_servo_mode_clamp),
-        cmocka_unit_test(test_profile_jittered_ticks_speed_exact),
+        cmocka_unit_test(test_profile_other_ticks_speed_exact),
         cmocka_unit_test(test_servo_mode_rotation_clock),
         cmocka_unit_test(test_extremes_stay_bounded),
     };
