@@ -50,8 +50,7 @@ static km_control_params_t s_params; /* the control registers, decoded */
 static km_fault_log_t s_fault_log __attribute__((section(".noinit")));
 #endif
 static uint32_t s_params_gen; /* km_servo_params_gen() they were decoded at */
-static uint32_t s_last_grid;  /* the last control tick's grid point */
-static uint32_t s_next_tick;  /* the next one's */
+static uint32_t s_next_tick;  /* the next control tick's grid point, a period after the last one's */
 static uint32_t s_tick_period;
 static uint32_t s_ticks; /* control ticks run since init */
 
@@ -511,8 +510,7 @@ __attribute__((noinline)) void km_app_init(void)
     s_ticks = 0u;
     const uint32_t now = km_hal_time_now();
     s_tick_period = prv_us_to_ticks(KM_APP_TICK_US);
-    s_next_tick = now;                 /* the first tick at once, */
-    s_last_grid = now - s_tick_period; /* a period after a grid point before it */
+    s_next_tick = now; /* the first tick at once, a period after the grid's point before it */
     s_confirm_at = now + prv_us_to_ticks(KM_APP_CONFIRM_US);
 }
 
@@ -540,14 +538,14 @@ static bool prv_tick_due(uint32_t now)
  * "Control tick"). */
 static uint32_t prv_next_tick(uint32_t now)
 {
-    uint32_t at = s_next_tick; /* this tick's grid point */
-    if (now - at >= s_tick_period / 2u) {
-        at = now - s_tick_period / 8u;
+    const uint32_t period = s_tick_period, due = s_next_tick;
+    if (now - due < period / 2u) {
+        s_next_tick = due + period;
+        return period;
     }
-    const uint32_t dt_ticks = at - s_last_grid;
-    s_last_grid = at;
-    s_next_tick = at + s_tick_period;
-    return dt_ticks;
+    const uint32_t at = now - period / 8u; /* this tick's grid point, moved */
+    s_next_tick = at + period;
+    return at - due + period;
 }
 
 /* Sleeps, under the caller's lock, until something needs a pass of the
