@@ -116,6 +116,22 @@ endif()
 # build, on in the 32 KiB one.
 option(KM_G031_COMPACT_RT "stm32g031 application: compact mem* and division (boot/boot_rt.c)"
        ${KM_G031_COMPACT_DEFAULT})
+# The application image's header: 32 B, the vector table right after it,
+# instead of 256 B with the table at 0x100 (docs/update.md §2). The
+# application runs on its RAM copy of the table (startup.c sets VTOR), so
+# the flash table needs no VTOR alignment; the bootloader then leaves VTOR
+# alone. An image format of its own: a bootloader built with it accepts only
+# such images, and the other way round. On in the 32 KiB build only (the
+# 64 KiB build's bootloaders in the field take 0x100).
+option(KM_G031_SHORT_HEADER "stm32g031: 32-byte application header, vector table at 0x20"
+       ${KM_G031_COMPACT_DEFAULT})
+if(KM_G031_SHORT_HEADER)
+  set(KM_G031_APP_HEADER 32)
+else()
+  set(KM_G031_APP_HEADER 256)
+endif()
+list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_IMAGE_VECTORS=${KM_G031_APP_HEADER}u)
+list(APPEND KM_BOARD_LINK_OPTIONS -Wl,--defsym=KM_APP_HEADER=${KM_G031_APP_HEADER})
 list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_G031_FLASH_KB=${KM_G031_FLASH_KB}u -DKM_G031_BOOT_KB=${KM_G031_BOOT_KB}u)
 list(APPEND KM_BOARD_LINK_OPTIONS -Wl,--defsym=KM_FLASH_SIZE=${KM_G031_FLASH_KB}K
      -Wl,--defsym=KM_BOOT_SIZE=${KM_G031_BOOT_KB}K)

@@ -8,7 +8,13 @@
 
 #define KM_IMAGE_MAGIC 0x57464D4Bu /* bytes 4B 4D 46 57, "KMFW" */
 #define KM_IMAGE_HEADER_SIZE 32u
-#define KM_IMAGE_VECTORS 0x100u                  /* vector table offset (VTOR: 256-aligned) */
+/* The vector table's offset in the image: 0x100 (256-aligned, so the
+ * bootloader can point VTOR at it) unless the build sets it; the
+ * STM32G031F6's 32 KiB build sets 0x20, right after the header, and its
+ * bootloader leaves VTOR alone (docs/update.md §2). */
+#ifndef KM_IMAGE_VECTORS
+#define KM_IMAGE_VECTORS 0x100u
+#endif
 #define KM_IMAGE_MIN_LEN (KM_IMAGE_VECTORS + 8u) /* at least initial SP + reset vector */
 
 /* Board models (docs/update.md §2). */

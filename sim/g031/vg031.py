@@ -712,7 +712,8 @@ class Machine:
 
 def flash_from_images(boot=None, app_kmfw=None, elf=None):
     """The 64 KiB flash contents from the images (ELF load segments; the
-    update image at the application region 0x08002000)."""
+    update image at the address its header names: the application region,
+    0x08002000 on the 64 KiB layout, 0x08001000 on the 32 KiB one)."""
     from elftools.elf.elffile import ELFFile
     flash = bytearray(b"\xff" * P.FLASH_SIZE)
     for path in [p for p in (boot, elf) if p]:
@@ -726,7 +727,8 @@ def flash_from_images(boot=None, app_kmfw=None, elf=None):
     if app_kmfw:
         with open(app_kmfw, "rb") as f:
             img = f.read()
-        flash[0x2000:0x2000 + len(img)] = img
+        at = int.from_bytes(img[20:24], "little") - P.FLASH_BASE  # header word 5: base
+        flash[at:at + len(img)] = img
     return bytes(flash)
 
 

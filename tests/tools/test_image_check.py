@@ -89,9 +89,9 @@ class ImageCheckTest(unittest.TestCase):
     def tearDown(self):
         shutil.rmtree(self.dir)
 
-    def build(self, *defines, stack=1024, lto=False):
+    def build(self, *defines, stack=1024, lto=False, origin="0x08000000"):
         (self.dir / "t.c").write_text(SRC)
-        (self.dir / "t.ld").write_text(f"STACK = {stack};\n" + LD)
+        (self.dir / "t.ld").write_text(f"STACK = {stack};\n" + LD.replace("0x08000000", origin))
         obj = self.dir / "t.o"
         elf = self.dir / "t.elf"
         flags = ["-mcpu=cortex-m0plus", "-mthumb", "-Os", "-ffunction-sections", "-fstack-usage"]
@@ -127,6 +127,20 @@ class ImageCheckTest(unittest.TestCase):
         self.assertNotIn("no .su", out)  # every frame came from t.su
         # leaf's 64-byte buffer is the deepest frame under Reset_Handler.
         self.assertRegex(out, r"main \(from Reset_Handler\) \d+ B via Reset_Handler > leaf")
+
+    def test_budget_takes_the_application_header_from_its_link_address(self):
+        """An application linked 32 or 256 B into its region's page is
+        charged that header (docs/update.md §2: the 32 KiB build's 32-byte
+        header), on top of its .bin."""
+        budget = {"flash": 32768, "boot_max": 4096, "store": 6144, "page": 2048, "ram_max": 6144,
+                  "role": "app"}
+        for origin, header in (("0x08001020", 32), ("0x08002100", 256)):
+            elf = self.build(origin=origin)
+            rc, out = self.check(elf, {"budget": budget}, "--checks", "budget", "--enforce-budget")
+            size = elf.with_suffix(".bin").stat().st_size
+            self.assertEqual(rc, 0, out)
+            self.assertIn(f"application {size:,} + {header} B header = {size + header:,} B", out)
+            elf.with_suffix(".bin").unlink()
 
     def test_heap_fails(self):
         rc, out = self.check(self.build("WITH_MALLOC"), self.config())

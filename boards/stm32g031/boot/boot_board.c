@@ -4,7 +4,8 @@
  * set up), TIM2 at 1 MHz, USART1 single-wire half-duplex on PB6 polled,
  * the flash controller over the application region (erase, double-word
  * program, reads that report a double ECC error), a read-only view of the
- * store, the IWDG, and the jump through VTOR; the 64 KiB build sleeps
+ * store, the IWDG, and the jump (VTOR set to the image's table where the
+ * header is 256 B; docs/update.md §2, §5); the 64 KiB build sleeps
  * between bytes (km_bootb_wait). Runs from flash with no interrupt
  * enabled, so a page erase simply stalls it (docs/flash-busy.md concerns
  * the application's bus interrupts, which are off here). */
@@ -306,7 +307,11 @@ _Noreturn void km_bootb_start(uint32_t vectors, uint32_t sp, uint32_t pc)
 {
     km_bootb_shared()->app_running = KM_BOOT_APP_MAGIC;
     prv_watchdog_start();
+#if KM_IMAGE_VECTORS % 256u == 0u
     PRV_SCB_VTOR = vectors;
+#else
+    (void)vectors; /* not 256-aligned: the application's startup sets VTOR (docs/update.md §2) */
+#endif
     __asm__ volatile("dsb         \n"
                      "isb         \n"
                      "msr msp, %0 \n"
