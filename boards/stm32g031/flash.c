@@ -13,7 +13,8 @@
 #include "km_cortex_m.h"
 
 extern const uint8_t __km_store_start[];
-extern const uint8_t __km_store_size[]; /* linker symbol: its address is the size */
+extern const uint8_t __km_store_size[];  /* linker symbol: its address is the size */
+extern const uint8_t __km_store_pages[]; /* linker symbol: its address is the page count */
 
 #define PROG_SIZE 8u
 /* BSY polling bound, well above a 40 ms erase (DS12992 table "Flash memory
@@ -172,24 +173,20 @@ static km_flash_result_t prv_read(void *ctx, uint32_t offset, void *data, uint32
     return ecc ? KM_FLASH_ERR_ECC : KM_FLASH_OK;
 }
 
-static const km_flash_t s_flash_template = {
+/* The page count is a link-time constant (the linker script's
+ * KM_STORE_PAGES), so the table is const, in flash. */
+static const km_flash_t s_flash = {
     .page_size = FLASH_PAGE_SIZE,
     .prog_size = PROG_SIZE,
-    .page_count = 0u, /* filled from the linker symbols below */
+    .page_count = (uint32_t)(uintptr_t)__km_store_pages,
     .erase = prv_erase,
     .program = prv_program,
     .read = prv_read,
     .ctx = 0,
 };
 
-static km_flash_t s_flash;
-
-/* The store's flash, page count from the linker symbols. */
+/* The store's flash. */
 const km_flash_t *km_board_flash(void)
 {
-    if (s_flash.erase == 0) {
-        s_flash = s_flash_template;
-        s_flash.page_count = prv_region_size() / FLASH_PAGE_SIZE;
-    }
     return &s_flash;
 }
