@@ -5,9 +5,11 @@
 /* (n x m) >> (32 + s): one copy of the multiply for every divisor (flash). */
 static __attribute__((noinline)) uint32_t prv_mulhi_shr(uint32_t n, uint32_t m, uint32_t s)
 {
+#if !KM_CONTROL_COMPACT
     if (n <= 0xFFFFu) { /* two of the four products */
         return ((n * (m >> 16) + ((n * (m & 0xFFFFu)) >> 16)) >> 16) >> s;
     }
+#endif
     return km_umulhi(n, m) >> s;
 }
 
@@ -154,6 +156,11 @@ __attribute__((noinline)) uint32_t km_udiv_near(uint32_t n, uint32_t d, const km
 }
 
 #if KM_CONTROL_COMPACT
+__attribute__((noinline)) uint32_t km_umulhi(uint32_t a, uint32_t b)
+{
+    return km_umulhi_inline(a, b);
+}
+
 __attribute__((noinline)) int32_t km_clamp(int32_t v, int32_t lo, int32_t hi)
 {
     return v < lo ? lo : (v > hi ? hi : v);

@@ -17,7 +17,7 @@
 #endif
 
 /* High 32 bits of a x b, exact, from four 16 x 16 products. */
-static inline __attribute__((always_inline)) uint32_t km_umulhi(uint32_t a, uint32_t b)
+static inline __attribute__((always_inline)) uint32_t km_umulhi_inline(uint32_t a, uint32_t b)
 {
     const uint32_t ah = a >> 16, al = a & 0xFFFFu, bh = b >> 16, bl = b & 0xFFFFu;
     const uint32_t ll = al * bl;
@@ -25,6 +25,17 @@ static inline __attribute__((always_inline)) uint32_t km_umulhi(uint32_t a, uint
     const uint32_t m2 = al * bh + (m1 & 0xFFFFu); /* likewise */
     return ah * bh + (m1 >> 16) + (m2 >> 16);
 }
+
+#if KM_CONTROL_COMPACT
+/* High 32 bits of a x b: km_umulhi_inline, one copy, not inlined (flash). */
+uint32_t km_umulhi(uint32_t a, uint32_t b);
+#else
+/* High 32 bits of a x b: km_umulhi_inline at each use (tick instructions). */
+static inline __attribute__((always_inline)) uint32_t km_umulhi(uint32_t a, uint32_t b)
+{
+    return km_umulhi_inline(a, b);
+}
+#endif
 
 /* The reciprocals: M = ceil(2^(32+s) / d). */
 #define KM_FIXDIV_M10 0xCCCCCCCDu   /* d = 10, s = 3 */
@@ -59,8 +70,8 @@ typedef struct {
     }
 uint32_t km_udiv_near(uint32_t n, uint32_t d, const km_recip_near_t *c);
 
-/* Four bits of the radicand, two of the root: one step (KM_SQRT_NIBBLES's
- * body); 32-bit for roots below 2^28 (docs/control-design.md "Arithmetic"). */
+/* Four bits of the radicand, two of the root: one step of km_isqrt56;
+ * 32-bit for roots below 2^28 (docs/control-design.md "Arithmetic"). */
 #define KM_SQRT_NIBBLE(w)                                   \
     do {                                                    \
         const uint32_t x = (rem << 4) | ((w) >> 28);        \
@@ -84,35 +95,35 @@ uint32_t km_udiv_near(uint32_t n, uint32_t d, const km_recip_near_t *c);
         }                                                   \
     } while (0)
 
-/* n steps of KM_SQRT_NIBBLE on the word w. */
-#define KM_SQRT_NIBBLES(w, n) \
-    for (; (n) > 0u; (n)--) { \
-        KM_SQRT_NIBBLE(w);    \
-    }
-
-/* floor(sqrt(hi:lo)) for hi:lo < 2^56, leading zero nibbles skipped
- * (the profile's braking speed calls it directly outside the compact build). */
+/* floor(sqrt(hi:lo)) for hi:lo < 2^56, leading zero nibbles skipped: one
+ * nibble step per pass, hi:lo shifted as one word (one copy of the step). */
 static inline uint32_t km_isqrt56(uint32_t hi, uint32_t lo)
 {
     uint32_t root = 0, rem = 0;
-    unsigned n = 8u, m = 8u; /* nibbles left in hi, in lo */
+    unsigned n = 16u; /* nibbles left in hi:lo */
     if (hi == 0u) {
         hi = lo;
-        m = 0u;
+        lo = 0u;
+        n = 8u;
         if (hi == 0u) {
             return 0u;
         }
     }
     while ((hi >> 24) == 0u) {
-        hi <<= 8;
+        hi = (hi << 8) | (lo >> 24);
+        lo <<= 8;
         n -= 2u;
     }
     while ((hi >> 28) == 0u) {
-        hi <<= 4;
+        hi = (hi << 4) | (lo >> 28);
+        lo <<= 4;
         n--;
     }
-    KM_SQRT_NIBBLES(hi, n)
-    KM_SQRT_NIBBLES(lo, m)
+    for (; n > 0u; n--) {
+        KM_SQRT_NIBBLE(hi);
+        hi |= lo >> 28;
+        lo <<= 4;
+    }
     return root;
 }
 
