@@ -38,18 +38,17 @@ static bool prv_temperature_bad(const km_sensors_t *in)
 static void prv_power_on_sample(km_selftest_t *t, const km_sensors_t *in, const km_control_params_t *p,
                                 bool bridge_free)
 {
-    bool bad[PRV_N];
-    bad[PRV_POS] = prv_position_bad(in, p);
-    bad[PRV_TEMP] = prv_temperature_bad(in);
-    bad[PRV_VOLT] = in->voltage_mv < KM_SELFTEST_SUPPLY_MIN_MV || in->voltage_mv > KM_SELFTEST_SUPPLY_MAX_MV;
-    bad[PRV_CURR] = bridge_free && prv_abs(in->current_ma) > KM_SELFTEST_CURRENT_OFFSET_MA;
+    const unsigned bad =
+        (prv_position_bad(in, p) ? 1u << PRV_POS : 0u) | (prv_temperature_bad(in) ? 1u << PRV_TEMP : 0u) |
+        (in->voltage_mv < KM_SELFTEST_SUPPLY_MIN_MV || in->voltage_mv > KM_SELFTEST_SUPPLY_MAX_MV
+             ? 1u << PRV_VOLT
+             : 0u) |
+        (bridge_free && prv_abs(in->current_ma) > KM_SELFTEST_CURRENT_OFFSET_MA ? 1u << PRV_CURR : 0u);
     if (bridge_free) {
         t->free_samples++;
     }
     for (unsigned i = 0; i < PRV_N; i++) {
-        if (bad[i]) {
-            t->fails[i]++;
-        }
+        t->fails[i] = (uint8_t)(t->fails[i] + ((bad >> i) & 1u));
     }
     t->samples++;
     if (t->samples == KM_SELFTEST_SAMPLES) {
