@@ -71,9 +71,8 @@ void km_motor_mode_run(km_motor_mode_t *m, const km_motor_run_t *run, const km_c
         return;
     }
     const bool speed_mode = run->mode == KM_RUN_SPEED;
-    const int32_t mag = (int32_t)run->value;
-    const int32_t v = speed_mode ? prv_speed(p, run->reverse ? -mag : mag)
-                                 : (run->reverse ? -1 : 1) * (mag > 1000 ? 1000 : mag);
+    const int32_t mag = (int32_t)run->value, dir_mag = run->reverse ? -mag : mag;
+    const int32_t v = speed_mode ? prv_speed(p, dir_mag) : km_sat(dir_mag, 1000);
     prv_start(m, speed_mode, v, after);
     const uint32_t amount = run->amount;
     m->count_kind = run->until;
