@@ -189,7 +189,7 @@ static void prv_protect_act(km_control_t *c, km_prot_action_t act, km_prot_actio
 }
 
 /* A protection's action began, changed or ended (km_control.h for 0x64). */
-static void prv_protect_transition(km_control_t *c, km_prot_action_t act)
+static KM_COMPACT_NOINLINE void prv_protect_transition(km_control_t *c, km_prot_action_t act)
 {
     const km_prot_action_t was = (km_prot_action_t)c->action;
     if (act == was) {
@@ -251,7 +251,8 @@ static void prv_observe(km_control_t *c, int32_t raw, uint32_t dt_us)
 /* 1. sensing: the position `pos` (master's frame), its speeds, the clock.
  * Returns the fast speed (0.1 deg/s) the loops damp with; *speed_dps the
  * 20 ms window's (0x47). */
-static int32_t prv_sense(km_control_t *c, int32_t raw, int32_t pos, uint32_t dt_us, int32_t *speed_dps)
+static KM_COMPACT_NOINLINE int32_t prv_sense(km_control_t *c, int32_t raw, int32_t pos, uint32_t dt_us,
+                                             int32_t *speed_dps)
 {
     if (!c->have_position) {
         km_speed_fast_init(&c->fast, pos);
@@ -270,8 +271,9 @@ static int32_t prv_sense(km_control_t *c, int32_t raw, int32_t pos, uint32_t dt_
 }
 
 /* 2. self-test and protection; returns the hardware faults found at this tick. */
-static uint8_t prv_supervise(km_control_t *c, const km_sensors_t *in, const km_control_params_t *p,
-                             int32_t pos, uint32_t dt_us, km_live_t *live)
+static KM_COMPACT_NOINLINE uint8_t prv_supervise(km_control_t *c, const km_sensors_t *in,
+                                                 const km_control_params_t *p, int32_t pos, uint32_t dt_us,
+                                                 km_live_t *live)
 {
     const int32_t drive = c->bridge.mode == KM_BRIDGE_PWM ? c->bridge.pwm : 0;
     const uint8_t hw = km_selftest_step(&c->selftest, in, p, drive, c->bridge.mode == KM_BRIDGE_FREE, dt_us);
@@ -302,8 +304,8 @@ static int32_t prv_limit(km_control_t *c, const km_sensors_t *in, const km_contr
 }
 
 /* 3. motor mode owns the bridge; 0x5A = 1 (servo only) stops it. */
-static void prv_drive_motor(km_control_t *c, const km_control_params_t *p, int32_t pos, int32_t speed_ddps,
-                            uint32_t dt_us, int32_t limit)
+static KM_COMPACT_NOINLINE void prv_drive_motor(km_control_t *c, const km_control_params_t *p, int32_t pos,
+                                                int32_t speed_ddps, uint32_t dt_us, int32_t limit)
 {
     if (p->control_mode == KM_MODE_SERVO_ONLY && c->motor.running) {
         km_motor_mode_stop(&c->motor, p->idle_brake ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE);
@@ -333,8 +335,8 @@ static int32_t prv_speed_governor(const km_control_params_t *p, int32_t pwm, int
 }
 
 /* 3. servo mode and the position loop, 4. output. */
-static void prv_drive_servo(km_control_t *c, const km_control_params_t *p, int32_t pos, int32_t speed_ddps,
-                            uint32_t dt_us, int32_t limit)
+static KM_COMPACT_NOINLINE void prv_drive_servo(km_control_t *c, const km_control_params_t *p, int32_t pos,
+                                                int32_t speed_ddps, uint32_t dt_us, int32_t limit)
 {
     km_servo_mode_out_t sm;
     km_servo_mode_step(&c->servo, p, pos, speed_ddps, dt_us, &sm);

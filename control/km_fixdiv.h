@@ -16,6 +16,16 @@
 #define KM_CONTROL_COMPACT 0
 #endif
 
+/* A step of the control tick kept a call in the compact build: LTO makes
+ * the tick one function, and these calls spill fewer registers and need
+ * fewer long branches than their bodies inlined (flash); inlined otherwise
+ * (tick instructions). docs/footprint.md. */
+#if KM_CONTROL_COMPACT
+#define KM_COMPACT_NOINLINE __attribute__((noinline))
+#else
+#define KM_COMPACT_NOINLINE
+#endif
+
 /* High 32 bits of a x b, exact, from four 16 x 16 products. */
 static inline __attribute__((always_inline)) uint32_t km_umulhi_inline(uint32_t a, uint32_t b)
 {

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "km_axis.h"
+#include "km_fixdiv.h"
 
 #define PRV_N 4u
 #define PRV_US_PER_100MS 100000u
@@ -159,8 +160,9 @@ static km_prot_action_t prv_action(const km_protect_t *s, const km_control_param
     return KM_PROT_ACT_NONE;
 }
 
-km_prot_action_t km_protect_step(km_protect_t *s, const km_protect_in_t *in, const km_control_params_t *p,
-                                 uint32_t dt_us, km_protect_events_t *ev)
+KM_COMPACT_NOINLINE km_prot_action_t km_protect_step(km_protect_t *s, const km_protect_in_t *in,
+                                                     const km_control_params_t *p, uint32_t dt_us,
+                                                     km_protect_events_t *ev)
 {
     ev->tripped = 0;
     ev->released = 0;

@@ -5,6 +5,8 @@
 
 #include <string.h>
 
+#include "km_fixdiv.h"
+
 enum { PRV_POS, PRV_TEMP, PRV_VOLT, PRV_CURR, PRV_N };
 
 static const uint8_t s_bit[PRV_N] = {KM_HW_POSITION, KM_HW_TEMPERATURE, KM_HW_VOLTAGE, KM_HW_CURRENT};
@@ -78,8 +80,9 @@ static void prv_run_check(km_selftest_t *t, unsigned i, bool bad, uint32_t dt_us
     t->run_bad_us[i] = timer;
 }
 
-uint8_t km_selftest_step(km_selftest_t *t, const km_sensors_t *in, const km_control_params_t *p,
-                         int32_t drive_pwm, bool bridge_free, uint32_t dt_us)
+KM_COMPACT_NOINLINE uint8_t km_selftest_step(km_selftest_t *t, const km_sensors_t *in,
+                                             const km_control_params_t *p, int32_t drive_pwm,
+                                             bool bridge_free, uint32_t dt_us)
 {
     t->faults |= in->faults; /* what the hal's drivers flag, at any time */
     if (!km_selftest_done(t)) {
