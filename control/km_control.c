@@ -135,7 +135,8 @@ static bool prv_clear(km_control_t *c, uint8_t mask)
     return true;
 }
 
-bool km_control_request(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
+KM_COMPACT_NOINLINE bool km_control_request(km_control_t *c, const km_request_t *req,
+                                            const km_control_params_t *p)
 {
     prv_follow_axis(c, p);
     c->requests++;

@@ -16,10 +16,10 @@
 #define KM_CONTROL_COMPACT 0
 #endif
 
-/* A step of the control tick kept a call in the compact build: LTO makes
- * the tick one function, and these calls spill fewer registers and need
- * fewer long branches than their bodies inlined (flash); inlined otherwise
- * (tick instructions). docs/footprint.md. */
+/* A step of the control tick or of a request kept a call in the compact
+ * build: LTO makes the tick one function, and these calls spill fewer
+ * registers and need fewer long branches than their bodies inlined
+ * (flash); inlined otherwise (instructions). docs/footprint.md. */
 #if KM_CONTROL_COMPACT
 #define KM_COMPACT_NOINLINE __attribute__((noinline))
 #else

@@ -61,7 +61,7 @@ static void prv_stop(km_servo_mode_t *m, uint8_t ts)
 }
 
 /* Turns the torque on holding `position`. */
-static void prv_on_at(km_servo_mode_t *m, int32_t position)
+static KM_COMPACT_NOINLINE void prv_on_at(km_servo_mode_t *m, int32_t position)
 {
     km_profile_reset(&m->profile, position);
     m->target = position;
@@ -155,7 +155,7 @@ bool km_servo_mode_move(km_servo_mode_t *m, const km_move_t *mv, const km_contro
     return true;
 }
 
-void km_servo_mode_rebase(km_servo_mode_t *m, int32_t position)
+KM_COMPACT_NOINLINE void km_servo_mode_rebase(km_servo_mode_t *m, int32_t position)
 {
     km_profile_reset(&m->profile, position);
     m->target = position;
