@@ -105,8 +105,10 @@ uint32_t km_udiv_near(uint32_t n, uint32_t d, const km_recip_near_t *c);
         }                                                   \
     } while (0)
 
+#if KM_CONTROL_COMPACT
 /* floor(sqrt(hi:lo)) for hi:lo < 2^56, leading zero nibbles skipped: one
- * nibble step per pass, hi:lo shifted as one word (one copy of the step). */
+ * nibble step per pass, hi:lo shifted as one word (one copy of the step,
+ * a few instructions more per step: flash). */
 static inline uint32_t km_isqrt56(uint32_t hi, uint32_t lo)
 {
     uint32_t root = 0, rem = 0;
@@ -136,6 +138,39 @@ static inline uint32_t km_isqrt56(uint32_t hi, uint32_t lo)
     }
     return root;
 }
+#else
+/* n steps of KM_SQRT_NIBBLE on the word w. */
+#define KM_SQRT_NIBBLES(w, n) \
+    for (; (n) > 0u; (n)--) { \
+        KM_SQRT_NIBBLE(w);    \
+    }
+
+/* floor(sqrt(hi:lo)) for hi:lo < 2^56, leading zero nibbles skipped: the
+ * nibbles of hi, then those of lo (two copies of the step: instructions). */
+static inline uint32_t km_isqrt56(uint32_t hi, uint32_t lo)
+{
+    uint32_t root = 0, rem = 0;
+    unsigned n = 8u, m = 8u; /* nibbles left in hi, in lo */
+    if (hi == 0u) {
+        hi = lo;
+        m = 0u;
+        if (hi == 0u) {
+            return 0u;
+        }
+    }
+    while ((hi >> 24) == 0u) {
+        hi <<= 8;
+        n -= 2u;
+    }
+    while ((hi >> 28) == 0u) {
+        hi <<= 4;
+        n--;
+    }
+    KM_SQRT_NIBBLES(hi, n)
+    KM_SQRT_NIBBLES(lo, m)
+    return root;
+}
+#endif
 
 #if !KM_CONTROL_COMPACT
 /* 1/sqrt from a value's top 8 bits: [i] = round(2^31 / sqrt((64 + i + 1/2)
