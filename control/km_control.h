@@ -40,6 +40,7 @@ typedef struct {
     uint8_t hw;       /* 0x35 bits found */
     uint8_t cleared;  /* protections a clear request released since the last tick */
     bool have_position;
+    bool obs_on;        /* the observer below runs (a stream) */
     km_axis_t frame;    /* the master's frame of the last tick (km_axis.h) */
     km_bridge_t bridge; /* the last command */
     int32_t position;   /* 0.1 deg, master's frame, last tick */
@@ -54,7 +55,6 @@ typedef struct {
     km_speed_fast_t fast;    /* the loop's damping input */
     km_speed_obs_t obs;      /* position and speed between counts (a 0x68 stream's loop input) */
     int32_t obs_ddps;        /* its speed this tick */
-    bool obs_on;             /* it runs (a stream) */
     km_hold_filter_t hold;   /* the position while holding still */
     km_current_limit_t ilim; /* 0x5C / 0x14 */
     km_protect_t prot;       /* the protection supervisor */

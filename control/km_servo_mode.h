@@ -20,17 +20,18 @@
 typedef struct {
     uint8_t ts;   /* km_torque_t as control runs it */
     bool touched; /* a torque command has come since power-on */
+    /* the byte flags first: an M0 byte access reaches 32 bytes into a struct */
+    bool running;    /* status bit 7 */
+    bool streaming;  /* the last move was a stream target */
+    bool reset_loop; /* the loop starts afresh at the next tick */
     km_profile_t profile;
     int32_t target;       /* 0.1 deg, the target in force */
     int32_t pwm_cap;      /* this move's own PWM bound, else 1000 */
-    bool running;         /* status bit 7 */
     uint32_t rotation_ms; /* 0x4D */
     uint32_t rotation_rem_us;
     uint32_t settle_us; /* since the profile reached the target and the shaft last moved */
     int32_t settle_pos; /* where the shaft was when that clock (re)started, 0.1 deg */
-    bool streaming;     /* the last move was a stream target */
     uint32_t stream_us; /* since the last stream target */
-    bool reset_loop;    /* the loop starts afresh at the next tick */
 } km_servo_mode_t;
 
 typedef struct {
