@@ -15,9 +15,11 @@
 static const uint8_t s_priority[PRV_N] = {KM_PROT_VOLTAGE, KM_PROT_TEMPERATURE, KM_PROT_CURRENT,
                                           KM_PROT_STALL};
 
-static uint8_t prv_index(uint8_t bit)
+/* The bit number of a single protection bit (1, 2, 4 or 8 -> 0..3): the
+ * index of its timer and of its two bits in 0x34. */
+static uint8_t prv_bit_number(uint8_t bit)
 {
-    return bit == KM_PROT_VOLTAGE ? 0u : bit == KM_PROT_CURRENT ? 1u : bit == KM_PROT_TEMPERATURE ? 2u : 3u;
+    return (uint8_t)((bit >> 1) - (bit >> 3));
 }
 
 static int32_t prv_abs(int32_t v)
@@ -86,13 +88,7 @@ static uint8_t prv_excursions(km_protect_t *s, const km_protect_in_t *in, const 
 
 static uint8_t prv_action_bits(const km_control_params_t *p, uint8_t bit)
 {
-    return (uint8_t)((p->prot_state >> (2u * prv_index(bit))) & 3u);
-}
-
-/* The bit number of a single protection bit (1, 2, 4 or 8 -> 0..3). */
-static uint8_t prv_bit_number(uint8_t bit)
-{
-    return (uint8_t)((bit >> 1) - (bit >> 3));
+    return (uint8_t)((p->prot_state >> (2u * prv_bit_number(bit))) & 3u);
 }
 
 /* The up/down timer of each protection that is over, active or being
@@ -203,5 +199,5 @@ km_prot_state_t km_protect_state(const km_protect_t *s, uint8_t bit)
     if ((s->active & bit) != 0u) {
         return KM_PROT_TRIPPED;
     }
-    return s->timer_us[prv_index(bit)] != 0u ? KM_PROT_PENDING : KM_PROT_NORMAL;
+    return s->timer_us[prv_bit_number(bit)] != 0u ? KM_PROT_PENDING : KM_PROT_NORMAL;
 }
