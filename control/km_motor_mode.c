@@ -190,22 +190,26 @@ static int32_t prv_drive(km_motor_mode_t *m, const km_control_params_t *p, int32
         km_motor_mode_stop(m, m->stop_bridge); /* at the edge of the travel */
         return 0;
     }
-    if (room == KM_MOTOR_ROOM_FREE) {
-        return m->speed_mode ? prv_speed_loop(m, &p->gains, want, speed_ddps, dt_us) : m->pwm;
+    int32_t sp = want; /* the speed loop's set-point */
+    if (room != KM_MOTOR_ROOM_FREE) {
+        /* the loop's lag: what the shaft covers before a slower set-point bites */
+        const int32_t fast = speed_ddps * dir;
+        const int32_t lag = fast > 0 ? km_sdiv1000((fast > 20000 ? 20000 : fast) * KM_MOTOR_LAG_MS) : 0;
+        const uint32_t sq = prv_approach_sq(&p->gains, room - lag);
+        if (!m->speed_mode && (fast < 0 || sq > prv_sq(fast + KM_MOTOR_CREEP_DDPS))) {
+            return m->pwm; /* far from the end: the constant PWM */
+        }
+        if (!m->speed_mode || sq < prv_sq(want)) {
+            sp = dir * prv_approach_ddps(sq);
+        }
+    } else if (!m->speed_mode) {
+        return m->pwm;
     }
-    /* the loop's lag: what the shaft covers before a slower set-point bites */
-    const int32_t fast = speed_ddps * dir;
-    const int32_t lag = fast > 0 ? km_sdiv1000((fast > 20000 ? 20000 : fast) * KM_MOTOR_LAG_MS) : 0;
-    const uint32_t sq = prv_approach_sq(&p->gains, room - lag);
+    const int32_t out = prv_speed_loop(m, &p->gains, sp, speed_ddps, dt_us);
     if (m->speed_mode) {
-        const int32_t sp = sq >= prv_sq(want) ? want : dir * prv_approach_ddps(sq);
-        return prv_speed_loop(m, &p->gains, sp, speed_ddps, dt_us);
+        return out;
     }
-    if (fast < 0 || sq > prv_sq(fast + KM_MOTOR_CREEP_DDPS)) {
-        return m->pwm; /* far from the end: the constant PWM */
-    }
-    const int32_t slow = prv_speed_loop(m, &p->gains, dir * prv_approach_ddps(sq), speed_ddps, dt_us);
-    return dir > 0 ? (slow < m->pwm ? slow : m->pwm) : (slow > m->pwm ? slow : m->pwm);
+    return dir > 0 ? (out < m->pwm ? out : m->pwm) : (out > m->pwm ? out : m->pwm);
 }
 
 void km_motor_mode_reaxis(km_motor_mode_t *m, const km_axis_t *was, const km_axis_t *now)
