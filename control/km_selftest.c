@@ -37,11 +37,13 @@ static bool prv_temperature_bad(const km_sensors_t *in)
     return in->temperature_c10 < KM_SELFTEST_NTC_OPEN_C10 || in->temperature_c10 > KM_SELFTEST_NTC_SHORT_C10;
 }
 
-static void prv_power_on_sample(km_selftest_t *t, const km_sensors_t *in, const km_control_params_t *p,
+/* One power-on sample; `sensors_bad` has the position and temperature
+ * checks' bits (1 << PRV_POS, 1 << PRV_TEMP). */
+static void prv_power_on_sample(km_selftest_t *t, const km_sensors_t *in, unsigned sensors_bad,
                                 bool bridge_free)
 {
     const unsigned bad =
-        (prv_position_bad(in, p) ? 1u << PRV_POS : 0u) | (prv_temperature_bad(in) ? 1u << PRV_TEMP : 0u) |
+        sensors_bad |
         (in->voltage_mv < KM_SELFTEST_SUPPLY_MIN_MV || in->voltage_mv > KM_SELFTEST_SUPPLY_MAX_MV
              ? 1u << PRV_VOLT
              : 0u) |
@@ -85,16 +87,14 @@ KM_COMPACT_NOINLINE uint8_t km_selftest_step(km_selftest_t *t, const km_sensors_
                                              bool bridge_free, uint32_t dt_us)
 {
     t->faults |= in->faults; /* what the hal's drivers flag, at any time */
+    const unsigned bad =
+        (prv_position_bad(in, p) ? 1u << PRV_POS : 0u) | (prv_temperature_bad(in) ? 1u << PRV_TEMP : 0u);
     if (!km_selftest_done(t)) {
-        prv_power_on_sample(t, in, p, bridge_free);
-    } else {
-        const bool pos_bad = prv_position_bad(in, p);
-        const bool temp_bad = prv_temperature_bad(in);
-        if (pos_bad || temp_bad || (t->run_bad_us[PRV_POS] | t->run_bad_us[PRV_TEMP]) != 0u) {
-            /* the usual tick (both sound, nothing being timed) skips this */
-            prv_run_check(t, PRV_POS, pos_bad, dt_us);
-            prv_run_check(t, PRV_TEMP, temp_bad, dt_us);
-        }
+        prv_power_on_sample(t, in, bad, bridge_free);
+    } else if (bad != 0u || (t->run_bad_us[PRV_POS] | t->run_bad_us[PRV_TEMP]) != 0u) {
+        /* the usual tick (both sound, nothing being timed) skips this */
+        prv_run_check(t, PRV_POS, (bad & (1u << PRV_POS)) != 0u, dt_us);
+        prv_run_check(t, PRV_TEMP, (bad & (1u << PRV_TEMP)) != 0u, dt_us);
     }
     if (prv_abs(drive_pwm) >= KM_SELFTEST_MOTOR_PWM && prv_abs(in->current_ma) < KM_SELFTEST_MOTOR_MA) {
         t->motor_open_us += dt_us;
