@@ -176,6 +176,26 @@ static uint32_t prv_sq(int32_t v)
     return b * b;
 }
 
+/* A PWM run still far from its end: the constant PWM (no speed set-point
+ * is this low: they are within +-200000). */
+#define PRV_FAR INT32_MIN
+
+/* The speed loop's set-point with `room` (0.1 deg) left to the end in the
+ * direction `dir` of `want`: `want`, or the approach speed once the end is near,
+ * and PRV_FAR for a PWM run still far from it. */
+static int32_t prv_near_setpoint(const km_motor_mode_t *m, const km_control_gains_t *g, int32_t room,
+                                 int32_t want, int32_t dir, int32_t speed_ddps)
+{
+    /* the loop's lag: what the shaft covers before a slower set-point bites */
+    const int32_t fast = speed_ddps * dir;
+    const int32_t lag = fast > 0 ? km_sdiv1000((fast > 20000 ? 20000 : fast) * KM_MOTOR_LAG_MS) : 0;
+    const uint32_t sq = prv_approach_sq(g, room - lag);
+    if (!m->speed_mode && (fast < 0 || sq > prv_sq(fast + KM_MOTOR_CREEP_DDPS))) {
+        return PRV_FAR;
+    }
+    return m->speed_mode && sq >= prv_sq(want) ? want : dir * prv_approach_ddps(sq);
+}
+
 /* A run with an end ahead (a count or the travel's edge): ends at it, and
  * slows down before it instead of driving through (the speed set-point,
  * or a constant PWM, cut by the approach speed; the square root is taken
@@ -192,15 +212,9 @@ static int32_t prv_drive(km_motor_mode_t *m, const km_control_params_t *p, int32
     }
     int32_t sp = want; /* the speed loop's set-point */
     if (room != KM_MOTOR_ROOM_FREE) {
-        /* the loop's lag: what the shaft covers before a slower set-point bites */
-        const int32_t fast = speed_ddps * dir;
-        const int32_t lag = fast > 0 ? km_sdiv1000((fast > 20000 ? 20000 : fast) * KM_MOTOR_LAG_MS) : 0;
-        const uint32_t sq = prv_approach_sq(&p->gains, room - lag);
-        if (!m->speed_mode && (fast < 0 || sq > prv_sq(fast + KM_MOTOR_CREEP_DDPS))) {
+        sp = prv_near_setpoint(m, &p->gains, room, want, dir, speed_ddps);
+        if (sp == PRV_FAR) {
             return m->pwm; /* far from the end: the constant PWM */
-        }
-        if (!m->speed_mode || sq < prv_sq(want)) {
-            sp = dir * prv_approach_ddps(sq);
         }
     } else if (!m->speed_mode) {
         return m->pwm;
