@@ -2,16 +2,22 @@
 /* Division by the tick's constants: reciprocal multiplies (km_fixdiv.h). */
 #include "km_fixdiv.h"
 
+#if KM_CONTROL_COMPACT
+/* (n x m) >> (32 + s): the one km_umulhi (flash). */
+static inline uint32_t prv_mulhi_shr(uint32_t n, uint32_t m, uint32_t s)
+{
+    return km_umulhi(n, m) >> s;
+}
+#else
 /* (n x m) >> (32 + s): one copy of the multiply for every divisor (flash). */
 static __attribute__((noinline)) uint32_t prv_mulhi_shr(uint32_t n, uint32_t m, uint32_t s)
 {
-#if !KM_CONTROL_COMPACT
     if (n <= 0xFFFFu) { /* two of the four products */
         return ((n * (m >> 16) + ((n * (m & 0xFFFFu)) >> 16)) >> 16) >> s;
     }
-#endif
     return km_umulhi(n, m) >> s;
 }
+#endif
 
 #if KM_CONTROL_COMPACT
 /* A divisor of the tick: floor(n / d) = floor((n >> pre) / d') with
