@@ -12,7 +12,7 @@ static const uint8_t s_restart_magic[4] = {0xE1, 0xE2, 0xE3, 0xE4};
 
 static bool prv_is_encoder(const km_servo_t *s)
 {
-    return s->reg.product->variant == KM_VARIANT_ENCODER;
+    return km_product_variant(s->reg.product) == KM_VARIANT_ENCODER;
 }
 
 /* 0x02: exactly E1 E2 E3 E4 restarts at once ("Restart": nothing after

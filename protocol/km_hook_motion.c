@@ -7,7 +7,7 @@
 
 static bool prv_is_encoder(const km_servo_t *s)
 {
-    return s->reg.product->variant == KM_VARIANT_ENCODER;
+    return km_product_variant(s->reg.product) == KM_VARIANT_ENCODER;
 }
 
 /* 0x64: 0..3 are torque requests (4, 5 and up are not writable); on (2) is

@@ -21,7 +21,7 @@ void km_servo_control_params(const km_servo_t *s, km_control_params_t *out)
     const uint32_t cur = km_regfile_get(rf, KM_REG_CURRENT_LIMIT);
     const uint32_t stall = km_regfile_get(rf, KM_REG_STALL_LIMIT);
     memset(out, 0, sizeof *out);
-    out->variant = rf->product->variant;
+    out->variant = km_product_variant(rf->product);
     out->reverse = (config & CONFIG_DIRECTION) != 0u;
     out->idle_brake = (config & CONFIG_IDLE_BRAKE) != 0u;
     out->power_on_brake = (config & CONFIG_POWER_ON_BRAKE) != 0u;

@@ -11,6 +11,10 @@ set(KM_BOARD_TOOLCHAIN arm-none-eabi)
 set(KM_BOARD_BUILD_TYPE MinSizeRel)
 set(KM_BOARD_COMPILE_OPTIONS -mcpu=cortex-m0plus -mthumb -ffunction-sections -fdata-sections
     -fstack-usage)
+# The product this board is built as (product.c) is a potentiometer servo:
+# the variant is fixed at compile time (km_product_variant), so the
+# encoder-only checks fold away.
+list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_PRODUCT_VARIANT=KM_VARIANT_POTENTIOMETER)
 set(KM_BOARD_LINK_OPTIONS -mcpu=cortex-m0plus -mthumb --specs=nano.specs --specs=nosys.specs
     -nostartfiles -Wl,--gc-sections)
 # The only board code that runs without the MCU, host-tested by

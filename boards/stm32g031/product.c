@@ -22,7 +22,7 @@ static const km_product_t s_product = {
     /* 0x@@##&&&&: no bootloader, hardware v1.0, software v0.1.00 (a
      * second build for the update tests sets KM_APP_SW_VERSION) */
     .firmware_version = 0x00100000u | (uint32_t)(KM_APP_SW_VERSION),
-    .variant = KM_VARIANT_POTENTIOMETER,
+    .variant = KM_PRODUCT_VARIANT, /* board.cmake: one variant, fixed at compile time */
     .max_current_ma = 2000,
     .max_speed_dps = 360,
     .zero_offset1 = 0, /* factory calibration: set per unit at end of line */
