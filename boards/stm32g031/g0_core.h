@@ -5,7 +5,16 @@
 
 #include <stdint.h>
 
-#define G0_REG(addr) (*(volatile uint32_t *)(uintptr_t)(addr))
+/* A register as a word of a 128-byte block: the compiler then reaches the
+ * registers near one another from one block address in a register, not
+ * one literal address each (docs/footprint.md "STM32G031F6"). */
+typedef struct {
+    volatile uint32_t word[32];
+} g0_block_t;
+/* The register `offset` bytes (below 128) from `base`. */
+#define G0_REG_AT(base, offset) (((g0_block_t *)(uintptr_t)(base))->word[(offset) / 4u])
+/* The register at a constant address. */
+#define G0_REG(addr) G0_REG_AT((addr) & ~0x7Fu, 0x7Fu & (addr))
 
 /* System control block (ARMv6-M B3.2.2). */
 #define SCB_AIRCR G0_REG(0xE000ED0Cu)
@@ -30,7 +39,7 @@
 #define NVIC_ISER G0_REG(0xE000E100u)
 #define NVIC_ICER G0_REG(0xE000E180u)
 #define NVIC_ICPR G0_REG(0xE000E280u)
-#define NVIC_IPR(n) G0_REG(0xE000E400u + 4u * (uint32_t)(n))
+#define NVIC_IPR(n) G0_REG_AT(0xE000E400u, 4u * (uint32_t)(n))
 
 /* Sets the priority, clears pending, enables. */
 static inline void g0_nvic_enable(uint32_t irq, uint32_t prio)

@@ -93,13 +93,13 @@
 /* ---- GPIO (RM0444 §7.4), IOPORT bus 0x5000 0000 ---- */
 #define GPIOA_BASE_R 0x50000000u
 #define GPIOB_BASE_R 0x50000400u
-#define GPIO_MODER(p) G0_REG((p) + 0x00u)
-#define GPIO_OTYPER(p) G0_REG((p) + 0x04u)
-#define GPIO_OSPEEDR(p) G0_REG((p) + 0x08u)
-#define GPIO_PUPDR(p) G0_REG((p) + 0x0Cu)
-#define GPIO_BSRR(p) G0_REG((p) + 0x18u)
-#define GPIO_AFR(p, n) G0_REG((p) + 0x20u + 4u * (n)) /* AFRL, AFRH */
-#define GPIO_BRR(p) G0_REG((p) + 0x28u)
+#define GPIO_MODER(p) G0_REG_AT((p), 0x00u)
+#define GPIO_OTYPER(p) G0_REG_AT((p), 0x04u)
+#define GPIO_OSPEEDR(p) G0_REG_AT((p), 0x08u)
+#define GPIO_PUPDR(p) G0_REG_AT((p), 0x0Cu)
+#define GPIO_BSRR(p) G0_REG_AT((p), 0x18u)
+#define GPIO_AFR(p, n) G0_REG_AT((p), 0x20u + 4u * (n)) /* AFRL, AFRH */
+#define GPIO_BRR(p) G0_REG_AT((p), 0x28u)
 
 /* ---- USART1 (RM0444 §33.8), base 0x4001 3800 ---- */
 #define USART1_BASE_R 0x40013800u
@@ -135,17 +135,17 @@
 /* ---- General-purpose timers TIM2/TIM3 (RM0444 §22.4) ---- */
 #define TIM2_BASE_R 0x40000000u
 #define TIM3_BASE_R 0x40000400u
-#define TIM_CR1(t) G0_REG((t) + 0x00u)
-#define TIM_DIER(t) G0_REG((t) + 0x0Cu)
-#define TIM_SR(t) G0_REG((t) + 0x10u)
-#define TIM_EGR(t) G0_REG((t) + 0x14u)
-#define TIM_CCMR1(t) G0_REG((t) + 0x18u)
-#define TIM_CCER(t) G0_REG((t) + 0x20u)
-#define TIM_CNT(t) G0_REG((t) + 0x24u)
-#define TIM_PSC(t) G0_REG((t) + 0x28u)
-#define TIM_ARR(t) G0_REG((t) + 0x2Cu)
-#define TIM_CCR1(t) G0_REG((t) + 0x34u)
-#define TIM_CCR2(t) G0_REG((t) + 0x38u)
+#define TIM_CR1(t) G0_REG_AT((t), 0x00u)
+#define TIM_DIER(t) G0_REG_AT((t), 0x0Cu)
+#define TIM_SR(t) G0_REG_AT((t), 0x10u)
+#define TIM_EGR(t) G0_REG_AT((t), 0x14u)
+#define TIM_CCMR1(t) G0_REG_AT((t), 0x18u)
+#define TIM_CCER(t) G0_REG_AT((t), 0x20u)
+#define TIM_CNT(t) G0_REG_AT((t) + 0x24u, 0u) /* by its own address: one literal on the hot paths */
+#define TIM_PSC(t) G0_REG_AT((t), 0x28u)
+#define TIM_ARR(t) G0_REG_AT((t), 0x2Cu)
+#define TIM_CCR1(t) G0_REG_AT((t), 0x34u)
+#define TIM_CCR2(t) G0_REG_AT((t), 0x38u)
 #define TIM_CR1_CEN (1u << 0) /* §22.4.1 */
 #define TIM_CR1_ARPE (1u << 7)
 #define TIM_DIER_CC1IE (1u << 1) /* §22.4.4 */

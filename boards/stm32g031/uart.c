@@ -180,11 +180,11 @@ G0_RAMFUNC(USART1_IRQHandler) void USART1_IRQHandler(void)
 {
     uintptr_t usart = USART1_BASE_R;
     __asm__("" : "+l"(usart)); /* ISR and RDR from one base register */
-    const uint32_t isr = G0_REG(usart + PRV_ISR_OFFSET);
+    const uint32_t isr = G0_REG_AT(usart, PRV_ISR_OFFSET);
     const uint32_t errors = USART_ISR_ORE | USART_ISR_FE | USART_ISR_NE | USART_ISR_PE;
     if ((isr & (errors | USART_ISR_RXNE)) == USART_ISR_RXNE) {
         const uint32_t tick = TIM_CNT(TIM2_BASE_R);
-        const uint8_t byte = (uint8_t)G0_REG(usart + PRV_RDR_OFFSET); /* reading clears RXNE */
+        const uint8_t byte = (uint8_t)G0_REG_AT(usart, PRV_RDR_OFFSET); /* reading clears RXNE */
         s_rx.call(s_rx.ctx, byte, tick, false);
         return;
     }

@@ -75,9 +75,10 @@ def read_defines(path):
 
 
 def evaluate(defines, name, args=None):
-    """Value of a define (G0_REG(x) read as x; parameters given by args)."""
+    """Value of a define (G0_REG(x) read as x, G0_REG_AT(b, o) as b + o; parameters given by args)."""
     params, expr = defines[name]
-    expr = re.sub(r"\b(0x[0-9A-Fa-f]+|\d+)[uU]\b", r"\1", expr).replace("G0_REG", "")
+    expr = re.sub(r"\b(0x[0-9A-Fa-f]+|\d+)[uU]\b", r"\1", expr)
+    expr = re.sub(r"\bG0_REG_AT\(", "_g0_at(", expr).replace("G0_REG", "")
     expr = expr.replace("(uint32_t)", "")
     for p, v in zip(params or [], args or []):
         expr = re.sub(r"\b%s\b" % p, str(v), expr)
@@ -85,7 +86,7 @@ def evaluate(defines, name, args=None):
     def sub(m):
         return str(evaluate(defines, m.group(0))) if m.group(0) in defines else m.group(0)
     expr = re.sub(r"\b[A-Za-z_]\w*\b", sub, expr)
-    return eval(expr, {"__builtins__": {}})  # noqa: S307 - the project's own header
+    return eval(expr, {"__builtins__": {}, "_g0_at": lambda base, offset: base + offset})  # noqa: S307 - the project's own header
 
 
 def field_mask(field):
