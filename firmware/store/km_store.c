@@ -63,22 +63,12 @@ static bool prv_write(km_store_t *s, uint32_t page, uint32_t offset, const uint8
     return !commit_cell || prv_cell(f, base + body, &rec[body]);
 }
 
-/* Writes state as a snapshot of the next generation at the start of target, then its confirmation cell K. */
-static bool prv_compact(km_store_t *s, uint32_t target, const uint32_t *state)
+/* Writes state as a snapshot of the next generation at the start of target (erased), then its confirmation
+ * cell K. */
+static bool prv_snapshot(km_store_t *s, uint32_t target, const uint32_t *state)
 {
     const km_flash_t *f = s->flash;
     s->own = false;
-    for (uint32_t p = 0; p < f->page_count; p++) {
-        if ((s->suspect & prv_page_bit(p)) != 0u && p != target) {
-            if (!prv_erase(s, p)) {
-                return false;
-            }
-            s->suspect &= ~prv_page_bit(p);
-        }
-    }
-    if ((s->erased & prv_page_bit(target)) == 0u && !prv_erase(s, target)) {
-        return false;
-    }
     s->erased &= ~prv_page_bit(target); /* programmed from here on */
     uint8_t buf[KM_REC_MAX_BYTES];
     const km_rec_t hdr = {
@@ -97,6 +87,44 @@ static bool prv_compact(km_store_t *s, uint32_t target, const uint32_t *state)
     s->tail = size + f->prog_size;
     s->own = true;
     return true;
+}
+
+/* What prv_compact_step did. */
+typedef enum {
+    PRV_STEP_ERASED,  /* a page erased: more steps follow */
+    PRV_STEP_WRITTEN, /* the snapshot written and confirmed: compaction done */
+    PRV_STEP_FAILED,
+} prv_step_t;
+
+/* One flash step of a compaction into target: erase the first page without a valid snapshot (target
+ * aside), else erase target unless it is erased, else write the snapshot of state there. */
+static prv_step_t prv_compact_step(km_store_t *s, uint32_t target, const uint32_t *state)
+{
+    const km_flash_t *f = s->flash;
+    for (uint32_t p = 0; p < f->page_count; p++) {
+        if ((s->suspect & prv_page_bit(p)) != 0u && p != target) {
+            if (!prv_erase(s, p)) {
+                return PRV_STEP_FAILED;
+            }
+            s->suspect &= ~prv_page_bit(p);
+            return PRV_STEP_ERASED;
+        }
+    }
+    if ((s->erased & prv_page_bit(target)) == 0u) {
+        return prv_erase(s, target) ? PRV_STEP_ERASED : PRV_STEP_FAILED;
+    }
+    return prv_snapshot(s, target, state) ? PRV_STEP_WRITTEN : PRV_STEP_FAILED;
+}
+
+/* Compacts state into target: prv_compact_step until the snapshot is written or a step fails. */
+static bool prv_compact(km_store_t *s, uint32_t target, const uint32_t *state)
+{
+    s->own = false;
+    prv_step_t step;
+    do {
+        step = prv_compact_step(s, target, state);
+    } while (step == PRV_STEP_ERASED);
+    return step == PRV_STEP_WRITTEN;
 }
 
 /* What prv_append_delta did. */
@@ -209,12 +237,8 @@ bool km_store_maintain(km_store_t *s)
     if (f->page_size - s->tail >= room) {
         return false;
     }
-    const uint32_t target = prv_next(s, s->active);
-    if ((s->erased & prv_page_bit(target)) == 0u) {
-        (void)prv_erase(s, target);
-    } else {
-        (void)prv_compact(s, target, s->values);
-    }
+    /* The session owns a page, so no page is suspect: the step erases the next page, or compacts into it. */
+    (void)prv_compact_step(s, prv_next(s, s->active), s->values);
     return true;
 }
 
@@ -226,20 +250,7 @@ bool km_store_prepare(km_store_t *s)
     if (!s->mounted || s->own) {
         return false;
     }
-    const km_flash_t *f = s->flash;
-    for (uint32_t p = 0; p < f->page_count; p++) {
-        if ((s->suspect & prv_page_bit(p)) != 0u && p != s->target) {
-            if (!prv_erase(s, p)) {
-                return false;
-            }
-            s->suspect &= ~prv_page_bit(p);
-            return true;
-        }
-    }
-    if ((s->erased & prv_page_bit(s->target)) == 0u) {
-        return prv_erase(s, s->target);
-    }
-    return prv_compact(s, s->target, s->values);
+    return prv_compact_step(s, s->target, s->values) != PRV_STEP_FAILED;
 }
 
 bool km_store_get(const km_store_t *s, uint8_t key, uint32_t *value)
