@@ -116,8 +116,10 @@ static prv_step_t prv_compact_step(km_store_t *s, uint32_t target, const uint32_
     return prv_snapshot(s, target, state) ? PRV_STEP_WRITTEN : PRV_STEP_FAILED;
 }
 
-/* Compacts state into target: prv_compact_step until the snapshot is written or a step fails. */
-static bool prv_compact(km_store_t *s, uint32_t target, const uint32_t *state)
+/* Compacts state into target: prv_compact_step until the snapshot is written or a step fails (inlined: no
+ * frame of its own on the deepest stack path, docs/footprint.md "STM32G031F6"). */
+static inline __attribute__((always_inline)) bool prv_compact(km_store_t *s, uint32_t target,
+                                                              const uint32_t *state)
 {
     s->own = false;
     prv_step_t step;
