@@ -32,10 +32,11 @@
 
 /* The receive interrupt's state: its frame tracker (docs/benchmarks.md "Per
  * byte") and the queue, one base address for a byte's fast path. */
-static struct {
+typedef struct {
     km_rx_track_t track;
     km_rx_queue_t q;
-} s_rx;
+} prv_rx_t;
+static prv_rx_t s_rx;
 /* Set by the RX interrupt when the main loop must parse. */
 static volatile bool s_wake;
 static km_parser_t s_parser;
@@ -90,7 +91,7 @@ static void ISR_rx_wake(void)
 static void ISR_rx_byte(void *ctx, uint8_t byte, uint32_t tick, bool lost)
 {
     (void)ctx;
-    __typeof__(&s_rx) rx = &s_rx;
+    prv_rx_t *rx = &s_rx;
     __asm__("" : "+r"(rx)); /* one base register for every field, not a literal each */
     km_rx_queue_push(&rx->q, byte, tick, lost);
     if (km_rx_track_byte(&rx->track, byte, tick, lost)) {
@@ -111,6 +112,14 @@ static void ISR_answer_due(void *ctx)
     } else {
         s_tx_refused++;
     }
+}
+
+/* The receive state through a register (as prv_control()). */
+static inline prv_rx_t *prv_rx(void)
+{
+    prv_rx_t *rx = &s_rx;
+    __asm__("" : "+r"(rx));
+    return rx;
 }
 
 /* Ticks per microsecond, fixed at init (the hal tick is whole MHz). */
@@ -207,7 +216,7 @@ static void prv_take_waiting_frame(void)
 {
     if ((s_rx_hold & PRV_HOLD_FRAME) != 0u && prv_on_frame()) {
         s_rx_hold &= (uint8_t)~PRV_HOLD_FRAME;
-        km_rx_queue_release(&s_rx.q, s_frame_release);
+        km_rx_queue_release(&prv_rx()->q, s_frame_release);
         s_frame_release = 0u;
     }
 }
@@ -221,13 +230,13 @@ static void prv_take_waiting_frame(void)
  * (docs/benchmarks.md "Control tick"). */
 static bool prv_rx_mid_frame(void)
 {
-    const km_rx_track_t *track = &s_rx.track;
+    const km_rx_track_t *track = &prv_rx()->track;
     const unsigned state = track->state;
     if (state == KM_TRACK_HUNT || state == KM_TRACK_EVERY) {
         return false;
     }
     const uint32_t left = state == KM_TRACK_COUNT ? track->left : 0u;
-    return left + km_rx_queue_count(&s_rx.q) <= KM_APP_RX_DEFER_MAX &&
+    return left + km_rx_queue_count(&prv_rx()->q) <= KM_APP_RX_DEFER_MAX &&
            km_hal_time_now() - track->last_tick <= track->gap_ticks; /* the clock read last */
 }
 
@@ -238,7 +247,7 @@ static void prv_drain_rx(void)
     km_rx_run_t run;
     const bool woken = s_wake;
     s_wake = false; /* before looking: a later byte's wake-up is kept */
-    while (budget > 0u && !prv_rx_blocked() && km_rx_queue_peek(&s_rx.q, &run)) {
+    while (budget > 0u && !prv_rx_blocked() && km_rx_queue_peek(&prv_rx()->q, &run)) {
         if (!woken && budget == KM_APP_RX_BUDGET && prv_rx_mid_frame()) {
             return; /* the first run: a frame still arriving stays queued */
         }
@@ -255,7 +264,7 @@ static void prv_drain_rx(void)
             s_frame_release = used; /* the frame may be a view of these bytes */
             return;
         }
-        km_rx_queue_release(&s_rx.q, used);
+        km_rx_queue_release(&prv_rx()->q, used);
         budget -= used;
     }
     if (!prv_rx_blocked() && !km_parser_empty(&s_parser)) { /* empty: no time read, no call */
@@ -273,6 +282,15 @@ static inline __attribute__((always_inline)) bool prv_restart_ready(void)
 }
 
 /* The control registers in engineering units, decoded again after a change. */
+/* The control state through a register: the inlined control code then reaches
+ * its fields from one base, not one literal address each (docs/footprint.md "STM32G031F6"). */
+static inline km_control_t *prv_control(void)
+{
+    km_control_t *control = &s_control;
+    __asm__("" : "+r"(control));
+    return control;
+}
+
 static const km_control_params_t *prv_params(void)
 {
     const uint32_t gen = km_servo_params_gen(&s_servo);
@@ -306,7 +324,7 @@ static __attribute__((noinline)) void prv_control_tick(uint32_t dt_ticks)
     km_live_t live;
     km_bridge_t bridge;
     km_hal_sensors_read(&sensors);
-    km_control_step(&s_control, &sensors, prv_params(), prv_ticks_to_us(dt_ticks), &live, &bridge);
+    km_control_step(prv_control(), &sensors, prv_params(), prv_ticks_to_us(dt_ticks), &live, &bridge);
     km_servo_set_live(&s_servo, &live);
 #if KM_FEATURE_EXT
     km_fault_log_record(&s_fault_log, &live);
@@ -335,7 +353,7 @@ static bool prv_ops_commit(void *ctx, const uint8_t *addrs, const uint32_t *valu
 /* One step of idle-time store work on a silent bus; true if it did flash work. */
 static bool prv_idle_flash_work(uint32_t now)
 {
-    if (prv_bridge_driving() || !km_rx_queue_empty(&s_rx.q) ||
+    if (prv_bridge_driving() || !km_rx_queue_empty(&prv_rx()->q) ||
         now - s_parser.last_tick < prv_us_to_ticks(KM_APP_FLASH_QUIET_US)) {
         return false;
     }
@@ -357,7 +375,7 @@ static void prv_ops_restart(void *ctx)
 static bool prv_ops_request(void *ctx, const km_request_t *req)
 {
     (void)ctx;
-    return km_control_request(&s_control, req, prv_params());
+    return km_control_request(prv_control(), req, prv_params());
 }
 
 /* 0x78 in the application (docs/update.md §4): STATUS, or ENTER the bootloader. */
@@ -498,14 +516,14 @@ __attribute__((noinline)) void km_app_init(void)
 #endif
     km_servo_control_params(&s_servo, &s_params);
     s_params_gen = km_servo_params_gen(&s_servo);
-    km_control_init(&s_control, &s_params);
+    km_control_init(prv_control(), &s_params);
 
-    km_rx_queue_init(&s_rx.q);
+    km_rx_queue_init(&prv_rx()->q);
     const uint32_t baud = prv_open_bus(km_servo_active_baud(&s_servo));
     km_servo_set_active_baud(&s_servo, baud);
     /* docs/protocol-decisions.md "Inter-byte gap"; the slot floor is 0 */
     km_parser_init(&s_parser, prv_us_to_ticks(km_parser_default_gap_us(baud)));
-    s_rx.track.gap_ticks = s_parser.gap_ticks;
+    prv_rx()->track.gap_ticks = s_parser.gap_ticks;
 
     s_ticks = 0u;
     const uint32_t now = km_hal_time_now();
@@ -523,7 +541,7 @@ void km_app_set_bus_floors(uint32_t gap_floor_us, uint32_t slot_floor_us)
         gap_us = gap_floor_us;
     }
     km_parser_set_gap(&s_parser, prv_us_to_ticks(gap_us));
-    s_rx.track.gap_ticks = s_parser.gap_ticks;
+    prv_rx()->track.gap_ticks = s_parser.gap_ticks;
 }
 
 /* True when the control tick is due at `now`. */
@@ -560,7 +578,7 @@ static void prv_sleep(uint32_t irq, bool queued)
         return;
     }
     if (!queued) { /* else a frame arriving: the tracker is ahead of the parser */
-        km_rx_track_sync(&s_rx.track, &s_parser); /* every byte is parsed */
+        km_rx_track_sync(&prv_rx()->track, &s_parser); /* every byte is parsed */
     }
     do {
         km_hal_sleep(irq); /* the interrupts run in it; the caller restores irq */
@@ -586,7 +604,7 @@ static bool prv_tick(uint32_t now)
 static void prv_sleep_unless_work(void)
 {
     const uint32_t irq = km_hal_irq_lock();
-    const bool queued = !km_rx_queue_empty(&s_rx.q);
+    const bool queued = !km_rx_queue_empty(&prv_rx()->q);
     const bool rx_work = !prv_rx_blocked() && queued && (s_wake || !prv_rx_mid_frame());
     const bool tx_work = (s_rx_hold & PRV_HOLD_FRAME) != 0u && !km_hal_uart_tx_busy();
     if (!rx_work && !tx_work && !prv_restart_ready()) {
