@@ -281,7 +281,6 @@ static inline __attribute__((always_inline)) bool prv_restart_ready(void)
     return s_rx_hold == PRV_HOLD_RESTART && !s_tx_armed && !km_hal_uart_tx_busy();
 }
 
-/* The control registers in engineering units, decoded again after a change. */
 /* The control state through a register: the inlined control code then reaches
  * its fields from one base, not one literal address each (docs/footprint.md "STM32G031F6"). */
 static inline km_control_t *prv_control(void)
@@ -291,6 +290,7 @@ static inline km_control_t *prv_control(void)
     return control;
 }
 
+/* The control registers in engineering units, decoded again after a change. */
 static const km_control_params_t *prv_params(void)
 {
     const uint32_t gen = km_servo_params_gen(&s_servo);
