@@ -174,6 +174,7 @@ km_report_t km_cmd_multi_write(km_servo_t *s, const km_frame_view_t *f, km_reply
     return KM_REPORT_NONE;
 }
 
+#if KM_FEATURE_MULTI_READ
 /* "Multi-ID read 0x82": F9 FF FE len 82 addr id_0 .. id_n-1 cs. A listed
  * servo answers exactly what a 0x02 read of addr answers, starting in slot
  * j, j = its first position in the list. */
@@ -205,3 +206,4 @@ km_report_t km_cmd_multi_read(km_servo_t *s, const km_frame_view_t *f, km_reply_
     /* As a read: the status register's value is the ping's status byte. */
     return addr == 0x01 && !s->reg.flags ? KM_REPORT_ALL : KM_REPORT_OWN;
 }
+#endif

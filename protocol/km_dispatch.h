@@ -23,7 +23,9 @@ km_report_t km_cmd_read(km_servo_t *s, const km_frame_view_t *f, km_reply_t *rep
 km_report_t km_cmd_write(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply);
 km_report_t km_cmd_sync_write(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply);
 km_report_t km_cmd_sync_execute(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply);
+#if KM_FEATURE_MULTI_READ
 km_report_t km_cmd_multi_read(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply);
+#endif
 km_report_t km_cmd_multi_write(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply);
 km_report_t km_cmd_ext(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply);
 km_report_t km_cmd_update(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply);

@@ -52,7 +52,9 @@ static const prv_command_t s_commands[16] = {
     PRV_SLOT(CMD_WRITE) {CMD_WRITE, 0, km_cmd_write},
     PRV_SLOT(CMD_SYNC_WRITE) {CMD_SYNC_WRITE, RULE_KEEPS_SYNC, km_cmd_sync_write},
     PRV_SLOT(CMD_SYNC_EXECUTE) {CMD_SYNC_EXECUTE, RULE_KEEPS_SYNC, km_cmd_sync_execute},
+#if KM_FEATURE_MULTI_READ
     PRV_SLOT(CMD_MULTI_READ) {CMD_MULTI_READ, RULE_BROADCAST | RULE_KEEPS_SYNC, km_cmd_multi_read},
+#endif
     PRV_SLOT(CMD_MULTI_WRITE) {CMD_MULTI_WRITE, RULE_BROADCAST | RULE_KEEPS_SYNC, km_cmd_multi_write},
 #if KM_FEATURE_EXT
     PRV_SLOT(KM_CMD_EXT) {KM_CMD_EXT, RULE_SUPER, km_cmd_ext},
@@ -393,7 +395,8 @@ void km_servo_handle_view(km_servo_t *s, const km_frame_view_t *f, km_reply_t *r
 bool km_servo_may_answer(const km_servo_t *s, const km_frame_view_t *f)
 {
     if (f->id == KM_ID_BROADCAST) {
-        return f->cmd == CMD_MULTI_READ; /* §3: the only command a listed servo answers at the broadcast ID */
+        /* §3: the only command a listed servo answers at the broadcast ID */
+        return KM_FEATURE_MULTI_READ && f->cmd == CMD_MULTI_READ;
     }
     return f->id == km_servo_id(s) || f->id == KM_ID_SUPER;
 }

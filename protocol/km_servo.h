@@ -78,6 +78,14 @@ void km_servo_handle(km_servo_t *s, const km_frame_t *frame, km_reply_t *reply);
  * buffer for the answer built and the answer on the wire). */
 void km_servo_handle_view(km_servo_t *s, const km_frame_view_t *frame, km_reply_t *reply);
 
+/* The multi-ID read 0x82 (this firmware's definition, docs/protocol-decisions.md
+ * "Multi-ID read 0x82") is compiled in (1, the default) or out (0: the 32 KiB
+ * STM32G031F6 build, where 0x82 is an unsupported command, docs/footprint.md
+ * "What gives way"). */
+#ifndef KM_FEATURE_MULTI_READ
+#define KM_FEATURE_MULTI_READ 1
+#endif
+
 /* False when `frame` cannot be answered by this servo (another servo's ID;
  * the broadcast ID, except 0x82): handling it leaves reply->bytes alone. */
 bool km_servo_may_answer(const km_servo_t *s, const km_frame_view_t *frame);

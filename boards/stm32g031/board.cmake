@@ -84,6 +84,13 @@ option(KM_G031_EXT "stm32g031: extension command 0x7F and the fault log" ${KM_G0
 if(NOT KM_G031_EXT)
   list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_FEATURE_EXT=0)
 endif()
+# This firmware's multi-ID read 0x82 (docs/protocol.md §3 and §7 leave it
+# "to be completed"; docs/protocol-decisions.md "Multi-ID read 0x82");
+# without it 0x82 is an unsupported command (status bit 5, no answer).
+option(KM_G031_MULTI_READ "stm32g031: this firmware's multi-ID read 0x82" ${KM_G031_FEATURE_DEFAULT})
+if(NOT KM_G031_MULTI_READ)
+  list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_FEATURE_MULTI_READ=0)
+endif()
 # Control refinements that are not in docs/protocol.md (docs/footprint.md
 # "What gives way"): a 0x68 stream's loop on the sub-count observer (else
 # on the counts, as a move's), and a pushed hold's integrator refinements
