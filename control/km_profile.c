@@ -340,7 +340,7 @@ static int32_t prv_dv(km_profile_t *p, uint32_t dt_us)
 }
 
 /* `v` moved toward `want` by at most `dv` (>= 0): a speed's rate limit. */
-static int32_t prv_toward(int32_t v, int32_t want, int32_t dv)
+static KM_COMPACT_NOINLINE int32_t prv_toward(int32_t v, int32_t want, int32_t dv)
 {
     if (v < want) {
         return v + dv < want ? v + dv : want;
@@ -352,7 +352,7 @@ static int32_t prv_toward(int32_t v, int32_t want, int32_t dv)
 }
 
 /* One step of a stream speed's low pass from `v` toward `to` (exactly there once within a step). */
-static int32_t prv_smooth(int32_t v, int32_t to)
+static KM_COMPACT_NOINLINE int32_t prv_smooth(int32_t v, int32_t to)
 {
     const int32_t d = to - v, n = 1 << KM_PROFILE_STREAM_SMOOTH_SHIFT;
     return v + (d >= n || d <= -n ? d / n : d);
