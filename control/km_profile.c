@@ -69,14 +69,15 @@ int32_t km_profile_reach(const km_profile_t *p, int32_t target_ddeg)
     return target_ddeg;
 }
 
-/* d (u) over ms as u/s, at most `vmax` (no 32-bit overflow for any d). */
-static int32_t prv_speed_for(int32_t d, int32_t ms, int32_t vmax)
+/* m (u, >= 0) over t (>= 1) periods of 1/scale s as u/s, at most `vmax`
+ * (no 32-bit overflow for any m). */
+static KM_COMPACT_NOINLINE int32_t prv_rate(int32_t m, int32_t t, int32_t scale, int32_t vmax)
 {
-    const int32_t q = d / ms;
-    if (q >= km_sdiv1000(vmax) + 1) {
+    const int32_t q = m / t;
+    if (q >= vmax / scale + 1) {
         return vmax;
     }
-    const int32_t v = q * 1000 + ((d % ms) * 1000) / ms;
+    const int32_t v = q * scale + ((m % t) * scale) / t;
     return v < vmax ? v : vmax;
 }
 
@@ -127,7 +128,7 @@ static void prv_move_time_u(km_profile_t *p, int32_t tgt, uint32_t time_ms, int3
     const int32_t ta = time_ms >= 4u ? (int32_t)(time_ms / 4u) : 1;
     const int32_t tc = (int32_t)time_ms - ta > 0 ? (int32_t)time_ms - ta : 1;
     /* cruise D / (3T/4); the speed limit wins */
-    int32_t v = prv_speed_for(d, tc, vlimit_ups);
+    int32_t v = prv_rate(d, tc, 1000, vlimit_ups); /* ms */
     if (v < 1) {
         v = 1;
     }
@@ -206,12 +207,7 @@ void km_profile_retime(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, i
 static int32_t prv_speed_us(int32_t d, int32_t us, int32_t vmax)
 {
     const int32_t t = us / 100 > 0 ? us / 100 : 1; /* 0.1 ms */
-    const int32_t m = prv_abs(d), q = m / t;
-    int32_t v = vmax;
-    if (q < vmax / 10000 + 1) {
-        v = q * 10000 + ((m % t) * 10000) / t;
-        v = v < vmax ? v : vmax;
-    }
+    const int32_t v = prv_rate(prv_abs(d), t, 10000, vmax);
     return d < 0 ? -v : v;
 }
 
