@@ -411,12 +411,7 @@ static int32_t prv_stream_want(km_profile_t *p, int32_t ahead)
     int32_t err = ref - p->pos;
     const int32_t emax = p->vmax / 32 + 1, near = KM_PROFILE_STREAM_NEAR_U;
     err = km_sat(err, emax);
-    int32_t corr = err * 8;
-    if (err > near) {
-        corr = near * 8 + (err - near) * 16;
-    } else if (err < -near) {
-        corr = -near * 8 + (err + near) * 16;
-    }
+    const int32_t corr = err * 8 + (err - km_sat(err, near)) * 8; /* x 16 beyond near */
     const int32_t want = vff + corr;
     return km_sat(want, p->vmax);
 }
