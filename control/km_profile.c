@@ -336,15 +336,9 @@ static int32_t prv_dv(km_profile_t *p, uint32_t dt_us)
 }
 
 /* `v` moved toward `want` by at most `dv` (>= 0): a speed's rate limit. */
-static KM_COMPACT_NOINLINE int32_t prv_toward(int32_t v, int32_t want, int32_t dv)
+static int32_t prv_toward(int32_t v, int32_t want, int32_t dv)
 {
-    if (v < want) {
-        return v + dv < want ? v + dv : want;
-    }
-    if (v > want) {
-        return v - dv > want ? v - dv : want;
-    }
-    return v;
+    return km_clamp(want, v - dv, v + dv);
 }
 
 /* One step of a stream speed's low pass from `v` toward `to` (exactly there once within a step). */
