@@ -66,7 +66,7 @@ void km_speed_fast_init(km_speed_fast_t *f, int32_t position)
     f->count = 1;
 }
 
-int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
+KM_COMPACT_NOINLINE int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t position, uint32_t dt_us)
 {
     if (dt_us > 100000u) {
         dt_us = 100000u; /* a stalled tick: the estimate stays finite */
