@@ -17,7 +17,7 @@ static const km_recip_near_t s_window_recip = KM_RECIP_NEAR(KM_SPEED_WINDOW_US);
 
 /* n / d truncated toward zero, as C's `/`, without a library division
  * (km_udiv_near: a divisor near its nominal value costs a few adds); 0 for d = 0. */
-static int32_t prv_sdiv_near(int32_t n, uint32_t d, const km_recip_near_t *c)
+static KM_COMPACT_NOINLINE int32_t prv_sdiv_near(int32_t n, uint32_t d, const km_recip_near_t *c)
 {
     const uint32_t q = km_udiv_near(n < 0 ? 0u - (uint32_t)n : (uint32_t)n, d, c);
     return n < 0 ? -(int32_t)q : (int32_t)q;
