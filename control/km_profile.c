@@ -11,6 +11,7 @@
 #define STEP_MAX_US 2000u /* a late 1 ms tick stays one piece */
 #define ACCEL_MAX 1000000 /* u/s per ms */
 #define VMAX_MAX 0x3FFFFFFF
+_Static_assert(ACCEL_MAX % KM_PROFILE_STREAM_ACCEL_DIV == 0, "prv_stream_end's bound: a whole multiple");
 
 static int32_t prv_abs(int32_t v)
 {
@@ -368,8 +369,7 @@ static void prv_stream_end(km_profile_t *p)
         return;
     }
     p->stream = false;
-    p->accel = p->accel < ACCEL_MAX / KM_PROFILE_STREAM_ACCEL_DIV ? p->accel * KM_PROFILE_STREAM_ACCEL_DIV
-                                                                  : ACCEL_MAX;
+    p->accel = km_clamp(p->accel * KM_PROFILE_STREAM_ACCEL_DIV, 1, ACCEL_MAX);
     p->vsq_hi = km_umulhi((uint32_t)p->vmax, (uint32_t)p->vmax);
     p->vsq_lo = (uint32_t)p->vmax * (uint32_t)p->vmax;
 }
