@@ -25,6 +25,28 @@ void km_motor_mode_stop(km_motor_mode_t *m, km_bridge_mode_t bridge)
     m->stop_bridge = bridge;
 }
 
+/* Speed runs and counted angles or turns are for encoder products only
+ * (§6 "Encoder-only commands": the dispatcher refuses them on a
+ * potentiometer product), so motor mode takes their paths only on an
+ * encoder product; where the board fixes a potentiometer variant
+ * (km_params_variant) they fold away. */
+static bool prv_encoder(const km_control_params_t *p)
+{
+    return km_params_variant(p) == KM_VARIANT_ENCODER;
+}
+
+/* The run is a speed run (encoder products only). */
+static bool prv_speed_run(const km_motor_mode_t *m, const km_control_params_t *p)
+{
+    return prv_encoder(p) && m->speed_mode;
+}
+
+/* The run counts an angle or turns (encoder products only). */
+static bool prv_counts_travel(const km_motor_mode_t *m, const km_control_params_t *p)
+{
+    return prv_encoder(p) && m->count_kind >= KM_UNTIL_ANGLE;
+}
+
 /* Speed set-point cut to 0x5D (0x15 when 0x5D is 0). */
 static int32_t prv_speed(const km_control_params_t *p, int32_t dps)
 {
@@ -36,12 +58,13 @@ static int32_t prv_speed(const km_control_params_t *p, int32_t dps)
     return km_sat(dps, lim);
 }
 
-static void prv_start(km_motor_mode_t *m, bool speed_mode, int32_t value, km_bridge_mode_t stop_bridge)
+static void prv_start(km_motor_mode_t *m, const km_control_params_t *p, bool speed_mode, int32_t value,
+                      km_bridge_mode_t stop_bridge)
 {
     m->active = true;
     m->stop_bridge = stop_bridge;
     m->count_kind = 0;
-    if (speed_mode != m->speed_mode || !m->running) {
+    if (speed_mode != prv_speed_run(m, p) || !m->running) {
         m->i_acc = 0;
     }
     m->speed_mode = speed_mode;
@@ -70,10 +93,10 @@ void km_motor_mode_run(km_motor_mode_t *m, const km_motor_run_t *run, const km_c
         km_motor_mode_stop(m, after);
         return;
     }
-    const bool speed_mode = run->mode == KM_RUN_SPEED;
+    const bool speed_mode = prv_encoder(p) && run->mode == KM_RUN_SPEED;
     const int32_t mag = (int32_t)run->value, dir_mag = run->reverse ? -mag : mag;
     const int32_t v = speed_mode ? prv_speed(p, dir_mag) : km_sat(dir_mag, 1000);
-    prv_start(m, speed_mode, v, after);
+    prv_start(m, p, speed_mode, v, after);
     const uint32_t amount = run->amount;
     m->count_kind = run->until;
     m->start_pos = position;
@@ -96,7 +119,7 @@ static int32_t prv_moved(const km_motor_mode_t *m, int32_t position)
 
 /* 0x4D and the counted run: time off, or travel done; stops the motor
  * when it ends. */
-static void prv_count(km_motor_mode_t *m, int32_t position, uint32_t dt_us)
+static void prv_count(km_motor_mode_t *m, const km_control_params_t *p, int32_t position, uint32_t dt_us)
 {
     m->rotation_rem_us += dt_us;
     const uint32_t ms = km_udiv1000(m->rotation_rem_us);
@@ -107,7 +130,7 @@ static void prv_count(km_motor_mode_t *m, int32_t position, uint32_t dt_us)
         if (m->remain_ms == 0u) {
             km_motor_mode_stop(m, m->stop_bridge);
         }
-    } else if (m->count_kind >= KM_UNTIL_ANGLE) {
+    } else if (prv_counts_travel(m, p)) {
         if (prv_moved(m, position) >= m->travel) {
             km_motor_mode_stop(m, m->stop_bridge);
         }
@@ -139,10 +162,10 @@ static int32_t prv_speed_loop(km_motor_mode_t *m, const km_control_gains_t *g, i
 static int32_t prv_room(const km_motor_mode_t *m, const km_control_params_t *p, int32_t position, int32_t dir)
 {
     int32_t room = KM_MOTOR_ROOM_FREE;
-    if (m->count_kind >= KM_UNTIL_ANGLE) {
+    if (prv_counts_travel(m, p)) {
         room = m->travel - prv_moved(m, position);
     }
-    if (p->variant == KM_VARIANT_POTENTIOMETER) {
+    if (km_params_variant(p) == KM_VARIANT_POTENTIOMETER) {
         int32_t lo, hi;
         km_axis_travel(p, &lo, &hi);
         const int32_t edge = dir > 0 ? hi - position : position - lo;
@@ -183,17 +206,17 @@ static uint32_t prv_sq(int32_t v)
 /* The speed loop's set-point with `room` (0.1 deg) left to the end in the
  * direction `dir` of `want`: `want`, or the approach speed once the end is near,
  * and PRV_FAR for a PWM run still far from it. */
-static int32_t prv_near_setpoint(const km_motor_mode_t *m, const km_control_gains_t *g, int32_t room,
-                                 int32_t want, int32_t dir, int32_t speed_ddps)
+static int32_t prv_near_setpoint(bool speed_run, const km_control_gains_t *g, int32_t room, int32_t want,
+                                 int32_t dir, int32_t speed_ddps)
 {
     /* the loop's lag: what the shaft covers before a slower set-point bites */
     const int32_t fast = speed_ddps * dir;
     const int32_t lag = fast > 0 ? km_sdiv1000((fast > 20000 ? 20000 : fast) * KM_MOTOR_LAG_MS) : 0;
     const uint32_t sq = prv_approach_sq(g, room - lag);
-    if (!m->speed_mode && (fast < 0 || sq > prv_sq(fast + KM_MOTOR_CREEP_DDPS))) {
+    if (!speed_run && (fast < 0 || sq > prv_sq(fast + KM_MOTOR_CREEP_DDPS))) {
         return PRV_FAR;
     }
-    return m->speed_mode && sq >= prv_sq(want) ? want : dir * prv_approach_ddps(sq);
+    return speed_run && sq >= prv_sq(want) ? want : dir * prv_approach_ddps(sq);
 }
 
 /* A run with an end ahead (a count or the travel's edge): ends at it, and
@@ -203,7 +226,8 @@ static int32_t prv_near_setpoint(const km_motor_mode_t *m, const km_control_gain
 static int32_t prv_drive(km_motor_mode_t *m, const km_control_params_t *p, int32_t position,
                          int32_t speed_ddps, uint32_t dt_us)
 {
-    const int32_t want = m->speed_mode ? m->speed_dps * 10 : m->pwm;
+    const bool speed_run = prv_speed_run(m, p);
+    const int32_t want = speed_run ? m->speed_dps * 10 : m->pwm;
     const int32_t dir = want > 0 ? 1 : -1;
     const int32_t room = prv_room(m, p, position, dir);
     if (room <= 0) {
@@ -212,15 +236,15 @@ static int32_t prv_drive(km_motor_mode_t *m, const km_control_params_t *p, int32
     }
     int32_t sp = want; /* the speed loop's set-point */
     if (room != KM_MOTOR_ROOM_FREE) {
-        sp = prv_near_setpoint(m, &p->gains, room, want, dir, speed_ddps);
+        sp = prv_near_setpoint(speed_run, &p->gains, room, want, dir, speed_ddps);
         if (sp == PRV_FAR) {
             return m->pwm; /* far from the end: the constant PWM */
         }
-    } else if (!m->speed_mode) {
+    } else if (!speed_run) {
         return m->pwm;
     }
     const int32_t out = prv_speed_loop(m, &p->gains, sp, speed_ddps, dt_us);
-    if (m->speed_mode) {
+    if (speed_run) {
         return out;
     }
     return dir > 0 ? (out < m->pwm ? out : m->pwm) : (out > m->pwm ? out : m->pwm);
@@ -242,7 +266,7 @@ int32_t km_motor_mode_step(km_motor_mode_t *m, const km_control_params_t *p, int
         *mode = m->stop_bridge;
         return 0;
     }
-    prv_count(m, position, dt_us);
+    prv_count(m, p, position, dt_us);
     const int32_t pwm = m->running ? prv_drive(m, p, position, speed_ddps, dt_us) : 0;
     *mode = m->running ? KM_BRIDGE_PWM : m->stop_bridge;
     return pwm;

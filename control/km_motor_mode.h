@@ -3,7 +3,12 @@
  * speed (a speed loop), and 0x70's runs until a time, an angle or a number
  * of turns, slowing down before a count's end or the travel's edge. The
  * rules and the hand-over with servo mode: docs/control-design.md "Motor
- * mode"; the dispatcher checks the variant and 0x5A preconditions. */
+ * mode"; the dispatcher checks the variant and 0x5A preconditions. Speed
+ * runs and angle or turn counts are taken on encoder products only (a
+ * potentiometer product's dispatcher refuses them, §6): on another
+ * variant a speed run is taken as a PWM run and an angle or turn count is
+ * not counted, so their paths fold away on a board built as a
+ * potentiometer product. */
 #ifndef KM_MOTOR_MODE_H
 #define KM_MOTOR_MODE_H
 

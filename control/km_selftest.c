@@ -27,7 +27,7 @@ void km_selftest_init(km_selftest_t *t)
  * (potentiometer products; an encoder has no rail). */
 static bool prv_position_bad(const km_sensors_t *in, const km_control_params_t *p)
 {
-    return p->variant == KM_VARIANT_POTENTIOMETER &&
+    return km_params_variant(p) == KM_VARIANT_POTENTIOMETER &&
            (in->position < p->pos_read_min || in->position > p->pos_read_max);
 }
 

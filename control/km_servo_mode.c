@@ -19,7 +19,7 @@ void km_servo_mode_init(km_servo_mode_t *m, const km_control_params_t *p)
 int32_t km_servo_mode_clamp(const km_control_params_t *p, int32_t t)
 {
     int32_t lo = INT32_MIN, hi = INT32_MAX; /* multi-turn: no edge, any turn count */
-    if (p->variant != KM_VARIANT_ENCODER) {
+    if (km_params_variant(p) != KM_VARIANT_ENCODER) {
         km_axis_travel(p, &lo, &hi); /* the travel moves with the zero offsets */
     }
     if (p->angle_min != 0 && p->angle_min > lo) {

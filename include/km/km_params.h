@@ -52,4 +52,17 @@ typedef struct {
     km_control_gains_t gains;
 } km_control_params_t;
 
+/* The product's variant (§6) as control/ sees it: the board's fixed one
+ * when it is built as one product (KM_PRODUCT_VARIANT, km_product_variant),
+ * so the other variant's paths fold away at compile time; else p's. */
+static inline km_variant_t km_params_variant(const km_control_params_t *p)
+{
+#ifdef KM_PRODUCT_VARIANT
+    (void)p;
+    return KM_PRODUCT_VARIANT;
+#else
+    return p->variant;
+#endif
+}
+
 #endif
