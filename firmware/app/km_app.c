@@ -510,8 +510,8 @@ __attribute__((noinline)) void km_app_init(void)
     km_servo_set_userdata_source(&s_servo, (uint8_t)mount);
     s_store_prepare = mount != KM_STORE_MOUNT_ERR_ARG &&
                       (mount != KM_STORE_MOUNT_LOADED || km_board_store_prepare_each_boot());
-    km_servo_set_reset_cause(&s_servo, (uint8_t)km_hal_reset_cause());
 #if KM_FEATURE_EXT
+    km_servo_set_reset_cause(&s_servo, (uint8_t)km_hal_reset_cause());
     (void)km_fault_log_boot(&s_fault_log);
 #endif
     km_servo_control_params(&s_servo, &s_params);
