@@ -6,6 +6,13 @@
 
 #include "km_fixdiv.h"
 
+/* Motor mode owns the bridge: never in a build without it
+ * (KM_FEATURE_MOTOR_MODE=0, docs/footprint.md "What gives way"). */
+static bool prv_motor_active(const km_control_t *c)
+{
+    return KM_FEATURE_MOTOR_MODE && c->motor.active;
+}
+
 void km_control_init(km_control_t *c, const km_control_params_t *p)
 {
     memset(c, 0, sizeof *c);
@@ -51,7 +58,7 @@ static void prv_rebase_axis(km_control_t *c, const km_axis_t *now)
     }
     prv_rebase_axis_speeds(c, &was, now, sign);
     c->position = km_axis_map(&was, now, c->position);
-    if (c->motor.active) {
+    if (prv_motor_active(c)) {
         km_motor_mode_reaxis(&c->motor, &was, now);
     } else if (c->servo.ts == KM_TORQUE_ON) {
         const bool moving = c->servo.running;
@@ -77,10 +84,23 @@ static void prv_follow_axis(km_control_t *c, const km_control_params_t *p)
 /* A torque switch for servo mode: motor mode lets go of the bridge. */
 static bool prv_torque(km_control_t *c, km_torque_t torque)
 {
-    if (c->motor.active) {
+    if (prv_motor_active(c)) {
         km_motor_mode_release(&c->motor);
     }
     return km_servo_mode_torque(&c->servo, torque, c->position);
+}
+
+/* A motor run: ends a servo-mode hold or move (refused in a build without
+ * motor mode, whose dispatcher sends none). */
+static bool prv_request_motor(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
+{
+    if (!KM_FEATURE_MOTOR_MODE) {
+        return false;
+    }
+    km_motor_mode_run(&c->motor, &req->u.run, p, c->position);
+    c->servo.running = false;
+    c->servo.streaming = false;
+    return true;
 }
 
 /* While protecting: only a request for less motion is taken; FREE/BRAKE
@@ -91,10 +111,7 @@ static bool prv_request_protecting(km_control_t *c, const km_request_t *req, con
         return false;
     }
     if (req->kind != KM_REQ_TORQUE) {
-        km_motor_mode_run(&c->motor, &req->u.run, p, c->position);
-        c->servo.running = false;
-        c->servo.streaming = false;
-        return true;
+        return prv_request_motor(c, req, p);
     }
     c->ts_after = req->u.torque;
     return prv_torque(c, (km_torque_t)req->u.torque);
@@ -103,25 +120,16 @@ static bool prv_request_protecting(km_control_t *c, const km_request_t *req, con
 /* A torque switch or a move: servo mode takes the shaft back from the motor. */
 static bool prv_request_servo(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
 {
-    if (c->motor.active && c->servo.ts == KM_TORQUE_ON) {
+    if (prv_motor_active(c) && c->servo.ts == KM_TORQUE_ON) {
         km_servo_mode_rebase(&c->servo, c->position);
     }
     const bool ok = req->kind == KM_REQ_TORQUE
                         ? km_servo_mode_torque(&c->servo, (km_torque_t)req->u.torque, c->position)
                         : km_servo_mode_move(&c->servo, &req->u.move, p, c->position);
-    if (ok) {
+    if (ok && KM_FEATURE_MOTOR_MODE) {
         km_motor_mode_release(&c->motor);
     }
     return ok;
-}
-
-/* A motor run: ends a servo-mode hold or move. */
-static bool prv_request_motor(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
-{
-    km_motor_mode_run(&c->motor, &req->u.run, p, c->position);
-    c->servo.running = false;
-    c->servo.streaming = false;
-    return true;
 }
 
 /* A clear request (0x36); what it released goes into the next tick's events. */
@@ -170,10 +178,10 @@ static void prv_protect_act(km_control_t *c, km_prot_action_t act, km_prot_actio
     if (was == KM_PROT_ACT_NONE) {
         c->ts_after = c->servo.ts <= KM_TORQUE_BRAKE ? c->servo.ts : (uint8_t)KM_TORQUE_ARMED;
     }
-    if (c->motor.active) {
+    if (prv_motor_active(c)) {
         km_motor_mode_stop(&c->motor, act == KM_PROT_ACT_FREE ? KM_BRIDGE_FREE : KM_BRIDGE_BRAKE);
     }
-    if (act == KM_PROT_ACT_HOLD && c->servo.ts == KM_TORQUE_ON && !c->motor.active) {
+    if (act == KM_PROT_ACT_HOLD && c->servo.ts == KM_TORQUE_ON && !prv_motor_active(c)) {
         if (was == KM_PROT_ACT_NONE) {
             /* a move stops where the shaft is; a hold keeps its loop's integral */
             if (c->servo.running || c->servo.streaming) {
@@ -207,7 +215,7 @@ static KM_COMPACT_NOINLINE void prv_protect_transition(km_control_t *c, km_prot_
 /* §5.2 0x35: a hardware fault stops everything, the output free. */
 static void prv_hw_fault(km_control_t *c)
 {
-    if (c->motor.active) {
+    if (prv_motor_active(c)) {
         km_motor_mode_stop(&c->motor, KM_BRIDGE_FREE);
     }
     if (c->servo.ts != KM_TORQUE_PROTECTED) {
@@ -226,7 +234,7 @@ static int32_t prv_position(const km_control_t *c, const km_sensors_t *in)
 static int32_t prv_hold_position(km_control_t *c, int32_t pos)
 {
     const bool hold =
-        !c->servo.running && c->servo.profile.done && c->servo.ts == KM_TORQUE_ON && !c->motor.active;
+        !c->servo.running && c->servo.profile.done && c->servo.ts == KM_TORQUE_ON && !prv_motor_active(c);
     if (!hold && !c->hold.on) {
         return pos; /* moving: the reading as is */
     }
@@ -289,7 +297,7 @@ static KM_COMPACT_NOINLINE uint8_t prv_supervise(km_control_t *c, const km_senso
         .temperature_c10 = in->temperature_c10,
         .position = pos,
         .drive_pwm = drive,
-        .servo_mode = !c->motor.active,
+        .servo_mode = !prv_motor_active(c),
     };
     prv_protect_transition(c, km_protect_step(&c->prot, &pin, p, dt_us, &live->events));
     return hw_found;
@@ -384,7 +392,7 @@ static void prv_protect_output(km_control_t *c)
 static void prv_report(km_control_t *c, const km_sensors_t *in, int32_t pos, int32_t speed_dps,
                        bool was_acting, uint8_t hw_found, km_live_t *live)
 {
-    const bool motor = c->motor.active;
+    const bool motor = prv_motor_active(c);
     live->position = pos;
     live->speed = speed_dps;
     live->current = in->current_ma;
@@ -420,7 +428,7 @@ void km_control_step(km_control_t *c, const km_sensors_t *in, const km_control_p
     const bool was_acting = c->action != KM_PROT_ACT_NONE;
     const uint8_t hw_found = prv_supervise(c, in, p, pos, dt_us, live);
     const int32_t limit = prv_limit(c, in, p);
-    if (c->motor.active) {
+    if (prv_motor_active(c)) {
         prv_drive_motor(c, p, pos, speed_ddps, dt_us, limit);
     } else {
         prv_drive_servo(c, p, pos, speed_ddps, dt_us, limit);

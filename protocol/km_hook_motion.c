@@ -5,11 +5,6 @@
 
 #include "km_servo.h"
 
-static bool prv_is_encoder(const km_servo_t *s)
-{
-    return km_product_variant(s->reg.product) == KM_VARIANT_ENCODER;
-}
-
 /* 0x64: 0..3 are torque requests (4, 5 and up are not writable); on (2) is
  * refused with a hardware fault latched. The register takes the value once
  * control accepts it. */
@@ -90,6 +85,13 @@ void km_wr_servo_advanced(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uin
     prv_servo_move(s, &req);
 }
 
+#if KM_FEATURE_MOTOR_MODE
+/* An encoder product (§6): the one with speed runs and counted angles or turns. */
+static bool prv_is_encoder(const km_servo_t *s)
+{
+    return km_product_variant(s->reg.product) == KM_VARIANT_ENCODER;
+}
+
 /* A decoded motor run: "Motion preconditions" (no fault latched, but a
  * request for less motion is taken with one: "Protections"; not
  * servo-only), then control. */
@@ -152,3 +154,15 @@ void km_wr_motor_advanced(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uin
     }
     prv_motor_run(s, &req);
 }
+#else
+/* Without motor mode (KM_FEATURE_MOTOR_MODE=0) only 0x6F reaches this
+ * hook (0x6E and 0x70 are KM_GONE): an encoder product's command, it fails
+ * with bit 6 as it does on a potentiometer product (§6). */
+void km_wr_motor(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t len)
+{
+    (void)r;
+    (void)d;
+    (void)len;
+    km_regfile_fail(&s->reg);
+}
+#endif

@@ -7,9 +7,12 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "km_params.h" /* KM_MODE_LAST, KM_FEATURE_MOTOR_MODE: the .def's bounds and rows */
 #include "km_product.h"
 
-typedef enum { KM_R = 1, KM_W = 2, KM_RW = 3 } km_access_t;
+/* KM_GONE: a register this build leaves out (km_registers.def): no read,
+ * no write, no 0x83; every command answers it as a reserved address. */
+typedef enum { KM_GONE = 0, KM_R = 1, KM_W = 2, KM_RW = 3 } km_access_t;
 
 typedef enum {
     KM_L_U8,     /* 1 B */

@@ -91,6 +91,14 @@ option(KM_G031_MULTI_READ "stm32g031: this firmware's multi-ID read 0x82" ${KM_G
 if(NOT KM_G031_MULTI_READ)
   list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_FEATURE_MULTI_READ=0)
 endif()
+# Motor mode (docs/protocol.md §5.4 0x6E, 0x70 and 0x5A = 2; docs/footprint.md
+# "What gives way"): without it 0x6E and 0x70 answer as reserved addresses
+# (status bit 5) and a write of 0x5A = 2 is out of range (bit 6); 0x6F, an
+# encoder product's command, fails as before on this potentiometer product.
+option(KM_G031_MOTOR_MODE "stm32g031: motor mode (0x6E, 0x70, 0x5A = 2)" ${KM_G031_FEATURE_DEFAULT})
+if(NOT KM_G031_MOTOR_MODE)
+  list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_FEATURE_MOTOR_MODE=0)
+endif()
 # Control refinements that are not in docs/protocol.md (docs/footprint.md
 # "What gives way"): a 0x68 stream's loop on the sub-count observer (else
 # on the counts, as a move's), and a pushed hold's integrator refinements

@@ -16,6 +16,10 @@ typedef enum {
     KM_MODE_MOTOR_ONLY = 2, /* servo commands refused */
 } km_control_mode_t;
 
+/* 0x5A's largest value: 2, or 1 in a build without motor mode (a write of
+ * 2 is then out of range, docs/protocol.md §4). */
+#define KM_MODE_LAST (KM_FEATURE_MOTOR_MODE ? KM_MODE_MOTOR_ONLY : KM_MODE_SERVO_ONLY)
+
 /* Angles: 0.1 deg in the master's frame, like 0x46. */
 typedef struct {
     km_variant_t variant;    /* §6 */

@@ -6,6 +6,13 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+/* Motor mode (docs/protocol.md §5.4: 0x6E, 0x6F, 0x70, 0x5A = 2), built
+ * unless a board leaves it out with KM_FEATURE_MOTOR_MODE=0 (the 32 KiB
+ * STM32G031F6 build, docs/footprint.md "What gives way"). */
+#ifndef KM_FEATURE_MOTOR_MODE
+#define KM_FEATURE_MOTOR_MODE 1
+#endif
+
 /* Servo mode's torque switch, numbered as 0x64 reads it. */
 typedef enum {
     KM_TORQUE_FREE = 0,      /* off, output free */

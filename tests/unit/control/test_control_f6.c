@@ -3,7 +3,9 @@
  * (docs/footprint.md "What gives way"): KM_FEATURE_STREAM_OBS=0, a 0x68
  * stream (docs/protocol.md §5.4) runs on the counts and the fast speed as a
  * move does, no sub-count observer; KM_FEATURE_HOLD_KI=0, a pushed still
- * hold integrates at ki, not at the growing ki_hold. Built with its own
+ * hold integrates at ki, not at the growing ki_hold; KM_FEATURE_MOTOR_MODE=0,
+ * control takes no motor run (§5.4 0x6E, 0x70: the dispatcher sends none).
+ * Built with its own
  * km_control.c and km_position_loop.c (tests/unit/control/CMakeLists.txt);
  * the default build's tests keep the refinements. */
 #include <setjmp.h>
@@ -18,7 +20,8 @@
 #include "km_position_loop.h"
 #include "stream_rig.h"
 
-_Static_assert(KM_FEATURE_STREAM_OBS == 0 && KM_FEATURE_HOLD_KI == 0, "the 32 KiB build's control");
+_Static_assert(KM_FEATURE_STREAM_OBS == 0 && KM_FEATURE_HOLD_KI == 0 && KM_FEATURE_MOTOR_MODE == 0,
+               "the 32 KiB build's control");
 
 static kr_rig_t r;
 
@@ -81,11 +84,34 @@ static void test_f6_pushed_hold_integrates_at_ki(void **state)
     assert_int_equal(l.i_acc, (int32_t)p.gains.ki_q8 * e_d / 10 * 10);
 }
 
+/* Without motor mode a motor run (PWM 600, or a stop at PWM 0) is refused
+ * and the hold goes on: the bridge stays with servo mode, the shaft where
+ * it was; a move afterwards runs as ever. */
+static void test_f6_motor_run_refused(void **state)
+{
+    (void)state;
+    kr_init_at(&r, km_plant_config_named("realistic"), 0);
+    assert_true(kr_torque(&r, 2));
+    kr_run(&r, 300);
+    assert_false(kr_motor_signed(&r, KM_RUN_PWM, 600));
+    assert_false(kr_motor_signed(&r, KM_RUN_PWM, 0));
+    for (int k = 0; k < 300; k++) {
+        kr_tick(&r);
+        assert_false(r.ctl.motor.active);
+        assert_false(r.live.running);
+        assert_true(kr_pos(&r) >= -5 && kr_pos(&r) <= 5);
+    }
+    assert_true(kr_move(&r, KM_MOVE_TIME, 300, 300));
+    kr_run(&r, 1000);
+    assert_true(kr_pos(&r) >= 295 && kr_pos(&r) <= 305);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_f6_stream_runs_on_the_counts),
         cmocka_unit_test(test_f6_pushed_hold_integrates_at_ki),
+        cmocka_unit_test(test_f6_motor_run_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
