@@ -20,6 +20,13 @@
 /* A word of a frame's bytes: read as words, they may alias the bytes. */
 typedef uint32_t __attribute__((may_alias)) prv_word_t;
 
+/* The one-by-one scan's inlining: a call in the 32 KiB build (KM_PROTOCOL_COMPACT, docs/footprint.md). */
+#if defined(KM_PROTOCOL_COMPACT) && KM_PROTOCOL_COMPACT
+#define PRV_EACH_INLINE __attribute__((noinline))
+#else
+#define PRV_EACH_INLINE inline __attribute__((always_inline))
+#endif
+
 /* floor(n / d) for n <= 255, 1 <= d <= 8, as (n x ceil(2^11 / d)) >> 11:
  * exact in that range (tests/unit/protocol/test_dispatch_multi_scan.c);
  * on the M0 a division is a library call. */
@@ -27,8 +34,8 @@ static const uint16_t s_recip_2048[9] = {0u, 2048u, 1024u, 683u, 512u, 410u, 342
 
 /* The first entry of `own` among the entries of `stride` bytes from p up
  * to end (the ID first in each), or end: one by one. */
-static inline __attribute__((always_inline)) const uint8_t *
-prv_find_each(const uint8_t *p, const uint8_t *const end, const uint8_t own, const size_t stride)
+static PRV_EACH_INLINE const uint8_t *prv_find_each(const uint8_t *p, const uint8_t *const end,
+                                                    const uint8_t own, const size_t stride)
 {
     while (p < end && *p != own) {
         p += stride;

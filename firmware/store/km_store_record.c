@@ -9,6 +9,13 @@
 #define PRV_DENSE_MASK 0xE0u /* a dense tag is 0b100c_cccc: count - 1 in the low five bits */
 #define PRV_IDX_LEN_SHIFT 5u
 
+/* prv_put32 a call in the 32 KiB build (its compact protocol, KM_PROTOCOL_COMPACT: docs/footprint.md). */
+#if defined(KM_PROTOCOL_COMPACT) && KM_PROTOCOL_COMPACT
+#define PRV_PUT32_INLINE __attribute__((noinline))
+#else
+#define PRV_PUT32_INLINE
+#endif
+
 /* n rounded up to a whole number of cells: a mask for a power-of-two cell
  * (every board's), no library division (km_store_maintain runs each idle pass). */
 static uint32_t prv_round_up(uint32_t n, uint32_t cell)
@@ -19,7 +26,7 @@ static uint32_t prv_round_up(uint32_t n, uint32_t cell)
     return (n + cell - 1u) / cell * cell;
 }
 
-static void prv_put32(uint8_t *p, uint32_t v)
+static PRV_PUT32_INLINE void prv_put32(uint8_t *p, uint32_t v)
 {
     p[0] = (uint8_t)v;
     p[1] = (uint8_t)(v >> 8);
