@@ -2,7 +2,15 @@
 /* Encoder for servo -> master frames (docs/protocol.md §2). */
 #include "km_encoder.h"
 
-uint16_t km_encode_response(uint8_t *out, uint8_t id, uint8_t cmd, const uint8_t *body, uint8_t body_len)
+/* km_encode_response one call in the 32 KiB build (KM_PROTOCOL_COMPACT: docs/footprint.md). */
+#if defined(KM_PROTOCOL_COMPACT) && KM_PROTOCOL_COMPACT
+#define PRV_ENCODE_NOINLINE __attribute__((noinline))
+#else
+#define PRV_ENCODE_NOINLINE
+#endif
+
+PRV_ENCODE_NOINLINE uint16_t km_encode_response(uint8_t *out, uint8_t id, uint8_t cmd, const uint8_t *body,
+                                                uint8_t body_len)
 {
     if (body_len > KM_BODY_MAX) {
         return 0;

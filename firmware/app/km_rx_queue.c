@@ -4,6 +4,14 @@
 
 #include <string.h>
 
+/* km_rx_queue_release one call in the 32 KiB build (KM_PROTOCOL_COMPACT, set for all of it:
+ * docs/footprint.md). */
+#if defined(KM_PROTOCOL_COMPACT) && KM_PROTOCOL_COMPACT
+#define PRV_RELEASE_NOINLINE __attribute__((noinline))
+#else
+#define PRV_RELEASE_NOINLINE
+#endif
+
 void km_rx_queue_init(km_rx_queue_t *q)
 {
     atomic_init(&q->head, 0u);
@@ -100,7 +108,7 @@ bool km_rx_queue_peek(km_rx_queue_t *q, km_rx_run_t *run)
     return true;
 }
 
-void km_rx_queue_release(km_rx_queue_t *q, uint32_t n)
+PRV_RELEASE_NOINLINE void km_rx_queue_release(km_rx_queue_t *q, uint32_t n)
 {
     if (n == 0u) {
         return;
