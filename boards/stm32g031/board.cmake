@@ -77,40 +77,34 @@ endif()
 # (docs/update.md §3).
 option(KM_G031_BOOT_STORE_READER "stm32g031 bootloader: update mode at the stored ID and baud"
        ${KM_G031_FEATURE_DEFAULT})
+# A feature that gives way in the 32 KiB build (docs/footprint.md "What
+# gives way"): the board option `opt`, ON by default in the 64 KiB build;
+# OFF compiles the firmware with `define`=0.
+function(km_g031_feature opt desc define)
+  option(${opt} "${desc}" ${KM_G031_FEATURE_DEFAULT})
+  if(NOT ${opt})
+    set(KM_BOARD_COMPILE_OPTIONS ${KM_BOARD_COMPILE_OPTIONS} -D${define}=0 PARENT_SCOPE)
+  endif()
+endfunction()
 # This firmware's extension command 0x7F (not in docs/protocol.md) and the
 # fault log it reads, with the log's .noinit RAM; without it 0x7F is an
 # unknown command (status bit 5).
-option(KM_G031_EXT "stm32g031: extension command 0x7F and the fault log" ${KM_G031_FEATURE_DEFAULT})
-if(NOT KM_G031_EXT)
-  list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_FEATURE_EXT=0)
-endif()
+km_g031_feature(KM_G031_EXT "stm32g031: extension command 0x7F and the fault log" KM_FEATURE_EXT)
 # This firmware's multi-ID read 0x82 (docs/protocol.md §3 and §7 leave it
 # "to be completed"; docs/protocol-decisions.md "Multi-ID read 0x82");
 # without it 0x82 is an unsupported command (status bit 5, no answer).
-option(KM_G031_MULTI_READ "stm32g031: this firmware's multi-ID read 0x82" ${KM_G031_FEATURE_DEFAULT})
-if(NOT KM_G031_MULTI_READ)
-  list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_FEATURE_MULTI_READ=0)
-endif()
+km_g031_feature(KM_G031_MULTI_READ "stm32g031: this firmware's multi-ID read 0x82" KM_FEATURE_MULTI_READ)
 # Motor mode (docs/protocol.md §5.4 0x6E, 0x70 and 0x5A = 2; docs/footprint.md
 # "What gives way"): without it 0x6E and 0x70 answer as reserved addresses
 # (status bit 5) and a write of 0x5A = 2 is out of range (bit 6); 0x6F, an
 # encoder product's command, fails as before on this potentiometer product.
-option(KM_G031_MOTOR_MODE "stm32g031: motor mode (0x6E, 0x70, 0x5A = 2)" ${KM_G031_FEATURE_DEFAULT})
-if(NOT KM_G031_MOTOR_MODE)
-  list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_FEATURE_MOTOR_MODE=0)
-endif()
+km_g031_feature(KM_G031_MOTOR_MODE "stm32g031: motor mode (0x6E, 0x70, 0x5A = 2)" KM_FEATURE_MOTOR_MODE)
 # Control refinements that are not in docs/protocol.md (docs/footprint.md
 # "What gives way"): a 0x68 stream's loop on the sub-count observer (else
 # on the counts, as a move's), and a pushed hold's integrator refinements
 # (else a still hold integrates at ki, as a moving one; docs/tuning.md).
-option(KM_G031_STREAM_OBS "stm32g031: 0x68 streams on the sub-count observer" ${KM_G031_FEATURE_DEFAULT})
-if(NOT KM_G031_STREAM_OBS)
-  list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_FEATURE_STREAM_OBS=0)
-endif()
-option(KM_G031_HOLD_KI "stm32g031: a pushed hold's integrator refinements (ki_hold, bleeds)" ${KM_G031_FEATURE_DEFAULT})
-if(NOT KM_G031_HOLD_KI)
-  list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_FEATURE_HOLD_KI=0)
-endif()
+km_g031_feature(KM_G031_STREAM_OBS "stm32g031: 0x68 streams on the sub-count observer" KM_FEATURE_STREAM_OBS)
+km_g031_feature(KM_G031_HOLD_KI "stm32g031: a pushed hold's integrator refinements (ki_hold, bleeds)" KM_FEATURE_HOLD_KI)
 # control/'s compact forms (one division body over a table of divisors,
 # clamps not inlined, the profile's braking root through km_isqrt): fewer
 # bytes, more tick instructions (docs/footprint.md). On in the 32 KiB
