@@ -6,6 +6,7 @@ give the same figures on any host.
 
     flash_op_rows(IMAGES) -> [(flash operation, bytes lost, answer delay us or None)]
     markdown(IMAGES)      -> the section's lines
+    stack_high_water(IMAGES) -> (bytes of the stack used, bytes reserved)
 
 IMAGES: the stm32g031 preset's boards/stm32g031 output directory."""
 import argparse
@@ -15,6 +16,8 @@ import vg031
 
 MS = 1_000_000
 BAUD = 115200   # a fresh servo's baud (docs/protocol.md §1)
+PAINT = 0x5AFE57AC   # boards/stm32g031/fault.c paints the stack with it at boot
+RAM = 0x20000000
 
 
 def frame(servo_id, cmd, adr=None, params=b""):
@@ -74,3 +77,26 @@ def markdown(images):
     for what, lost, delay in flash_op_rows(images):
         out.append("| %s | %d of 6 | %s |" % (what, lost, "none" if delay is None else "%.1f us" % delay))
     return out + [""]
+
+
+def stack_high_water(images):
+    """The application's stack high-water mark after the traffic of
+    tests/g031/test_vg031_flash.py (a ping, the idle-time format of a blank
+    store, a persisted setting, a ping 2.5 ms after it): the deepest painted
+    word overwritten, as (bytes used below _estack, the reserve above the
+    guard band)."""
+    m, poll = app_machine(images)
+    if not m.run_until(m.now + 100 * MS, stop=lambda: bool(m.watches[poll])):
+        raise RuntimeError("the application's main loop did not start within 100 ms")
+    m.run_until(m.now + 2 * MS)
+    ping(m, 0, m.now)
+    m.run_until(m.now + 300 * MS)   # bus silent: the blank store is formatted
+    write_end = m.send(frame(0, 0x03, 0x0F, b"\x07"), BAUD)
+    ping(m, 7, write_end + 2.5 * MS)
+    elf = os.path.join(images, "km-servo-app-stm32g031.elf")
+    top = vg031.symbol(elf, "_estack") - RAM
+    limit = vg031.symbol(elf, "__stack_limit") - RAM
+    guard_end = vg031.symbol(elf, "__stack_guard_end") - RAM
+    ram = bytes(m.uc.mem_read(RAM, top))
+    low = next(a for a in range(limit, top, 4) if int.from_bytes(ram[a:a + 4], "little") != PAINT)
+    return top - low, top - guard_end

@@ -3,18 +3,25 @@
 """Writes docs/figures.md from measurements, never by hand: the real-path
 benchmark of the shipped stm32g031 image (bench_realpath.py: instructions
 and estimated M0+ cycles per byte, per command, per list length, per
-control tick) and the image's flash and RAM per module from its linker map
-(tools/check/footprint). Everything in it is deterministic for a given image
-(virtual time on sim/g031; the map), so CTest's `figures_doc_current`
-checks that the committed file is what this prints.
+control tick), the images' static worst-case stack (tools/check/image-check)
+and the application's measured stack high-water (sim/g031/g031_figures.py),
+the store's wear on the STM32G031 (the host benchmark bench_store_wear) and
+the image's flash and RAM per module from its linker map
+(tools/check/footprint). Everything in it is deterministic for a given build
+(virtual time on sim/g031; the map; the host simulator of the flash), so
+CTest's `figures_doc_current` checks that the committed file is what this
+prints.
 
-    PYTHONPATH=sim/g031 /usr/bin/python3 tests/bench/m0/figures.py [--build DIR] [--write | --check]
+    PYTHONPATH=sim/g031 /usr/bin/python3 tests/bench/m0/figures.py [--build DIR] [--host-build HDIR] [--write | --check]
 
-DIR: the stm32g031 preset's build directory (default build/stm32g031).
-Without --write or --check the document goes to stdout."""
+DIR: the stm32g031 preset's build directory (default build/stm32g031);
+HDIR: the host preset's (default build/host), which holds
+tests/bench_store_wear: missing, this fails. Without --write or --check the
+document goes to stdout."""
 import argparse
 import difflib
 import os
+import re
 import subprocess
 import sys
 
@@ -26,6 +33,12 @@ import g031_cycles  # sim/g031
 
 DOC = os.path.join(ROOT, "docs", "figures.md")
 STEP = 8  # list lengths: 1, 9, 17, ... and the longest
+# The shipped stm32g031 images whose stack is bounded, with what each is.
+STACK_IMAGES = [("km-servo-app-stm32g031", "application (behind the bootloader)"),
+                ("km-servo-stm32g031", "image without bootloader"),
+                ("km-boot-stm32g031", "bootloader")]
+HIGH_WATER_TARGET = 80  # % of the reserve, issue 21 goal 6
+WEAR_ROWS = "STM32G031 "  # bench_store_wear's rows for the board's store geometry
 
 
 def footprint(map_path):
@@ -35,13 +48,79 @@ def footprint(map_path):
     return [ln.rstrip() for ln in out.splitlines() if ln.strip()]
 
 
+def static_stack(build, name):
+    """tools/check/image-check's static worst case for one image, as the
+    build runs it after every link: (worst case B, reserve B, main's path)."""
+    tool = os.path.join(ROOT, "tools", "check", "image-check")
+    elf = os.path.join(build, "boards", "stm32g031", name + ".elf")
+    cfg = os.path.join(ROOT, "boards", "stm32g031", "image-check.json")
+    out = subprocess.run([sys.executable, tool, elf, "--config", cfg, "--su-root", build, "--checks", "stack"],
+                         check=True, capture_output=True, text=True).stdout
+    m = re.search(r"worst case (\d+) B; reserved (\d+) B", out)
+    path = re.search(r"^stack \S+: main \(from \S+\) \d+ B via (.*)$", out, re.M)
+    if not m or not path:
+        raise RuntimeError("image-check printed no stack bound for %s:\n%s" % (name, out))
+    return int(m.group(1)), int(m.group(2)), path.group(1)
+
+
+def stack_section(build):
+    """Static worst case and reserve of each shipped image, and the
+    application's measured high-water against goal 6's target."""
+    out = ["## Stack (stm32g031 images)", "",
+           "Static worst case: `tools/check/image-check --checks stack` (run after every link;"
+           " method in [footprint.md](footprint.md) \"Static worst-case stack\"): main's deepest"
+           " path plus the deepest handler of each interrupt priority with its exception frame."
+           " Reserve: the usable stack above the guard band.", "",
+           "| image | static worst case | reserve | margin |", "|---|---|---|---|"]
+    paths = []
+    for name, what in STACK_IMAGES:
+        worst, reserve, path = static_stack(build, name)
+        out.append("| %s (`%s`) | %s B | %s B | %s B |" % (what, name, f"{worst:,}", f"{reserve:,}",
+                                                          f"{reserve - worst:,}"))
+        paths.append("- `%s`: %s" % (name, path))
+    used, reserve = g031_figures.stack_high_water(os.path.join(build, "boards", "stm32g031"))
+    pct = 100.0 * used / reserve
+    out += ["", "Main's deepest path per image:", ""] + paths + ["",
+            "Measured high-water of the application (boot + application images on the virtual G031,"
+            " stack painted at boot; after a ping, the idle-time format of a blank store, a persisted"
+            " setting and a ping 2.5 ms after it; sim/g031/g031_figures.py `stack_high_water`,"
+            " CTest g031_first_saved_setting_ping_on_time checks the same traffic's mark): **%s B of the %s B reserve, %.0f %%** (target ≤ %d %%: %s)."
+            % (f"{used:,}", f"{reserve:,}", pct, HIGH_WATER_TARGET,
+               "met" if pct <= HIGH_WATER_TARGET else "NOT met"), ""]
+    return out
+
+
+def wear_exe(host_build):
+    """The host benchmark bench_store_wear's path; exits with an error when
+    the host preset has not built it (the figures never go without it)."""
+    exe = os.path.join(host_build, "tests", "bench_store_wear")
+    if not os.path.isfile(exe):
+        raise SystemExit("figures.py: %s missing: build the host preset first"
+                         " (cmake --build --preset host --target bench_store_wear)" % exe)
+    return exe
+
+
+def wear_section(host_build):
+    """The STM32G031 rows of the host benchmark bench_store_wear, with its header."""
+    exe = wear_exe(host_build)
+    lines = subprocess.run([exe], check=True, capture_output=True, text=True).stdout.splitlines()
+    head = lines[:lines.index(next(ln for ln in lines if ln.startswith("geometry"))) + 1]
+    rows = [ln.rstrip() for ln in lines if ln.startswith(WEAR_ROWS)]
+    if not rows:
+        raise RuntimeError("bench_store_wear printed no %r rows" % WEAR_ROWS)
+    return (["## Store wear (STM32G031 geometry: 2 KiB pages, 8-byte programs, 3 pages)", "",
+             "`tests/bench_store_wear` (host preset; the store's code on a simulator of the"
+             " board's flash geometry; method in [store.md](store.md)), its STM32G031 rows:", "", "```"]
+            + [ln.rstrip() for ln in head] + rows + ["```", ""])
+
+
 def instruction_classes(elf):
     """The virtual G031's section (helper vg031's, sim/g031/g031_cycles.py):
     instructions per class with their M0+ cycles on a few measured paths."""
     return g031_cycles.markdown(bench_realpath, elf)
 
 
-def render(build):
+def render(build, host_build):
     images = os.path.join(build, "boards", "stm32g031")
     elf = os.path.join(images, "km-servo-stm32g031.elf")
     rows, _figs = bench_realpath.measure(elf, step=STEP)
@@ -61,21 +140,26 @@ def render(build):
         out.append("| %s | %s | %s | %s |" % (fig, ins or "—", cyc or "—", tgt or "—"))
     out += [""] + g031_figures.markdown(images)
     out += instruction_classes(elf)
+    out += stack_section(build)
+    out += wear_section(host_build)
     out += ["## Flash and RAM (stm32g031 servo image, from its linker map)", "", "```"]
     out += footprint(os.path.join(images, "km-servo-stm32g031.map"))
-    out += ["```", "", "Reproduce: `cmake --build --preset stm32g031 && PYTHONPATH=sim/g031"
-            " /usr/bin/python3 tests/bench/m0/figures.py --write`.", ""]
+    out += ["```", "", "Reproduce: `cmake --build --preset stm32g031 && cmake --build --preset host"
+            " --target bench_store_wear && PYTHONPATH=sim/g031 /usr/bin/python3"
+            " tests/bench/m0/figures.py --write`.", ""]
     return "\n".join(out)
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--build", default=os.path.join(ROOT, "build", "stm32g031"))
+    ap.add_argument("--host-build", default=os.path.join(ROOT, "build", "host"))
     g = ap.add_mutually_exclusive_group()
     g.add_argument("--write", action="store_true")
     g.add_argument("--check", action="store_true")
     a = ap.parse_args()
-    text = render(a.build)
+    wear_exe(a.host_build)  # before the long measurements
+    text = render(a.build, a.host_build)
     if a.write:
         with open(DOC, "w") as f:
             f.write(text)
