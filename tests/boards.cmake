@@ -75,7 +75,8 @@ find_program(KM_DEBIAN_PYTHON NAMES python3 PATHS /usr/bin NO_DEFAULT_PATH)
 add_test(NAME board_stm32g031_f6_fit
   COMMAND ${KM_DEBIAN_PYTHON} ${KM_ROOT_DIR}/tests/footprint/f6_fit.py ${KM_ROOT_DIR}
           ${CMAKE_BINARY_DIR}/f6-fit)
-set_tests_properties(board_stm32g031_f6_fit PROPERTIES LABELS board TIMEOUT 900)
+set_tests_properties(board_stm32g031_f6_fit PROPERTIES LABELS board TIMEOUT 900
+  FIXTURES_SETUP km_f6_fit_build)  # its build dir feeds figures_doc_current (tests/bench_m0.cmake)
 set_property(TEST board_stm32g031_f6_fit APPEND PROPERTY ENVIRONMENT_MODIFICATION
   "PYTHONPATH=path_list_append:${KM_ROOT_DIR}/sim/g031")  # the virtual G031
 # The 32 KiB build's 32-byte application header (board.cmake

@@ -16,10 +16,13 @@ prints.
 
 DIR: the stm32g031 preset's build directory (default build/stm32g031);
 HDIR: the host preset's (default build/host), which holds
-tests/bench_store_wear: missing, this fails. Without --write or --check the
-document goes to stdout."""
+tests/bench_store_wear: missing, this fails. --f6-build F6DIR (a 32 KiB
+build, KM_G031_FLASH_KB=32, as CTest board_stm32g031_f6_fit makes in
+build/host/f6-fit) adds the 32 KiB budget lines. Without --write or --check
+the document goes to stdout."""
 import argparse
 import difflib
+import json
 import os
 import re
 import subprocess
@@ -84,7 +87,8 @@ def stack_section(build):
             "Measured high-water of the application (boot + application images on the virtual G031,"
             " stack painted at boot; after a ping, the idle-time format of a blank store, a persisted"
             " setting and a ping 2.5 ms after it; sim/g031/g031_figures.py `stack_high_water`,"
-            " CTest g031_first_saved_setting_ping_on_time checks the same traffic's mark): **%s B of the %s B reserve, %.0f %%** (target ≤ %d %%: %s)."
+            " CTest g031_first_saved_setting_ping_on_time checks the same traffic's mark):"
+            " **%s B of the %s B reserve, %.0f %%** (target ≤ %d %%: %s)."
             % (f"{used:,}", f"{reserve:,}", pct, HIGH_WATER_TARGET,
                "met" if pct <= HIGH_WATER_TARGET else "NOT met"), ""]
     return out
@@ -114,13 +118,56 @@ def wear_section(host_build):
             + [ln.rstrip() for ln in head] + rows + ["```", ""])
 
 
+def f6_app_link(f6_build):
+    """Links the application's .elf in a 32 KiB build (CTest's f6 fit builds
+    only the images held to the budget): None when it links, else the
+    linker's overflow line."""
+    p = subprocess.run(["cmake", "--build", f6_build, "--target", "km-servo-app-stm32g031"],
+                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    if p.returncode == 0:
+        return None
+    over = re.search(r"region `FLASH' overflowed by \d+ bytes", p.stdout)
+    if not over:
+        raise RuntimeError("the 32 KiB application failed to build:\n" + p.stdout[-4000:])
+    return over.group(0)
+
+
+def f6_budget_section(f6_build):
+    """tools/check/image-check's budget lines (issue 21 goal 6) for the
+    images of a 32 KiB build (KM_G031_FLASH_KB=32): bootloader, application
+    with its header, image without bootloader, RAM; an application that
+    does not link there is shown with the linker's overflow."""
+    tool = os.path.join(ROOT, "tools", "check", "image-check")
+    cfg = os.path.join(ROOT, "boards", "stm32g031", "image-check.json")
+    app_overflow = f6_app_link(f6_build)
+    out = ["## 32 KiB part (STM32G031F6) budget", "",
+           "`tools/check/image-check --checks budget` on the images of the 32 KiB build"
+           " (`-DKM_G031_FLASH_KB=32`, CTest board_stm32g031_f6_fit; what gives way in"
+           " [footprint.md](footprint.md) \"STM32G031F6\"):", "", "```"]
+    for name, _what in STACK_IMAGES:
+        elf = os.path.join(f6_build, "boards", "stm32g031", name + ".elf")
+        if name == "km-servo-app-stm32g031" and app_overflow:
+            budget = json.load(open(cfg))["budget"]
+            limit = budget["flash"] - budget["boot_max"] - budget["store"]
+            out.append("%s: does not link in the 32 KiB build (application + header: %s B left by the"
+                       " bootloader and the store): %s" % (name, f"{limit:,}", app_overflow))
+            continue
+        p = subprocess.run([sys.executable, tool, elf, "--config", cfg, "--checks", "budget"],
+                           capture_output=True, text=True)
+        lines = [ln for ln in (p.stdout + p.stderr).splitlines() if "budget" in ln]
+        if not lines:
+            raise RuntimeError("image-check printed no budget line for %s:\n%s%s" % (elf, p.stdout, p.stderr))
+        out += ["%s: %s" % (name, ln) for ln in lines]
+    return out + ["```", ""]
+
+
 def instruction_classes(elf):
     """The virtual G031's section (helper vg031's, sim/g031/g031_cycles.py):
     instructions per class with their M0+ cycles on a few measured paths."""
     return g031_cycles.markdown(bench_realpath, elf)
 
 
-def render(build, host_build):
+def render(build, host_build, f6_build=None):
     images = os.path.join(build, "boards", "stm32g031")
     elf = os.path.join(images, "km-servo-stm32g031.elf")
     rows, _figs = bench_realpath.measure(elf, step=STEP)
@@ -142,11 +189,14 @@ def render(build, host_build):
     out += instruction_classes(elf)
     out += stack_section(build)
     out += wear_section(host_build)
+    if f6_build:
+        out += f6_budget_section(f6_build)
     out += ["## Flash and RAM (stm32g031 servo image, from its linker map)", "", "```"]
     out += footprint(os.path.join(images, "km-servo-stm32g031.map"))
     out += ["```", "", "Reproduce: `cmake --build --preset stm32g031 && cmake --build --preset host"
             " --target bench_store_wear && PYTHONPATH=sim/g031 /usr/bin/python3"
-            " tests/bench/m0/figures.py --write`.", ""]
+            " tests/bench/m0/figures.py --f6-build build/host/f6-fit --write` (after CTest"
+            " board_stm32g031_f6_fit has made that 32 KiB build).", ""]
     return "\n".join(out)
 
 
@@ -154,12 +204,16 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--build", default=os.path.join(ROOT, "build", "stm32g031"))
     ap.add_argument("--host-build", default=os.path.join(ROOT, "build", "host"))
+    ap.add_argument("--f6-build", help="a 32 KiB build (KM_G031_FLASH_KB=32): its budget lines too")
     g = ap.add_mutually_exclusive_group()
     g.add_argument("--write", action="store_true")
     g.add_argument("--check", action="store_true")
     a = ap.parse_args()
     wear_exe(a.host_build)  # before the long measurements
-    text = render(a.build, a.host_build)
+    if a.f6_build and not os.path.isdir(os.path.join(a.f6_build, "boards", "stm32g031")):
+        raise SystemExit("figures.py: %s holds no stm32g031 images: build it (CTest board_stm32g031_f6_fit)"
+                         % a.f6_build)
+    text = render(a.build, a.host_build, a.f6_build)
     if a.write:
         with open(DOC, "w") as f:
             f.write(text)
