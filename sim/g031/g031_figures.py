@@ -93,7 +93,13 @@ def stack_high_water(images):
     m.run_until(m.now + 300 * MS)   # bus silent: the blank store is formatted
     write_end = m.send(frame(0, 0x03, 0x0F, b"\x07"), BAUD)
     ping(m, 7, write_end + 2.5 * MS)
-    elf = os.path.join(images, "km-servo-app-stm32g031.elf")
+    return stack_use(m, os.path.join(images, "km-servo-app-stm32g031.elf"))
+
+
+def stack_use(m, elf):
+    """The stack m's image `elf` has used so far: the deepest painted word
+    overwritten, as (bytes used below _estack, the reserve above the guard
+    band)."""
     top = vg031.symbol(elf, "_estack") - RAM
     limit = vg031.symbol(elf, "__stack_limit") - RAM
     guard_end = vg031.symbol(elf, "__stack_guard_end") - RAM

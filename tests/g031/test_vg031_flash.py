@@ -23,7 +23,6 @@ import g031_figures  # noqa: E402
 IMAGES = None
 BAUD = 115200        # a fresh servo's baud (docs/protocol.md §1)
 MS = 1_000_000
-PAINT = 0x5AFE57AC   # boards/stm32g031/fault.c paints the stack with it
 
 
 def frame(servo_id, cmd, adr=None, params=b""):
@@ -66,13 +65,7 @@ class Flash(unittest.TestCase):
         self.assertEqual(n, 6, "no answer from ID 7")
         self.assertLessEqual(late, quiet + 100)
         self.assertEqual(m.faults, [])
-        # Stack high-water: the deepest word of the painted stack overwritten.
-        top = vg031.symbol(elf, "_estack") - 0x20000000
-        limit = vg031.symbol(elf, "__stack_limit") - 0x20000000
-        guard_end = vg031.symbol(elf, "__stack_guard_end") - 0x20000000
-        ram = bytes(m.uc.mem_read(0x20000000, top))
-        low = next(a for a in range(limit, top, 4) if int.from_bytes(ram[a:a + 4], "little") != PAINT)
-        used, reserve = top - low, top - guard_end
+        used, reserve = g031_figures.stack_use(m, elf)  # the deepest painted word overwritten
         print("stack high-water %d B of the %d B reserve (%.0f %%)" % (used, reserve, 100.0 * used / reserve))
         self.assertLessEqual(used, reserve * 80 // 100)
 
