@@ -425,6 +425,16 @@ static inline void kt_ping_is(kt_fx_t *fx, uint8_t id, uint8_t status)
     kt_reply_is_status(fx, id, status);
 }
 
+/* The protocol's own commands answer at `id`: a ping (status 0) and a read
+ * of 0x0F, the ID (docs/protocol.md §3, §5.1). */
+static inline void kt_spec_commands_answer(kt_fx_t *fx, uint8_t id)
+{
+    kt_ping_is(fx, id, 0);
+    const uint8_t addr = 0x0F;
+    kt_send(fx, id, 0x02, &addr, 1u);
+    kt_reply_is_read(fx, id, addr, &id, 1u);
+}
+
 /* Value bytes of the last read answer (asserts it is one for `addr`). */
 static inline unsigned kt_read_value(const kt_fx_t *fx, uint8_t addr, uint8_t *out)
 {

@@ -81,10 +81,7 @@ static void test_spec_commands_still_answer(void **state)
 {
     (void)state;
     prv_init();
-    kt_ping_is(&fx, ID, 0);
-    const uint8_t addr = 0x0F, id = ID;
-    kt_send(&fx, ID, 0x02, &addr, 1u);
-    kt_reply_is_read(&fx, ID, addr, &id, 1u);
+    kt_spec_commands_answer(&fx, ID);
 }
 
 int main(void)
