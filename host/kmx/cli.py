@@ -300,12 +300,14 @@ MONITOR = ("position", "speed", "current", "temperature", "voltage")
 def monitor_sample(bus, regs, names, ids):
     """One sample of registers `names` of every servo in ids: one multi-ID
     read (0x82) per register for all of them; a servo missing from one is
-    read on its own (0x02). {id: [Value per name]}."""
+    read on its own (0x02), and by 0x02 only in later samples of this regs
+    (Registers.read_each: a servo without 0x82 reports its status bit 5
+    once, not on every sample). {id: [Value per name]}."""
     out = {i: [] for i in ids}
     for name in names:
-        got = regs.get_many(ids, name)
+        got = regs.read_each(ids, name)
         for i in ids:
-            out[i].append(got[i] if got[i] is not None else regs.get(i, name))
+            out[i].append(got[i])
     return out
 
 

@@ -334,6 +334,8 @@ class Registers:
         self.bus = bus
         self.map = regmap or RegisterMap.load()
         self._limits = None
+        # Servos that left a multi-ID read (0x82) unanswered: read_each reads them by 0x02 from then on.
+        self.no_multi_read = set()
 
     def get(self, dev_id, key, timeout=None):
         reg = self.map.find(key)
@@ -361,6 +363,21 @@ class Registers:
             raise RegisterError("%s (0x%02X) is write-only" % (reg.name, reg.address))
         got = self.bus.multi_read(reg.address, ids, timeout)
         return {i: None if data is None else reg.decode(data) for i, data in got.items()}
+
+    def read_each(self, ids, key):
+        """One register of many servos, each servo read once: one multi-ID
+        read (0x82) for every servo not known to lack it, then a read (0x02)
+        of each servo that did not answer it. A servo that leaves an 0x82
+        listing it unanswered (a build without 0x82, such as the 32 KiB
+        STM32G031F6 one: docs/footprint.md "What gives way") is remembered
+        in no_multi_read for the life of this object (the bus session) and
+        read by 0x02 only from then on: each 0x82 it does not take sets its
+        status bit 5 (§4, unsupported command), so its status reports bit 5
+        once, after the first 0x82, and not on every call. {id: Value}."""
+        multi = [i for i in ids if i not in self.no_multi_read]
+        got = self.get_many(multi, key) if multi else {}
+        self.no_multi_read.update(i for i in multi if got[i] is None)
+        return {i: got[i] if got.get(i) is not None else self.get(i, key) for i in ids}
 
     def _encode_many(self, reg, values, check):
         """{id: value in units} -> [(id, bytes)], every value checked first."""

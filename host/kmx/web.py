@@ -277,7 +277,8 @@ class Wizard:
         return self.set(dev_id, {"name": "interpolate", "value": body["angle"]})
 
     def live(self, ids):
-        """One sample of every servo in ids: each register by one 0x82."""
+        """One sample of every servo in ids: each register by one 0x82 (0x02
+        for a servo without it, cli.monitor_sample)."""
         self.need_bus()
         t = time.monotonic() - self.t0
         sample = cli.monitor_sample(self.bus, self.regs, LIVE, ids)
