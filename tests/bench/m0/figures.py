@@ -16,7 +16,7 @@ prints.
 
 DIR: the stm32g031 preset's build directory (default build/stm32g031);
 HDIR: the host preset's (default build/host), which holds
-tests/bench_store_wear: missing, this fails. --f6-build F6DIR (a 32 KiB
+build/host/tests/bench_store_wear: missing, this fails. --f6-build F6DIR (a 32 KiB
 build, KM_G031_FLASH_KB=32, as CTest board_stm32g031_f6_fit makes in
 build/host/f6-fit) adds the 32 KiB budget lines. Without --write or --check
 the document goes to stdout."""
@@ -113,7 +113,7 @@ def wear_section(host_build):
     if not rows:
         raise RuntimeError("bench_store_wear printed no %r rows" % WEAR_ROWS)
     return (["## Store wear (STM32G031 geometry: 2 KiB pages, 8-byte programs, 3 pages)", "",
-             "`tests/bench_store_wear` (host preset; the store's code on a simulator of the"
+             "`build/host/tests/bench_store_wear` (tests/bench/bench_store_wear.c; the store's code on a simulator of the"
              " board's flash geometry; method in [store.md](store.md)), its STM32G031 rows:", "", "```"]
             + [ln.rstrip() for ln in head] + rows + ["```", ""])
 
