@@ -13,14 +13,12 @@ and every value is read.
                                board_stm32g031_f6_kmx_monitor)
 """
 import os
-import signal
-import subprocess
 import sys
 import tempfile
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
 sys.path[:0] = [os.path.join(REPO, "host"), os.path.join(REPO, "sim", "g031")]
-import vclock  # noqa: E402  (sim/g031)
+import g031_servo_bus  # noqa: E402  (sim/g031)
 from kmx import cli  # noqa: E402
 from kmx.bus import Bus  # noqa: E402
 from kmx.registers import Registers  # noqa: E402
@@ -60,24 +58,11 @@ def main():
         print("FAIL: missing %s (CTest board_stm32g031_f6_fit builds it)" % image)
         return 1
     tmp = tempfile.TemporaryDirectory(prefix="f6-monitor-")
-    clock_file = os.path.join(tmp.name, "clock")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path[:2] + [os.environ.get("PYTHONPATH", "")]))
-    bus_proc = subprocess.Popen([os.path.join(REPO, "sim/bus/servo-bus"), "--backend", "g031", "--ids",
-                                 ",".join(map(str, IDS)), "--port", "0", "--image", image, "--timeout", "60",
-                                 "--clock-file", clock_file], stdout=subprocess.PIPE, text=True, env=env)
     try:
-        line = bus_proc.stdout.readline().strip()
-        if not line.startswith("ready "):
-            print("FAIL: servo-bus did not start: %r" % line)
-            return 1
-        vclock.install(clock_file)  # the master's timeouts in the servos' time
-        fails = check_samples("tcp:" + line.split()[1])
+        with g031_servo_bus.servo_bus(IDS, ["--image", image, "--timeout", "60"], tmp.name, env) as (spec, _clock):
+            fails = check_samples(spec)
     finally:
-        bus_proc.send_signal(signal.SIGTERM)
-        try:
-            bus_proc.wait(10)
-        except subprocess.TimeoutExpired:
-            bus_proc.kill()
         tmp.cleanup()
     for f in fails:
         print("FAIL:", f)

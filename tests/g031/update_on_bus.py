@@ -23,7 +23,6 @@ Prints "all checks passed" at the end; exit 1 on any failure.
 """
 import argparse
 import os
-import signal
 import struct
 import subprocess
 import sys
@@ -33,6 +32,7 @@ import zlib
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
 import vclock  # noqa: E402  (sim/g031, on PYTHONPATH)
+import g031_servo_bus  # noqa: E402  (sim/g031)
 from kmx.bus import Bus  # noqa: E402
 from kmx import frame as fr  # noqa: E402
 
@@ -128,28 +128,15 @@ def main():
             images.append(f.read())
     image, image_v2 = images
     tmp = tempfile.TemporaryDirectory(prefix="g031-update-")
-    bus_proc = subprocess.Popen([os.path.join(REPO, "sim/bus/servo-bus"), "--backend", "g031", "--ids", "1,2,3",
-                                 "--port", "0", "--build-dir", a.build_stm32, "--monitor-dir", tmp.name,
-                                 "--timeout", "30", "--clock-file", os.path.join(tmp.name, "clock")],
-                                stdout=subprocess.PIPE, text=True)
     t0 = time.monotonic()
     try:
-        line = bus_proc.stdout.readline().strip()
-        if not line.startswith("ready "):
-            print("servo-bus did not start: %r" % line)
-            return 1
-        spec = "tcp:" + line.split()[1]
-        print("bus: %s, up in %.1f s" % (spec, time.monotonic() - t0), flush=True)
-        clock = vclock.install(os.path.join(tmp.name, "clock"))  # this process's waits too
-        v0 = clock.ns()
-        failures = checks(spec, tmp.name, tmp.name, image, image_v2, a)
-        print("virtual time %.1f s" % ((clock.ns() - v0) / 1e9))
+        with g031_servo_bus.servo_bus((1, 2, 3), ["--build-dir", a.build_stm32, "--monitor-dir", tmp.name,
+                                                  "--timeout", "30"], tmp.name) as (spec, clock):
+            print("bus: %s, up in %.1f s" % (spec, vclock.real_monotonic() - t0), flush=True)
+            v0 = clock.ns()
+            failures = checks(spec, tmp.name, tmp.name, image, image_v2, a)
+            print("virtual time %.1f s" % ((clock.ns() - v0) / 1e9))
     finally:
-        bus_proc.send_signal(signal.SIGTERM)
-        try:
-            bus_proc.wait(10)
-        except subprocess.TimeoutExpired:
-            bus_proc.kill()
         tmp.cleanup()
     print("run time %.1f s real" % (vclock.real_monotonic() - t0))
     for f in failures:
