@@ -59,8 +59,10 @@ static void prv_same(void)
 static void prv_send_both(uint8_t id, uint8_t cmd, const uint8_t *body, unsigned n, uint8_t twin_body0)
 {
     uint8_t twin[KM_BODY_MAX];
-    memcpy(twin, body, n);
-    twin[0] = twin_body0;
+    if (n > 0u) { /* a body-less frame (0x84) is the same on both */
+        memcpy(twin, body, n);
+        twin[0] = twin_body0;
+    }
     kt_send(&fx_motor, id, cmd, body, n);
     kt_send(&fx_twin, id, cmd, twin, n);
     prv_same();
