@@ -56,17 +56,11 @@ typedef struct {
     km_control_gains_t gains;
 } km_control_params_t;
 
-/* The product's variant (§6) as control/ sees it: the board's fixed one
- * when it is built as one product (KM_PRODUCT_VARIANT, km_product_variant),
- * so the other variant's paths fold away at compile time; else p's. */
+/* The product's variant (§6) as control/ sees it: fixed where the board
+ * fixes it (km_variant_fixed_or), else p's. */
 static inline km_variant_t km_params_variant(const km_control_params_t *p)
 {
-#ifdef KM_PRODUCT_VARIANT
-    (void)p;
-    return KM_PRODUCT_VARIANT;
-#else
-    return p->variant;
-#endif
+    return km_variant_fixed_or(p->variant);
 }
 
 #endif

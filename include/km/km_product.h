@@ -64,17 +64,23 @@ typedef struct {
     const km_control_gains_t *gains; /* NULL = KM_CONTROL_GAINS_DEFAULT */
 } km_product_t;
 
-/* The product's variant (§6). A board built as one product fixes it with
- * -DKM_PRODUCT_VARIANT=... (its product.c then declares that variant), so
- * the checks for the other variant fold away at compile time. */
-static inline km_variant_t km_product_variant(const km_product_t *product)
+/* A variant as the firmware sees it: a board built as one product fixes it
+ * with -DKM_PRODUCT_VARIANT=... (its product.c then declares that variant),
+ * so the checks for the other variant fold away at compile time; else `v`. */
+static inline km_variant_t km_variant_fixed_or(km_variant_t v)
 {
 #ifdef KM_PRODUCT_VARIANT
-    (void)product;
+    (void)v;
     return KM_PRODUCT_VARIANT;
 #else
-    return product->variant;
+    return v;
 #endif
+}
+
+/* The product's variant (§6), fixed where the board fixes it. */
+static inline km_variant_t km_product_variant(const km_product_t *product)
+{
+    return km_variant_fixed_or(product->variant);
 }
 
 #endif
