@@ -33,34 +33,22 @@ static bool prv_erase(km_store_t *s, uint32_t page)
     return true;
 }
 
-/* Programs one cell and reads it back. */
-static bool prv_cell(const km_flash_t *f, uint32_t addr, const uint8_t *cell)
+/* Programs size bytes (whole cells) at addr one cell at a time, then reads them back. */
+static bool prv_program_verified(const km_flash_t *f, uint32_t addr, const uint8_t *rec, uint32_t size)
 {
-    uint8_t back[KM_REC_MAX_CELL];
-    return f->program(f->ctx, addr, cell, f->prog_size) == KM_FLASH_OK &&
-           f->read(f->ctx, addr, back, f->prog_size) == KM_FLASH_OK && memcmp(back, cell, f->prog_size) == 0;
-}
-
-/* Programs a record one cell at a time and reads it back (a snapshot's commit cell last). */
-static bool prv_write(km_store_t *s, uint32_t page, uint32_t offset, const uint8_t *rec, uint32_t size,
-                      bool commit_cell)
-{
-    const km_flash_t *f = s->flash;
     const uint32_t c = f->prog_size;
-    const uint32_t base = page * f->page_size + offset;
-    const uint32_t body = commit_cell ? size - c : size;
     uint8_t back[KM_REC_MAX_CELL];
-    for (uint32_t at = 0; at < body; at += c) {
-        if (f->program(f->ctx, base + at, &rec[at], c) != KM_FLASH_OK) {
+    for (uint32_t at = 0; at < size; at += c) {
+        if (f->program(f->ctx, addr + at, &rec[at], c) != KM_FLASH_OK) {
             return false;
         }
     }
-    for (uint32_t chk = 0; chk < body; chk += c) {
-        if (f->read(f->ctx, base + chk, back, c) != KM_FLASH_OK || memcmp(back, &rec[chk], c) != 0) {
+    for (uint32_t chk = 0; chk < size; chk += c) {
+        if (f->read(f->ctx, addr + chk, back, c) != KM_FLASH_OK || memcmp(back, &rec[chk], c) != 0) {
             return false;
         }
     }
-    return !commit_cell || prv_cell(f, base + body, &rec[body]);
+    return true;
 }
 
 /* Writes state as a snapshot of the next generation at the start of target (erased), then its confirmation
@@ -76,8 +64,13 @@ static bool prv_snapshot(km_store_t *s, uint32_t target, const uint32_t *state)
     const uint32_t size =
         km_rec_encode(buf, &hdr, s->schema, state, km_store_all_keys(s->schema), f->prog_size);
     static const uint8_t k_zero[KM_REC_MAX_CELL] = {0};
-    /* K last: a K that reads programmed then proves the snapshot solid. */
-    if (!prv_write(s, target, 0u, buf, size, true) || !prv_cell(f, target * f->page_size + size, k_zero)) {
+    const uint32_t at = target * f->page_size;
+    const uint32_t body = size - f->prog_size;
+    /* The commit cell after the body is read back, K last: a K that reads programmed then proves the snapshot
+     * solid. */
+    if (!prv_program_verified(f, at, buf, body) ||
+        !prv_program_verified(f, at + body, &buf[body], f->prog_size) ||
+        !prv_program_verified(f, at + size, k_zero, f->prog_size)) {
         s->target = (uint8_t)target; /* a retry erases it again */
         return false;
     }
@@ -148,7 +141,7 @@ static __attribute__((noinline)) prv_delta_t prv_append_delta(km_store_t *s, con
     if (size > f->page_size - s->tail) {
         return PRV_DELTA_NO_ROOM;
     }
-    if (!prv_write(s, s->active, s->tail, buf, size, false)) {
+    if (!prv_program_verified(f, s->active * f->page_size + s->tail, buf, size)) {
         return PRV_DELTA_FAILED;
     }
     s->tail += size;
