@@ -23,7 +23,7 @@
 #include "km_hal_time.h"
 #include "usart_brr.h"
 
-/* The receive side, in one place: the interrupt reaches every field from
+/* The driver's state in one place: the interrupt reaches every field from
  * one base address. A loss (an error flag) is remembered by pointing
  * `call` at prv_rx_after_loss until the next byte: the byte's fast path
  * tests nothing for it. */
@@ -31,16 +31,15 @@ static struct {
     km_uart_rx_handler_t call; /* `handler`, or prv_rx_after_loss */
     void *ctx;
     km_uart_rx_handler_t handler;
-} s_rx;
+    const uint8_t *tx_data;
+    uint16_t tx_len;
+    uint16_t tx_next;
+    volatile bool tx_busy;
+} s_uart;
 
 /* USART1_ISR's and USART1_RDR's offsets (RM0444 §33.8.9, §33.8.10). */
 #define PRV_ISR_OFFSET 0x1Cu
 #define PRV_RDR_OFFSET 0x24u
-
-static const uint8_t *s_tx_data;
-static uint16_t s_tx_len;
-static uint16_t s_tx_next;
-static volatile bool s_tx_busy;
 
 static void prv_de(bool on)
 {
@@ -60,8 +59,8 @@ static void prv_de(bool on)
 G0_RAMFUNC(prv_rx_after_loss) static void prv_rx_after_loss(void *ctx, uint8_t byte, uint32_t tick, bool lost)
 {
     (void)lost;
-    s_rx.call = s_rx.handler;
-    s_rx.handler(ctx, byte, tick, true);
+    s_uart.call = s_uart.handler;
+    s_uart.handler(ctx, byte, tick, true);
 }
 
 /* The handler of a receiver opened with none: the bytes are dropped. */
@@ -80,10 +79,10 @@ bool km_hal_uart_init(uint32_t baud, km_uart_rx_handler_t handler, void *ctx)
         return false;
     }
     g0_nvic_disable(G0_IRQ_USART1);
-    s_rx.handler = handler != 0 ? handler : prv_rx_discard;
-    s_rx.call = s_rx.handler;
-    s_rx.ctx = ctx;
-    s_tx_busy = false;
+    s_uart.handler = handler != 0 ? handler : prv_rx_discard;
+    s_uart.call = s_uart.handler;
+    s_uart.ctx = ctx;
+    s_uart.tx_busy = false;
 
     RCC_APBENR2 |= RCC_APBENR2_USART1;
     g0_gpio_open_drain_pullup(PIN_BUS_PORT, PIN_BUS_PIN);
@@ -114,14 +113,14 @@ G0_RAMFUNC(km_hal_uart_send) bool km_hal_uart_send(const uint8_t *data, uint16_t
         return true;
     }
     uint32_t key = km_cortex_irq_lock();
-    if (s_tx_busy) {
+    if (s_uart.tx_busy) {
         km_cortex_irq_restore(key);
         return false;
     }
-    s_tx_busy = true;
-    s_tx_data = data;
-    s_tx_len = len;
-    s_tx_next = 0u;
+    s_uart.tx_busy = true;
+    s_uart.tx_data = data;
+    s_uart.tx_len = len;
+    s_uart.tx_next = 0u;
     prv_de(true);
     USART1_CR1 = (USART1_CR1 & ~(USART_CR1_RE | USART_CR1_RXNEIE)) | USART_CR1_TXEIE;
     km_cortex_irq_restore(key);
@@ -130,32 +129,16 @@ G0_RAMFUNC(km_hal_uart_send) bool km_hal_uart_send(const uint8_t *data, uint16_t
 
 bool km_hal_uart_tx_busy(void)
 {
-    return s_tx_busy;
-}
-
-/* A received byte (RXNE), or an error flag, while receiving. The byte's
- * time stamp is TIM2's count read here (km_hal_time_now's, without the
- * call: this runs for every byte on the bus). */
-static inline __attribute__((always_inline)) void prv_rx(uint32_t isr)
-{
-    if ((isr & (USART_ISR_ORE | USART_ISR_FE | USART_ISR_NE | USART_ISR_PE)) != 0u) {
-        USART1_ICR = USART_ICR_ORECF | USART_ICR_FECF | USART_ICR_NECF | USART_ICR_PECF;
-        s_rx.call = prv_rx_after_loss;
-    }
-    if ((isr & USART_ISR_RXNE) != 0u) {
-        const uint32_t tick = TIM_CNT(TIM2_BASE_R);
-        const uint8_t byte = (uint8_t)USART1_RDR; /* reading clears RXNE */
-        s_rx.call(s_rx.ctx, byte, tick, false);
-    }
+    return s_uart.tx_busy;
 }
 
 static void prv_tx(uint32_t isr, uint32_t cr1)
 {
     if ((cr1 & USART_CR1_TXEIE) != 0u && (isr & USART_ISR_TXE) != 0u) {
-        if (s_tx_next < s_tx_len) {
-            USART1_TDR = s_tx_data[s_tx_next++];
+        if (s_uart.tx_next < s_uart.tx_len) {
+            USART1_TDR = s_uart.tx_data[s_uart.tx_next++];
         }
-        if (s_tx_next >= s_tx_len) {
+        if (s_uart.tx_next >= s_uart.tx_len) {
             /* Last byte queued: TC tells when its stop bit has left the wire. */
             USART1_ICR = USART_ICR_TCCF;
             USART1_CR1 = (USART1_CR1 & ~USART_CR1_TXEIE) | USART_CR1_TCIE;
@@ -166,7 +149,7 @@ static void prv_tx(uint32_t isr, uint32_t cr1)
          * received; clear any error flag latched around the RE switch. */
         USART1_ICR = USART_ICR_TCCF | USART_ICR_ORECF | USART_ICR_FECF | USART_ICR_NECF | USART_ICR_PECF;
         USART1_CR1 = (USART1_CR1 & ~USART_CR1_TCIE) | USART_CR1_RE | USART_CR1_RXNEIE;
-        s_tx_busy = false;
+        s_uart.tx_busy = false;
     }
 }
 
@@ -175,28 +158,31 @@ static void prv_tx(uint32_t isr, uint32_t cr1)
  * no error flag and no loss before it goes to the handler first, before
  * CR1 is read (docs/benchmarks.md "Per byte"): RXNE is only set with RE on,
  * or by a byte that came in just before a send turned RE off, which is then
- * handed over at once instead of at TC. */
+ * handed over at once instead of at TC. An error flag is cleared and marks
+ * the loss whether receiving or not (EIE interrupts even while RX is off).
+ * The byte's time stamp is TIM2's count read here (km_hal_time_now's,
+ * without the call: this runs for every byte on the bus). */
 G0_RAMFUNC(USART1_IRQHandler) void USART1_IRQHandler(void)
 {
     uintptr_t usart = USART1_BASE_R;
     __asm__("" : "+l"(usart)); /* ISR and RDR from one base register */
     const uint32_t isr = G0_REG_AT(usart, PRV_ISR_OFFSET);
     const uint32_t errors = USART_ISR_ORE | USART_ISR_FE | USART_ISR_NE | USART_ISR_PE;
-    if ((isr & (errors | USART_ISR_RXNE)) == USART_ISR_RXNE) {
-        const uint32_t tick = TIM_CNT(TIM2_BASE_R);
-        const uint8_t byte = (uint8_t)G0_REG_AT(usart, PRV_RDR_OFFSET); /* reading clears RXNE */
-        s_rx.call(s_rx.ctx, byte, tick, false);
-        return;
+    if ((isr & (errors | USART_ISR_RXNE)) != USART_ISR_RXNE) {
+        const uint32_t cr1 = USART1_CR1;
+        if ((isr & errors) != 0u) {
+            USART1_ICR = USART_ICR_ORECF | USART_ICR_FECF | USART_ICR_NECF | USART_ICR_PECF;
+            s_uart.call = prv_rx_after_loss;
+        }
+        if ((cr1 & USART_CR1_RXNEIE) == 0u) {
+            prv_tx(isr, cr1);
+            return;
+        }
+        if ((isr & USART_ISR_RXNE) == 0u) {
+            return;
+        }
     }
-    const uint32_t cr1 = USART1_CR1;
-    if ((cr1 & USART_CR1_RXNEIE) != 0u) {
-        prv_rx(isr);
-        return;
-    }
-    /* Error flags interrupt through EIE even while RX is off: clear them. */
-    if ((isr & (USART_ISR_ORE | USART_ISR_FE | USART_ISR_NE | USART_ISR_PE)) != 0u) {
-        USART1_ICR = USART_ICR_ORECF | USART_ICR_FECF | USART_ICR_NECF | USART_ICR_PECF;
-        s_rx.call = prv_rx_after_loss;
-    }
-    prv_tx(isr, cr1);
+    const uint32_t tick = TIM_CNT(TIM2_BASE_R);
+    const uint8_t byte = (uint8_t)G0_REG_AT(usart, PRV_RDR_OFFSET); /* reading clears RXNE */
+    s_uart.call(s_uart.ctx, byte, tick, false);
 }
