@@ -43,13 +43,13 @@ typedef struct {
     uint32_t last_tick;  /* tick of the newest byte */
     uint32_t stale_tick; /* tick of the newest stale byte */
     uint32_t gap_ticks;  /* inter-byte gap that drops a frame */
-    km_parser_stats_t stats;
-    uint8_t bad_ids[32]; /* bitset: IDs seen on checksum-failed frames */
     /* The unresolved bytes, oldest at `head`: a 256-byte ring indexed by uint8_t. */
     uint8_t window[KM_FRAME_MAX];
     /* psum[i]: sum mod 256 of every byte fed before window[i]; the checksum
      * of any candidate inside the ring is then one subtraction. */
     uint8_t psum[KM_FRAME_MAX];
+    km_parser_stats_t stats;
+    uint8_t bad_ids[32]; /* bitset: IDs seen on checksum-failed frames */
 } km_parser_t;
 
 /* A frame handed out by the batch entries: a view, valid until the next call on the parser. */
