@@ -135,16 +135,10 @@ static bool prv_need(prv_reader_t *r, uint32_t n)
     return true;
 }
 
-static bool prv_crc_ok(const uint8_t *buf, uint32_t crc_at)
-{
-    return km_crc32(0u, buf, crc_at) == prv_get(&buf[crc_at], KM_REC_CRC);
-}
-
-/* Dense delta: entries walked to find its size, then padding and CRC. */
-static bool prv_read_dense(prv_reader_t *r, km_rec_t *rec)
+/* Dense delta: walks its count entries to where they end (*end). */
+static bool prv_dense_end(prv_reader_t *r, uint32_t count, uint32_t *end)
 {
     const uint8_t *b = r->buf;
-    const uint32_t count = (b[0] & ~PRV_DENSE_MASK) + 1u;
     uint32_t at = 1;
     uint32_t next_idx = 0; /* indices strictly increase */
     for (uint32_t i = 0; i < count; i++) {
@@ -159,57 +153,47 @@ static bool prv_read_dense(prv_reader_t *r, km_rec_t *rec)
         next_idx = idx + 1u;
         at += 1u + ((uint32_t)e >> PRV_IDX_LEN_SHIFT) + 1u;
     }
-    const uint32_t size = prv_round_up(at + KM_REC_CRC, r->f->prog_size);
-    if (!prv_need(r, size)) {
-        return false;
-    }
-    for (uint32_t i = at; i < size - KM_REC_CRC; i++) {
-        if (b[i] != 0xFFu) {
-            return false;
-        }
-    }
-    if (!prv_crc_ok(b, size - KM_REC_CRC)) {
-        return false;
-    }
-    rec->type = KM_REC_DELTA;
-    rec->count = (uint8_t)count;
-    rec->size = size;
-    rec->entries = &b[1];
+    *end = at;
     return true;
 }
 
-/* Snapshot or legacy delta: fixed-size entries, CRC, then the commit cell. */
-static bool prv_read_fixed(prv_reader_t *r, km_rec_t *rec)
+/* Where a record's fixed bytes are: [from, to) must all read `fill`, its CRC-32 is at crc_at. */
+typedef struct {
+    uint32_t hdr; /* entries start here */
+    uint32_t size;
+    uint32_t crc_at;
+    uint32_t from;
+    uint32_t to;
+    uint8_t fill;
+} prv_layout_t;
+
+/* Dense delta: 0xFF padding from its entries' end to the CRC in the last four bytes. Snapshot or legacy
+ * delta: fixed-size entries, CRC, then the commit cell of zeros. */
+static bool prv_layout(prv_reader_t *r, uint8_t type, uint32_t count, prv_layout_t *l)
 {
-    const uint8_t *b = r->buf;
-    const uint8_t type = b[0];
-    const uint8_t count = b[1];
     const uint32_t c = r->f->prog_size;
+    if ((type & PRV_DENSE_MASK) == KM_REC_DELTA) {
+        uint32_t at;
+        if (!prv_dense_end(r, count, &at)) {
+            return false;
+        }
+        l->hdr = 1u;
+        l->size = prv_round_up(at + KM_REC_CRC, c);
+        l->crc_at = l->size - KM_REC_CRC;
+        l->from = at;
+        l->to = l->crc_at;
+        l->fill = 0xFFu;
+        return true;
+    }
     if (count > KM_STORE_MAX_KEYS || (type == KM_REC_DELTA_LEGACY && count == 0u)) {
         return false;
     }
-    const uint32_t hdr = (type == KM_REC_SNAPSHOT) ? KM_REC_HDR_SNAPSHOT : KM_REC_HDR_LEGACY;
-    const uint32_t size = prv_round_up(hdr + count * KM_REC_ENTRY + KM_REC_CRC, c) + c;
-    if (!prv_need(r, size)) {
-        return false;
-    }
-    for (uint32_t i = size - c; i < size; i++) {
-        if (b[i] != 0x00u) {
-            return false;
-        }
-    }
-    if (!prv_crc_ok(b, size - c - KM_REC_CRC)) {
-        return false;
-    }
-    rec->type = type;
-    rec->count = count;
-    rec->size = size;
-    rec->entries = &b[hdr];
-    if (type == KM_REC_SNAPSHOT) {
-        rec->version = (uint16_t)prv_get(&b[2], 2u);
-        rec->gen = prv_get(&b[4], 4u);
-        rec->hash = prv_get(&b[8], 4u);
-    }
+    l->hdr = (type == KM_REC_SNAPSHOT) ? KM_REC_HDR_SNAPSHOT : KM_REC_HDR_LEGACY;
+    l->size = prv_round_up(l->hdr + count * KM_REC_ENTRY + KM_REC_CRC, c) + c;
+    l->crc_at = l->size - c - KM_REC_CRC;
+    l->from = l->size - c;
+    l->to = l->size;
+    l->fill = 0x00u;
     return true;
 }
 
@@ -224,13 +208,34 @@ bool km_rec_read(const km_flash_t *f, uint32_t page, uint32_t offset, uint8_t *b
     if (!prv_need(&r, 1u)) {
         return false;
     }
-    if ((buf[0] & PRV_DENSE_MASK) == KM_REC_DELTA) {
-        return prv_read_dense(&r, rec);
+    const uint8_t type = buf[0];
+    const bool dense = (type & PRV_DENSE_MASK) == KM_REC_DELTA;
+    if (!dense && type != KM_REC_SNAPSHOT && type != KM_REC_DELTA_LEGACY) {
+        return false;
     }
-    if (buf[0] == KM_REC_SNAPSHOT || buf[0] == KM_REC_DELTA_LEGACY) {
-        return prv_read_fixed(&r, rec);
+    const uint32_t count = dense ? (type & ~PRV_DENSE_MASK) + 1u : buf[1];
+    prv_layout_t l;
+    if (!prv_layout(&r, type, count, &l) || !prv_need(&r, l.size)) {
+        return false;
     }
-    return false;
+    for (uint32_t i = l.from; i < l.to; i++) {
+        if (buf[i] != l.fill) {
+            return false;
+        }
+    }
+    if (km_crc32(0u, buf, l.crc_at) != prv_get(&buf[l.crc_at], KM_REC_CRC)) {
+        return false;
+    }
+    rec->type = dense ? (uint8_t)KM_REC_DELTA : type;
+    rec->count = (uint8_t)count;
+    rec->size = l.size;
+    rec->entries = &buf[l.hdr];
+    if (type == KM_REC_SNAPSHOT) {
+        rec->version = (uint16_t)prv_get(&buf[2], 2u);
+        rec->gen = prv_get(&buf[4], 4u);
+        rec->hash = prv_get(&buf[8], 4u);
+    }
+    return true;
 }
 
 void km_rec_entry(const km_rec_t *rec, uint32_t *at, uint8_t *id, uint32_t *value, bool *indexed)
