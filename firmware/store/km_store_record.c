@@ -80,16 +80,11 @@ uint32_t km_rec_encode(uint8_t *buf, const km_rec_t *rec, const km_store_schema_
         if ((keys_mask & (1u << i)) == 0u) {
             continue;
         }
-        if (snap) {
-            buf[at] = schema->keys[i].key;
-            prv_put32(&buf[at + 1u], values[i]);
-            at += KM_REC_ENTRY;
-        } else {
-            const uint32_t len = prv_value_len(values[i]);
-            buf[at] = (uint8_t)(i | ((len - 1u) << PRV_IDX_LEN_SHIFT));
-            prv_put32(&buf[at + 1u], values[i]); /* the bytes past len are overwritten next */
-            at += 1u + len;
-        }
+        /* Snapshot: key, 4-byte value; dense: index and length, the value's fewest bytes. */
+        const uint32_t len = snap ? 4u : prv_value_len(values[i]);
+        buf[at] = snap ? schema->keys[i].key : (uint8_t)(i | ((len - 1u) << PRV_IDX_LEN_SHIFT));
+        prv_put32(&buf[at + 1u], values[i]); /* a dense entry's bytes past len are overwritten next */
+        at += 1u + len;
         count++;
     }
     if (!snap) {
