@@ -132,7 +132,7 @@ static uint8_t prv_target(uint32_t pages, uint8_t active, bool confirmed, uint32
     if (active == KM_STORE_NO_PAGE || pages == 0u) {
         return 0u;
     }
-    uint32_t t = ((uint32_t)active + 1u) % pages;
+    uint32_t t = (uint32_t)active + 1u < pages ? (uint32_t)active + 1u : 0u;
     if (confirmed || (valid & ~(1u << active)) == 0u) {
         return (uint8_t)t;
     }
@@ -140,7 +140,7 @@ static uint8_t prv_target(uint32_t pages, uint8_t active, bool confirmed, uint32
         return active;
     }
     while (t == active || t == anchor) {
-        t = (t + 1u) % pages;
+        t = t + 1u < pages ? t + 1u : 0u;
     }
     return (uint8_t)t;
 }
