@@ -156,26 +156,29 @@ static km_store_status_t prv_commit_state(km_store_t *s, const uint32_t *next)
             changed |= 1u << i;
         }
     }
-    bool ok;
-    if (!s->own) {
-        /* First commit of the session (or after a failure): always writes. */
-        ok = prv_compact(s, s->target, next);
-    } else if (changed == 0u) {
-        return KM_STORE_OK;
-    } else {
+    uint32_t target = s->target;
+    const uint32_t *state = next;
+    bool failed = false;
+    if (s->own) {
+        if (changed == 0u) {
+            return KM_STORE_OK;
+        }
         const prv_delta_t delta = prv_append_delta(s, next, changed);
-        if (delta == PRV_DELTA_NO_ROOM) {
-            ok = prv_compact(s, prv_next(s, s->active), next);
-        } else if (delta == PRV_DELTA_WRITTEN) {
-            ok = true;
-        } else {
+        if (delta == PRV_DELTA_WRITTEN) {
+            memcpy(s->values, next, s->schema->count * sizeof next[0]);
+            return KM_STORE_OK;
+        }
+        target = prv_next(s, s->active);
+        if (delta == PRV_DELTA_FAILED) {
             /* The record may be half there and read valid later, or not:
              * nothing may follow it. Put the old state in a fresh page now
              * if the flash lets us. */
-            (void)prv_compact(s, prv_next(s, s->active), s->values);
-            ok = false;
+            state = s->values;
+            failed = true;
         }
     }
+    /* Not own: the first commit of the session (or after a failure), which always writes. */
+    const bool ok = prv_compact(s, target, state) && !failed;
     if (!ok) {
         return KM_STORE_ERR_FLASH;
     }
