@@ -59,8 +59,11 @@ static bool prv_snapshot(km_store_t *s, uint32_t target, const uint32_t *state)
     s->own = false;
     s->erased &= ~prv_page_bit(target); /* programmed from here on */
     uint8_t buf[KM_REC_MAX_BYTES];
-    const km_rec_t hdr = {
-        .type = KM_REC_SNAPSHOT, .version = s->schema->version, .gen = s->gen + 1u, .hash = s->hash};
+    km_rec_t hdr; /* km_rec_encode reads only the header fields */
+    hdr.type = KM_REC_SNAPSHOT;
+    hdr.version = s->schema->version;
+    hdr.gen = s->gen + 1u;
+    hdr.hash = s->hash;
     const uint32_t size =
         km_rec_encode(buf, &hdr, s->schema, state, km_store_all_keys(s->schema), f->prog_size);
     static const uint8_t k_zero[KM_REC_MAX_CELL] = {0};
@@ -135,7 +138,8 @@ static __attribute__((noinline)) prv_delta_t prv_append_delta(km_store_t *s, con
                                                               uint32_t changed)
 {
     const km_flash_t *f = s->flash;
-    const km_rec_t hdr = {.type = KM_REC_DELTA, .version = 0u, .gen = 0u, .hash = 0u};
+    km_rec_t hdr; /* km_rec_encode reads only the type of a delta */
+    hdr.type = KM_REC_DELTA;
     uint8_t buf[KM_REC_MAX_BYTES];
     const uint32_t size = km_rec_encode(buf, &hdr, s->schema, next, changed, f->prog_size);
     if (size > f->page_size - s->tail) {

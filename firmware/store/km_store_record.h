@@ -53,8 +53,8 @@ uint32_t km_rec_snapshot_size(uint32_t count, uint32_t cell);
 uint32_t km_rec_delta_max_size(uint32_t count, uint32_t cell);
 
 /* Builds in buf the record of the keys in keys_mask (schema indices) with
- * their values; rec gives type (snapshot or delta), version, gen and hash.
- * Returns its size. */
+ * their values; rec gives the type (snapshot or delta) and, for a snapshot,
+ * version, gen and hash: no other field is read. Returns its size. */
 uint32_t km_rec_encode(uint8_t *buf, const km_rec_t *rec, const km_store_schema_t *schema,
                        const uint32_t *values, uint32_t keys_mask, uint32_t cell);
 
