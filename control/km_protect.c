@@ -22,9 +22,10 @@ static uint8_t prv_bit_number(uint8_t bit)
     return (uint8_t)((bit >> 1) - (bit >> 3));
 }
 
-static int32_t prv_abs(int32_t v)
+/* |v| as unsigned: exact for every v, INT32_MIN too (2^31). */
+static uint32_t prv_mag(int32_t v)
 {
-    return v < 0 ? (v == INT32_MIN ? INT32_MAX : -v) : v;
+    return v < 0 ? 0u - (uint32_t)v : (uint32_t)v;
 }
 
 void km_protect_init(km_protect_t *s)
@@ -65,13 +66,13 @@ static uint8_t prv_excursions(km_protect_t *s, const km_protect_in_t *in, const 
         over |= KM_PROT_TEMPERATURE;
     }
 
-    if (prv_abs(in->current_ma) > (int32_t)p->current_trip_ma) {
+    if (prv_mag(in->current_ma) > p->current_trip_ma) {
         over |= KM_PROT_CURRENT;
     }
 
-    if (prv_abs(in->drive_pwm) >= (int32_t)p->stall_pwm && p->stall_pwm != 0u) {
+    if (prv_mag(in->drive_pwm) >= p->stall_pwm && p->stall_pwm != 0u) {
         if (!s->stall_anchored ||
-            prv_abs(km_pos_diff(in->position, s->stall_anchor)) > KM_PROTECT_STALL_WINDOW) {
+            prv_mag(km_pos_diff(in->position, s->stall_anchor)) > KM_PROTECT_STALL_WINDOW) {
             /* first driven tick, or it moved on: timing starts again here */
             s->stall_anchor = in->position;
             if (s->stall_anchored) {
