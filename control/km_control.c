@@ -103,11 +103,12 @@ static bool prv_request_motor(km_control_t *c, const km_request_t *req, const km
     return true;
 }
 
-/* While protecting: only a request for less motion is taken; FREE/BRAKE
- * is what 0x64 returns to, a motor stop stays after the release. */
-static bool prv_request_protecting(km_control_t *c, const km_request_t *req, const km_control_params_t *p)
+/* While protecting: only a request for less motion (`less`) is taken;
+ * FREE/BRAKE is what 0x64 returns to, a motor stop stays after the release. */
+static bool prv_request_protecting(km_control_t *c, const km_request_t *req, const km_control_params_t *p,
+                                   bool less)
 {
-    if (!km_request_less_motion(req)) {
+    if (!less) {
         return false;
     }
     if (req->kind != KM_REQ_TORQUE) {
@@ -155,11 +156,12 @@ KM_COMPACT_NOINLINE bool km_control_request(km_control_t *c, const km_request_t 
     if (req->kind == KM_REQ_ZERO_POSITION) {
         return true; /* the dispatcher moves the offsets; nothing moves here */
     }
-    if (c->hw != 0u && !km_request_less_motion(req)) {
+    const bool less = km_request_less_motion(req);
+    if (c->hw != 0u && !less) {
         return false; /* §5.2 0x35: a hardware fault blocks motion until restart; a stop is taken */
     }
     if (c->action != KM_PROT_ACT_NONE) {
-        return prv_request_protecting(c, req, p);
+        return prv_request_protecting(c, req, p, less);
     }
     switch (req->kind) {
     case KM_REQ_TORQUE:
