@@ -29,20 +29,27 @@ void km_control_init(km_control_t *c, const km_control_params_t *p)
     c->bridge = km_output_bridge(p->power_on_brake ? KM_BRIDGE_BRAKE : KM_BRIDGE_FREE, 0, 0, false);
 }
 
+/* A position of the old frame in the new one: km_axis_map's value, which
+ * is sign x pos + where the old frame's 0 is in the new one, modulo 2^32. */
+static int32_t prv_map(int32_t sign, uint32_t zero, int32_t pos)
+{
+    return km_s32((uint32_t)sign * (uint32_t)pos + zero);
+}
+
 /* The speed estimates and the hold filter into the new frame. */
-static void prv_rebase_axis_speeds(km_control_t *c, const km_axis_t *was, const km_axis_t *now, int32_t sign)
+static void prv_rebase_axis_speeds(km_control_t *c, int32_t sign, uint32_t zero)
 {
     for (uint32_t k = 0; k < KM_SPEED_FAST_N; k++) {
-        c->fast.pos[k] = km_axis_map(was, now, c->fast.pos[k]);
+        c->fast.pos[k] = prv_map(sign, zero, c->fast.pos[k]);
     }
     c->fast.ddps *= sign;
     if (KM_FEATURE_STREAM_OBS) {
-        km_speed_obs_reset(&c->obs, km_axis_map(was, now, c->obs.base), c->fast.ddps);
+        km_speed_obs_reset(&c->obs, prv_map(sign, zero, c->obs.base), c->fast.ddps);
     }
-    c->speed.last_position = km_axis_map(was, now, c->speed.last_position);
+    c->speed.last_position = prv_map(sign, zero, c->speed.last_position);
     c->speed.acc *= sign;
     c->speed.dps *= sign;
-    c->hold.out = km_axis_map(was, now, c->hold.out);
+    c->hold.out = prv_map(sign, zero, c->hold.out);
     c->hold.frac *= sign;
 }
 
@@ -52,18 +59,19 @@ static void prv_rebase_axis(km_control_t *c, const km_axis_t *now)
 {
     const km_axis_t was = c->frame;
     const int32_t sign = km_axis_sign(&was, now);
+    const uint32_t zero = (uint32_t)km_axis_map(&was, now, 0);
     c->frame = *now;
     if (!c->have_position) {
         return;
     }
-    prv_rebase_axis_speeds(c, &was, now, sign);
-    c->position = km_axis_map(&was, now, c->position);
+    prv_rebase_axis_speeds(c, sign, zero);
+    c->position = prv_map(sign, zero, c->position);
     if (prv_motor_active(c)) {
         km_motor_mode_reaxis(&c->motor, &was, now);
     } else if (c->servo.ts == KM_TORQUE_ON) {
         const bool moving = c->servo.running;
         const int32_t held = moving ? km_profile_pos_ddeg(&c->servo.profile) : c->servo.target;
-        km_servo_mode_rebase(&c->servo, km_axis_map(&was, now, held));
+        km_servo_mode_rebase(&c->servo, prv_map(sign, zero, held));
         c->servo.running = moving;
         c->servo.reset_loop = false;
         c->loop.i_acc *= sign;
