@@ -98,6 +98,46 @@ static void test_s5_1_position_is_sensor_plus_both_zero_offsets(void **state)
     }
 }
 
+/* §5.1 0x16, 0x17 and 0x11 bit 2 changed while holding: every position
+ * control keeps (the reading, the speed estimates' samples, the hold
+ * filter, the held target) is the same shaft angle in the new frame,
+ * exactly km_axis_map's; the speeds and the integral change sign with the
+ * direction (docs/control-design.md). */
+static void test_s5_1_frame_change_maps_the_state_exactly(void **state)
+{
+    (void)state;
+    const km_control_params_t was_cfg = cfg_of(123, -45, 0x02, KM_TORQUE_ON);
+    const km_control_params_t now_cfg = cfg_of(-700, 31, 0x02 | 0x04, KM_TORQUE_ON);
+    km_control_init(&c, &was_cfg);
+    torque_switch(KM_TORQUE_ON, &was_cfg);
+    for (int32_t k = 0; k < 40; k++) {
+        km_sensors_t in = sensors_at(1000 + 7 * k);
+        in.voltage_mv = 7400; /* sound sensors: no hardware fault lets go */
+        in.temperature_c10 = 250;
+        (void)step(&in, &was_cfg, 1000);
+    }
+    const km_control_t before = c;
+    const km_axis_t was = km_axis_of(&was_cfg), now = km_axis_of(&now_cfg);
+    assert_int_equal(before.servo.ts, KM_TORQUE_ON);
+    assert_true(before.hold.on);
+    assert_int_not_equal(before.fast.ddps, 0);
+    km_request_t req;
+    memset(&req, 0, sizeof req);
+    req.kind = KM_REQ_ZERO_POSITION; /* follows the frame, moves nothing */
+    assert_true(km_control_request(&c, &req, &now_cfg));
+    for (uint32_t k = 0; k < KM_SPEED_FAST_N; k++) {
+        assert_int_equal(c.fast.pos[k], km_axis_map(&was, &now, before.fast.pos[k]));
+    }
+    assert_int_equal(c.speed.last_position, km_axis_map(&was, &now, before.speed.last_position));
+    assert_int_equal(c.hold.out, km_axis_map(&was, &now, before.hold.out));
+    assert_int_equal(c.position, km_axis_map(&was, &now, before.position));
+    assert_int_equal(c.servo.target, km_axis_map(&was, &now, before.servo.target));
+    assert_int_equal(c.fast.ddps, -before.fast.ddps);
+    assert_int_equal(c.speed.dps, -before.speed.dps);
+    assert_int_equal(c.hold.frac, -before.hold.frac);
+    assert_int_equal(c.loop.i_acc, -before.loop.i_acc);
+}
+
 /* §5.1 0x11 bit 2 direction: set, the reported position (offsets applied)
  * changes sign; clear, it does not. */
 static void test_s5_1_direction_bit_flips_position(void **state)
@@ -398,6 +438,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_s5_1_position_is_sensor_plus_both_zero_offsets),
+        cmocka_unit_test(test_s5_1_frame_change_maps_the_state_exactly),
         cmocka_unit_test(test_s5_1_direction_bit_flips_position),
         cmocka_unit_test(test_s5_1_power_on_output_bit0),
         cmocka_unit_test(test_s5_4_torque_switch_bridge_mode),
