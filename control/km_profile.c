@@ -472,7 +472,7 @@ bool km_profile_step(km_profile_t *p, uint32_t dt_us)
 int32_t km_profile_pos_ddeg(const km_profile_t *p)
 {
     const int32_t h = KM_PROFILE_U_PER_DDEG / 2;
-    const int32_t from = p->pos >= 0 ? km_sdiv1000(p->pos + h) : -km_sdiv1000(-p->pos + h);
+    const int32_t from = km_sdiv1000(p->pos >= 0 ? p->pos + h : p->pos - h); /* rounded half away from 0 */
     return km_pos_add(p->origin, from);
 }
 
