@@ -53,12 +53,15 @@ static int32_t prv_target_u(const km_profile_t *p, int32_t ddeg)
 
 int32_t km_profile_reach(const km_profile_t *p, int32_t target_ddeg)
 {
-    /* near the origin: within the span without a divide */
+#if !KM_CONTROL_COMPACT
+    /* near the origin: within the span without a divide (the compact
+     * build divides: the general case below gives the same target) */
     const int32_t rel = km_pos_diff(target_ddeg, p->origin);
     const int32_t easy = KM_PROFILE_SPAN_DDEG - KM_PROFILE_ORIGIN_DDEG;
     if (p->pos < PRV_NEAR_U && p->pos >= -PRV_NEAR_U && rel <= easy && rel >= -easy) {
         return target_ddeg;
     }
+#endif
     const int32_t at = km_profile_pos_ddeg(p);
     const int32_t d = km_pos_diff(target_ddeg, at);
     if (d > KM_PROFILE_SPAN_DDEG) {
