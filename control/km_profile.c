@@ -185,7 +185,7 @@ static int32_t prv_brake_accel(int32_t v0, int32_t dabs, int32_t acc)
     if (need * 1000u <= (uint32_t)acc) {
         return acc;
     }
-    return need > (uint32_t)km_sdiv1000(ACCEL_MAX) ? ACCEL_MAX : (int32_t)need * 1000;
+    return need > (uint32_t)(ACCEL_MAX / 1000) ? ACCEL_MAX : (int32_t)need * 1000;
 }
 
 void km_profile_retime(km_profile_t *p, int32_t target_ddeg, uint32_t time_ms, int32_t vlimit_ups,
