@@ -98,15 +98,17 @@ static uint8_t prv_action_bits(const km_control_params_t *p, uint8_t bit)
 static void prv_time(km_protect_t *s, uint8_t over, uint8_t enabled, const km_control_params_t *p,
                      uint32_t dt_us, km_protect_events_t *ev)
 {
-    for (uint8_t dropped = (uint8_t)(s->timing & ~enabled); dropped != 0u;
-         dropped &= (uint8_t)(dropped - 1u)) {
-        s->timer_us[prv_bit_number((uint8_t)(dropped & (0u - dropped)))] = 0u;
-    }
+    const uint8_t pending = (uint8_t)((over | s->active | s->timing) & enabled);
     uint8_t timing = 0;
-    for (uint8_t pending = (uint8_t)((over | s->active | s->timing) & enabled); pending != 0u;
-         pending &= (uint8_t)(pending - 1u)) {
-        const uint8_t bit = (uint8_t)(pending & (0u - pending));
-        uint32_t *const timer = &s->timer_us[prv_bit_number(bit)];
+    for (unsigned i = 0; i < PRV_N; i++) { /* bit i's timer is timer_us[i] */
+        const uint8_t bit = (uint8_t)(1u << i);
+        uint32_t *const timer = &s->timer_us[i];
+        if ((pending & bit) == 0u) {
+            if ((s->timing & bit) != 0u) {
+                *timer = 0u; /* disabled while being timed: dropped */
+            }
+            continue;
+        }
         uint32_t t = *timer;
         if ((over & bit) != 0u) {
             const uint32_t t_detect = km_protect_detect_us(p, bit);
