@@ -104,8 +104,8 @@ bool km_servo_mode_torque(km_servo_mode_t *m, km_torque_t torque, int32_t positi
 }
 
 /* Starts the profile toward `target` (clamped) the way the move asks. */
-static void prv_plan(km_servo_mode_t *m, const km_move_t *mv, const km_control_params_t *p, int32_t target,
-                     bool was_on)
+static KM_COMPACT_NOINLINE void prv_plan(km_servo_mode_t *m, const km_move_t *mv,
+                                         const km_control_params_t *p, int32_t target, bool was_on)
 {
     const int32_t vlim = prv_vlimit(p);
     switch (mv->kind) {
