@@ -130,8 +130,8 @@ static KM_COMPACT_NOINLINE void prv_plan(km_servo_mode_t *m, const km_move_t *mv
     }
 }
 
-bool km_servo_mode_move(km_servo_mode_t *m, const km_move_t *mv, const km_control_params_t *p,
-                        int32_t position)
+KM_COMPACT_NOINLINE bool km_servo_mode_move(km_servo_mode_t *m, const km_move_t *mv,
+                                            const km_control_params_t *p, int32_t position)
 {
     if (m->ts != KM_TORQUE_ON && m->ts != KM_TORQUE_ARMED) {
         return false; /* torque off or protecting */
