@@ -92,15 +92,41 @@ static uint8_t prv_action_bits(const km_control_params_t *p, uint8_t bit)
     return (uint8_t)((p->prot_state >> (2u * prv_bit_number(bit))) & 3u);
 }
 
-/* The up/down timer of each protection that is over, active or being
- * timed (a disabled one's timer dropped): trips at the detection time,
- * releases automatically when it counted back to 0 (0x33 bit clear). */
+/* Protection `bit`'s up/down timer `t` after this tick (`over`: its
+ * excursion is present): trips at the detection time, releases
+ * automatically when it counted back to 0 (0x33 bit clear). */
+static uint32_t prv_time_one(km_protect_t *s, uint8_t bit, uint32_t t, bool over,
+                             const km_control_params_t *p, uint32_t dt_us, km_protect_events_t *ev)
+{
+    if (over) {
+        const uint32_t t_detect = km_protect_detect_us(p, bit);
+        t += dt_us;
+        if (t >= t_detect) {
+            t = t_detect;
+            if ((s->active & bit) == 0u) {
+                s->active |= bit;
+                ev->tripped |= bit;
+            }
+        }
+    } else {
+        t = t > dt_us ? t - dt_us : 0u;
+        if (t == 0u && (s->active & bit) != 0u && (p->prot_release & bit) == 0u) {
+            s->active &= (uint8_t)~bit; /* automatic release: absent for T */
+            ev->released |= bit;
+        }
+    }
+    return t;
+}
+
+/* The timer of each protection that is over, active or being timed (a
+ * disabled one's timer dropped): prv_time_one. */
 static void prv_time(km_protect_t *s, uint8_t over, uint8_t enabled, const km_control_params_t *p,
                      uint32_t dt_us, km_protect_events_t *ev)
 {
     const uint8_t pending = (uint8_t)((over | s->active | s->timing) & enabled);
     uint8_t timing = 0;
-    for (unsigned i = 0; i < PRV_N; i++) { /* bit i's timer is timer_us[i] */
+#if KM_CONTROL_COMPACT
+    for (unsigned i = 0; i < PRV_N; i++) { /* every index, one pass (flash); bit i's timer is timer_us[i] */
         const uint8_t bit = (uint8_t)(1u << i);
         uint32_t *const timer = &s->timer_us[i];
         if ((pending & bit) == 0u) {
@@ -109,29 +135,27 @@ static void prv_time(km_protect_t *s, uint8_t over, uint8_t enabled, const km_co
             }
             continue;
         }
-        uint32_t t = *timer;
-        if ((over & bit) != 0u) {
-            const uint32_t t_detect = km_protect_detect_us(p, bit);
-            t += dt_us;
-            if (t >= t_detect) {
-                t = t_detect;
-                if ((s->active & bit) == 0u) {
-                    s->active |= bit;
-                    ev->tripped |= bit;
-                }
-            }
-        } else {
-            t = t > dt_us ? t - dt_us : 0u;
-            if (t == 0u && (s->active & bit) != 0u && (p->prot_release & bit) == 0u) {
-                s->active &= (uint8_t)~bit; /* automatic release: absent for T */
-                ev->released |= bit;
-            }
-        }
+        const uint32_t t = prv_time_one(s, bit, *timer, (over & bit) != 0u, p, dt_us, ev);
         *timer = t;
         if (t != 0u) {
             timing |= bit;
         }
     }
+#else
+    for (uint8_t dropped = (uint8_t)(s->timing & ~enabled); dropped != 0u;
+         dropped &= (uint8_t)(dropped - 1u)) { /* the set bits only (tick instructions) */
+        s->timer_us[prv_bit_number((uint8_t)(dropped & (0u - dropped)))] = 0u;
+    }
+    for (uint8_t rest = pending; rest != 0u; rest &= (uint8_t)(rest - 1u)) {
+        const uint8_t bit = (uint8_t)(rest & (0u - rest));
+        uint32_t *const timer = &s->timer_us[prv_bit_number(bit)];
+        const uint32_t t = prv_time_one(s, bit, *timer, (over & bit) != 0u, p, dt_us, ev);
+        *timer = t;
+        if (t != 0u) {
+            timing |= bit;
+        }
+    }
+#endif
     s->timing = timing;
 }
 
