@@ -130,9 +130,7 @@ static void prv_time(km_protect_t *s, uint8_t over, uint8_t enabled, const km_co
         const uint8_t bit = (uint8_t)(1u << i);
         uint32_t *const timer = &s->timer_us[i];
         if ((pending & bit) == 0u) {
-            if ((s->timing & bit) != 0u) {
-                *timer = 0u; /* disabled while being timed: dropped */
-            }
+            *timer = 0u; /* dropped if it was being timed, else 0 already (docs/footprint.md) */
             continue;
         }
         const uint32_t t = prv_time_one(s, bit, *timer, (over & bit) != 0u, p, dt_us, ev);
