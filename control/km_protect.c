@@ -58,10 +58,8 @@ static uint8_t prv_excursions(km_protect_t *s, const km_protect_in_t *in, const 
         over |= KM_PROT_VOLTAGE;
     }
 
-    int32_t temp_limit_c10 = (int32_t)p->temp_trip_c * 10;
-    if ((s->active & KM_PROT_TEMPERATURE) != 0u) {
-        temp_limit_c10 -= (int32_t)p->temp_hysteresis_c * 10;
-    }
+    const int32_t hysteresis_c = (s->active & KM_PROT_TEMPERATURE) != 0u ? (int32_t)p->temp_hysteresis_c : 0;
+    const int32_t temp_limit_c10 = ((int32_t)p->temp_trip_c - hysteresis_c) * 10;
     if (in->temperature_c10 >= temp_limit_c10) {
         over |= KM_PROT_TEMPERATURE;
     }
