@@ -85,6 +85,7 @@ class Image:
         self.map_path = Path(map_path) if map_path else self.elf.with_suffix(".map")
         self.funcs = {}
         self.symbols = {}   # name -> address, every defined symbol
+        self.symbol_sizes = {}  # name -> st_size of that symbol
         self.sections = []  # (addr, size, obj, section name) of every map input section
         self._read_symbols()
         self._read_map()
@@ -99,6 +100,7 @@ class Image:
                 continue
             addr, size, kind, bind, name = int(parts[1], 16), int(parts[2], 0), parts[3], parts[4], parts[7]
             self.symbols.setdefault(name, addr)
+            self.symbol_sizes.setdefault(name, size)
             if kind != "FUNC":
                 continue
             a = addr & ~1
