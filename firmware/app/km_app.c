@@ -122,19 +122,23 @@ static inline prv_rx_t *prv_rx(void)
     return rx;
 }
 
-/* Ticks per microsecond, fixed at init (the hal tick is whole MHz). */
-static uint32_t s_ticks_per_us = 1u;
-static uint32_t s_ticks_us_shift; /* log2(s_ticks_per_us), or 32: not a power of two */
+/* Ticks per microsecond: every hal's tick is whole MHz (a constant where the
+ * link inlines km_hal_time_tick_hz). */
+static inline uint32_t prv_ticks_per_us(void)
+{
+    return km_hal_time_tick_hz() / 1000000u;
+}
 
 static uint32_t prv_us_to_ticks(uint32_t us)
 {
-    return us * s_ticks_per_us;
+    return us * prv_ticks_per_us();
 }
 
-/* Ticks to whole microseconds: a shift when the tick is 2^n MHz. */
+/* Ticks to whole microseconds (no division for a 1 MHz tick, as every hal's). */
 static uint32_t prv_ticks_to_us(uint32_t ticks)
 {
-    return s_ticks_us_shift < 32u ? ticks >> s_ticks_us_shift : ticks / s_ticks_per_us;
+    const uint32_t per_us = prv_ticks_per_us();
+    return per_us == 1u ? ticks : ticks / per_us;
 }
 
 /* Arms the timer to send s_tx_len bytes of s_reply `delay_us` after `frame_end`. */
@@ -495,13 +499,6 @@ __attribute__((noinline)) void km_app_init(void)
     km_hal_time_init();
     km_hal_motor_init();
     km_hal_sensors_init();
-    s_ticks_per_us = km_hal_time_tick_hz() / 1000000u;
-    s_ticks_us_shift = 32u;
-    for (uint32_t shift = 0u; shift < 32u; shift++) {
-        if ((1u << shift) == s_ticks_per_us) {
-            s_ticks_us_shift = shift;
-        }
-    }
 
     const km_product_t *product = km_board_product();
     uint32_t persisted[KM_USERDATA_MAX];
