@@ -8,7 +8,7 @@
 #include "g0_core.h"
 #include "g0_vectors.h"
 
-extern uint32_t _sidata, _sdata, _edata, _sbss, _ebss, _estack;
+extern uint32_t _sbss, _ebss, _estack; /* no .data: stm32g031_sections.ld asserts none */
 extern uint32_t _siramfunc, _sramfunc, _eramfunc;
 extern uint32_t __ram_vectors[];
 extern int main(void);
@@ -150,7 +150,7 @@ static inline void prv_ram_vectors(void)
 #endif
 _Static_assert(sizeof s_vectors <= G0_VECTOR_COUNT * sizeof(uint32_t), "the flash table fits the RAM one");
 
-/* RAM vectors and .ramfunc, VTOR, .data, .bss, stack paint, reset cause, main(). */
+/* RAM vectors and .ramfunc, VTOR, .bss, stack paint, reset cause, main(). */
 void Reset_Handler(void)
 {
     prv_ram_vectors();
@@ -162,10 +162,6 @@ void Reset_Handler(void)
     __asm volatile("dsb" ::: "memory");
     SCB_VTOR = (uint32_t)(uintptr_t)__ram_vectors;
     __asm volatile("dsb\n\tisb" ::: "memory");
-    src = &_sidata;
-    for (uint32_t *dst = &_sdata; dst < &_edata;) {
-        *dst++ = *src++;
-    }
     for (uint32_t *dst = &_sbss; dst < &_ebss;) {
         *dst++ = 0u;
     }
