@@ -37,8 +37,6 @@ typedef struct {
     km_rx_queue_t q;
 } prv_rx_t;
 static prv_rx_t s_rx;
-/* Set by the RX interrupt when the main loop must parse. */
-static volatile bool s_wake;
 static km_parser_t s_parser;
 static km_parser_out_t s_out; /* the frame the parser hands out: a view */
 static km_servo_t s_servo;
@@ -50,38 +48,41 @@ static km_control_params_t s_params; /* the control registers, decoded */
 #if KM_FEATURE_EXT
 static km_fault_log_t s_fault_log __attribute__((section(".noinit")));
 #endif
-static uint32_t s_params_gen; /* km_servo_params_gen() they were decoded at */
-static uint32_t s_next_tick;  /* the next control tick's grid point, a period after the last one's */
-static uint32_t s_tick_period;
-static uint32_t s_ticks; /* control ticks run since init */
-
-static uint16_t s_tx_len; /* bytes of s_reply armed or being sent */
-static volatile bool s_tx_armed;
-static uint32_t s_armed_frame_end; /* the armed answer's frame end tick */
-static uint32_t s_armed_delay_us;  /* and the delay it asked for */
-/* The answer that started, copied together by the timer interrupt. */
-static volatile uint32_t s_answer_frame_end;
-static volatile uint32_t s_answer_delay_us;
-static volatile uint32_t s_answer_start; /* tick the answer's first byte was handed to the UART */
-static volatile bool s_answer_started;
-static volatile uint32_t s_tx_refused; /* answers the UART would not take (diagnostic) */
-
-/* Why the parser is held, one byte so that "held at all" is one load: a
- * frame that may be answered, waiting for the answer on the wire to end (no
- * frame is parsed meanwhile), and a 0x02 restart pending. */
+/* The main loop's and its interrupts' scalars in one object: every
+ * function reaches them from one base (docs/footprint.md "STM32G031F6"). */
+typedef struct {
+    volatile bool wake; /* set by the RX interrupt when the main loop must parse */
+    volatile bool tx_armed;
+    volatile bool answer_started;
+    /* Why the parser is held, one byte so that "held at all" is one load: a
+     * frame that may be answered, waiting for the answer on the wire to end (no
+     * frame is parsed meanwhile), and a 0x02 restart pending. */
+    uint8_t rx_hold;
+    bool boot_confirmed; /* km_board_boot_confirm() was called */
+    bool store_prepare;  /* the store needs preparing in idle time this session */
+    uint16_t tx_len;     /* bytes of s_reply armed or being sent */
+    uint32_t params_gen; /* km_servo_params_gen() the control parameters were decoded at */
+    uint32_t next_tick;  /* the next control tick's grid point, a period after the last one's */
+    uint32_t tick_period;
+    uint32_t ticks;           /* control ticks run since init */
+    uint32_t armed_frame_end; /* the armed answer's frame end tick */
+    uint32_t armed_delay_us;  /* and the delay it asked for */
+    /* The answer that started, copied together by the timer interrupt. */
+    volatile uint32_t answer_frame_end;
+    volatile uint32_t answer_delay_us;
+    volatile uint32_t answer_start; /* tick the answer's first byte was handed to the UART */
+    volatile uint32_t tx_refused;   /* answers the UART would not take (diagnostic) */
+    uint32_t frame_release;         /* the waiting frame's queue bytes, released once handled */
+    uint32_t confirm_at;            /* tick at which the start is confirmed */
+} prv_app_t;
+static prv_app_t s_app;
 #define PRV_HOLD_FRAME 1u
 #define PRV_HOLD_RESTART 2u
-static uint8_t s_rx_hold;
-static uint32_t s_frame_release; /* the waiting frame's queue bytes, released once handled */
-static bool s_boot_confirmed;    /* km_board_boot_confirm() was called */
-/* The store needs preparing in idle time this session. */
-static bool s_store_prepare;
-static uint32_t s_confirm_at; /* tick at which the start is confirmed */
 
 /* The main loop must parse: woken (docs/benchmarks.md "Per byte"). */
 static void ISR_rx_wake(void)
 {
-    s_wake = true;
+    s_app.wake = true;
     km_hal_wake();
 }
 
@@ -102,15 +103,15 @@ static void ISR_rx_byte(void *ctx, uint8_t byte, uint32_t tick, bool lost)
 static void ISR_answer_due(void *ctx)
 {
     (void)ctx;
-    s_tx_armed = false;
-    if (km_hal_uart_send(s_reply.bytes, s_tx_len)) {
-        s_answer_start = km_hal_time_now();
-        s_answer_frame_end = s_armed_frame_end;
-        s_answer_delay_us = s_armed_delay_us;
-        s_answer_started = true;
+    s_app.tx_armed = false;
+    if (km_hal_uart_send(s_reply.bytes, s_app.tx_len)) {
+        s_app.answer_start = km_hal_time_now();
+        s_app.answer_frame_end = s_app.armed_frame_end;
+        s_app.answer_delay_us = s_app.armed_delay_us;
+        s_app.answer_started = true;
         km_hal_wake();
     } else {
-        s_tx_refused++;
+        s_app.tx_refused++;
     }
 }
 
@@ -141,12 +142,12 @@ static uint32_t prv_ticks_to_us(uint32_t ticks)
     return per_us == 1u ? ticks : ticks / per_us;
 }
 
-/* Arms the timer to send s_tx_len bytes of s_reply `delay_us` after `frame_end`. */
+/* Arms the timer to send s_app.tx_len bytes of s_reply `delay_us` after `frame_end`. */
 static void prv_arm_answer(uint32_t frame_end, uint32_t delay_us)
 {
-    s_tx_armed = true;
-    s_armed_frame_end = frame_end;
-    s_armed_delay_us = delay_us;
+    s_app.tx_armed = true;
+    s_app.armed_frame_end = frame_end;
+    s_app.armed_delay_us = delay_us;
     km_hal_timer_at(frame_end + prv_us_to_ticks(delay_us), ISR_answer_due, NULL);
 }
 
@@ -161,15 +162,15 @@ __attribute__((weak)) void km_app_answer_started(uint32_t frame_end, uint32_t st
 /* Hands the last answer's timing to the hook (top of a pass, after each frame). */
 static void prv_report_answer(void)
 {
-    if (!s_answer_started) {
+    if (!s_app.answer_started) {
         return;
     }
     /* one consistent record */
     const uint32_t irq = km_hal_irq_lock();
-    const uint32_t frame_end = s_answer_frame_end;
-    const uint32_t start = s_answer_start;
-    const uint32_t delay_us = s_answer_delay_us;
-    s_answer_started = false;
+    const uint32_t frame_end = s_app.answer_frame_end;
+    const uint32_t start = s_app.answer_start;
+    const uint32_t delay_us = s_app.answer_delay_us;
+    s_app.answer_started = false;
     km_hal_irq_restore(irq);
     km_app_answer_started(frame_end, start, delay_us);
 }
@@ -182,17 +183,17 @@ static bool prv_on_frame(void)
     bool held = false;
     if (km_servo_may_answer(&s_servo, frame)) {
         km_hal_timer_cancel(); /* then s_reply is armed-and-unsent or already sending */
-        if (!s_tx_armed && km_hal_uart_tx_busy()) {
+        if (!s_app.tx_armed && km_hal_uart_tx_busy()) {
             return false;
         }
-        held = s_tx_armed;
+        held = s_app.tx_armed;
     }
     km_servo_handle_view(&s_servo, frame, &s_reply);
     if (s_reply.len > 0) {
-        s_tx_len = s_reply.len;
+        s_app.tx_len = s_reply.len;
         prv_arm_answer(frame->end_tick, s_reply.delay_us);
     } else if (held) {
-        prv_arm_answer(s_armed_frame_end, s_armed_delay_us);
+        prv_arm_answer(s_app.armed_frame_end, s_app.armed_delay_us);
     }
     prv_report_answer();
     return true;
@@ -205,23 +206,23 @@ static void prv_on_events(unsigned events)
         km_servo_note_checksum_error(&s_servo);
     }
     if ((events & KM_PARSE_FRAME) && !prv_on_frame()) {
-        s_rx_hold |= PRV_HOLD_FRAME;
+        s_app.rx_hold |= PRV_HOLD_FRAME;
     }
 }
 
 /* True while the parser must not be fed: a restart or a waiting frame. */
 static inline __attribute__((always_inline)) bool prv_rx_blocked(void)
 {
-    return s_rx_hold != 0u;
+    return s_app.rx_hold != 0u;
 }
 
 /* The waiting frame, once the answer on the wire has ended: handled, its queue bytes released. */
 static void prv_take_waiting_frame(void)
 {
-    if ((s_rx_hold & PRV_HOLD_FRAME) != 0u && prv_on_frame()) {
-        s_rx_hold &= (uint8_t)~PRV_HOLD_FRAME;
-        km_rx_queue_release(&prv_rx()->q, s_frame_release);
-        s_frame_release = 0u;
+    if ((s_app.rx_hold & PRV_HOLD_FRAME) != 0u && prv_on_frame()) {
+        s_app.rx_hold &= (uint8_t)~PRV_HOLD_FRAME;
+        km_rx_queue_release(&prv_rx()->q, s_app.frame_release);
+        s_app.frame_release = 0u;
     }
 }
 
@@ -249,8 +250,8 @@ static void prv_drain_rx(void)
 {
     uint32_t budget = KM_APP_RX_BUDGET;
     km_rx_run_t run;
-    const bool woken = s_wake;
-    s_wake = false; /* before looking: a later byte's wake-up is kept */
+    const bool woken = s_app.wake;
+    s_app.wake = false; /* before looking: a later byte's wake-up is kept */
     while (budget > 0u && !prv_rx_blocked() && km_rx_queue_peek(&prv_rx()->q, &run)) {
         if (!woken && budget == KM_APP_RX_BUDGET && prv_rx_mid_frame()) {
             return; /* the first run: a frame still arriving stays queued */
@@ -264,8 +265,8 @@ static void prv_drain_rx(void)
         if (events != 0u) {
             prv_on_events(events);
         }
-        if ((s_rx_hold & PRV_HOLD_FRAME) != 0u) {
-            s_frame_release = used; /* the frame may be a view of these bytes */
+        if ((s_app.rx_hold & PRV_HOLD_FRAME) != 0u) {
+            s_app.frame_release = used; /* the frame may be a view of these bytes */
             return;
         }
         km_rx_queue_release(&prv_rx()->q, used);
@@ -282,7 +283,7 @@ static void prv_drain_rx(void)
 /* 0x02 restart: due once an earlier answer has gone out. */
 static inline __attribute__((always_inline)) bool prv_restart_ready(void)
 {
-    return s_rx_hold == PRV_HOLD_RESTART && !s_tx_armed && !km_hal_uart_tx_busy();
+    return s_app.rx_hold == PRV_HOLD_RESTART && !s_app.tx_armed && !km_hal_uart_tx_busy();
 }
 
 /* The control state through a register: the inlined control code then reaches
@@ -298,9 +299,9 @@ static inline km_control_t *prv_control(void)
 static const km_control_params_t *prv_params(void)
 {
     const uint32_t gen = km_servo_params_gen(&s_servo);
-    if (gen != s_params_gen) {
+    if (gen != s_app.params_gen) {
         km_servo_control_params(&s_servo, &s_params);
-        s_params_gen = gen;
+        s_app.params_gen = gen;
     }
     return &s_params;
 }
@@ -361,9 +362,9 @@ static bool prv_idle_flash_work(uint32_t now)
         now - s_parser.last_tick < prv_us_to_ticks(KM_APP_FLASH_QUIET_US)) {
         return false;
     }
-    if (s_store_prepare) {
-        s_store_prepare = km_app_userdata_prepare();
-        if (s_store_prepare) {
+    if (s_app.store_prepare) {
+        s_app.store_prepare = km_app_userdata_prepare();
+        if (s_app.store_prepare) {
             return true;
         }
     }
@@ -373,7 +374,7 @@ static bool prv_idle_flash_work(uint32_t now)
 static void prv_ops_restart(void *ctx)
 {
     (void)ctx;
-    s_rx_hold |= PRV_HOLD_RESTART;
+    s_app.rx_hold |= PRV_HOLD_RESTART;
 }
 
 static bool prv_ops_request(void *ctx, const km_request_t *req)
@@ -455,8 +456,8 @@ __attribute__((weak)) bool km_board_store_prepare_each_boot(void)
 /* docs/update.md §3a: confirms the start once, after KM_APP_CONFIRM_US. */
 static void prv_confirm_boot(uint32_t now)
 {
-    if (!s_boot_confirmed && (int32_t)(now - s_confirm_at) >= 0) {
-        s_boot_confirmed = true;
+    if (!s_app.boot_confirmed && (int32_t)(now - s_app.confirm_at) >= 0) {
+        s_app.boot_confirmed = true;
         km_board_boot_confirm();
     }
 }
@@ -486,12 +487,12 @@ static uint32_t prv_open_bus(uint32_t baud)
 /* noinline: its boot-time locals off the main loop's stack (docs/footprint.md "STM32G031F6"). */
 __attribute__((noinline)) void km_app_init(void)
 {
-    s_tx_armed = false;
-    s_answer_started = false;
-    s_tx_refused = 0;
-    s_rx_hold = 0u;
-    s_frame_release = 0u;
-    s_boot_confirmed = false;
+    s_app.tx_armed = false;
+    s_app.answer_started = false;
+    s_app.tx_refused = 0;
+    s_app.rx_hold = 0u;
+    s_app.frame_release = 0u;
+    s_app.boot_confirmed = false;
 
     km_hal_system_init();
     /* first: a hang anywhere later resets */
@@ -505,14 +506,14 @@ __attribute__((noinline)) void km_app_init(void)
     const km_store_mount_t mount = km_app_userdata_mount(km_board_flash(), product, persisted);
     km_servo_init(&s_servo, product, persisted, km_hal_entropy(), &s_ops);
     km_servo_set_userdata_source(&s_servo, (uint8_t)mount);
-    s_store_prepare = mount != KM_STORE_MOUNT_ERR_ARG &&
-                      (mount != KM_STORE_MOUNT_LOADED || km_board_store_prepare_each_boot());
+    s_app.store_prepare = mount != KM_STORE_MOUNT_ERR_ARG &&
+                          (mount != KM_STORE_MOUNT_LOADED || km_board_store_prepare_each_boot());
 #if KM_FEATURE_EXT
     km_servo_set_reset_cause(&s_servo, (uint8_t)km_hal_reset_cause());
     (void)km_fault_log_boot(&s_fault_log);
 #endif
     km_servo_control_params(&s_servo, &s_params);
-    s_params_gen = km_servo_params_gen(&s_servo);
+    s_app.params_gen = km_servo_params_gen(&s_servo);
     km_control_init(prv_control(), &s_params);
 
     km_rx_queue_init(&prv_rx()->q);
@@ -522,11 +523,11 @@ __attribute__((noinline)) void km_app_init(void)
     km_parser_init(&s_parser, prv_us_to_ticks(km_parser_default_gap_us(baud)));
     prv_rx()->track.gap_ticks = s_parser.gap_ticks;
 
-    s_ticks = 0u;
+    s_app.ticks = 0u;
     const uint32_t now = km_hal_time_now();
-    s_tick_period = prv_us_to_ticks(KM_APP_TICK_US);
-    s_next_tick = now; /* the first tick at once, a period after the grid's point before it */
-    s_confirm_at = now + prv_us_to_ticks(KM_APP_CONFIRM_US);
+    s_app.tick_period = prv_us_to_ticks(KM_APP_TICK_US);
+    s_app.next_tick = now; /* the first tick at once, a period after the grid's point before it */
+    s_app.confirm_at = now + prv_us_to_ticks(KM_APP_CONFIRM_US);
 }
 
 /* Emulated buses: the gap floor raises the parser's rule at the open baud. */
@@ -544,7 +545,7 @@ void km_app_set_bus_floors(uint32_t gap_floor_us, uint32_t slot_floor_us)
 /* True when the control tick is due at `now`. */
 static bool prv_tick_due(uint32_t now)
 {
-    return (int32_t)(now - s_next_tick) >= 0;
+    return (int32_t)(now - s_app.next_tick) >= 0;
 }
 
 /* The grid time, in ticks, from the last control tick to this one, due at
@@ -553,13 +554,13 @@ static bool prv_tick_due(uint32_t now)
  * "Control tick"). */
 static uint32_t prv_next_tick(uint32_t now)
 {
-    const uint32_t period = s_tick_period, due = s_next_tick;
+    const uint32_t period = s_app.tick_period, due = s_app.next_tick;
     if (now - due < period / 2u) {
-        s_next_tick = due + period;
+        s_app.next_tick = due + period;
         return period;
     }
     const uint32_t at = now - period / 8u; /* this tick's grid point, moved */
-    s_next_tick = at + period;
+    s_app.next_tick = at + period;
     return at - due + period;
 }
 
@@ -579,7 +580,7 @@ static void prv_sleep(uint32_t irq, bool queued)
     }
     do {
         km_hal_sleep(irq); /* the interrupts run in it; the caller restores irq */
-    } while (!s_wake && !s_answer_started && !prv_tick_due(km_hal_time_now()));
+    } while (!s_app.wake && !s_app.answer_started && !prv_tick_due(km_hal_time_now()));
 }
 
 /* The control tick due at `now`, the watchdog and the boot's confirmation;
@@ -590,11 +591,11 @@ static void prv_sleep(uint32_t irq, bool queued)
 static bool prv_tick(uint32_t now)
 {
     const uint32_t dt_ticks = prv_next_tick(now);
-    s_ticks++;
+    s_app.ticks++;
     prv_control_tick(dt_ticks);
     km_hal_watchdog_kick();
     prv_confirm_boot(now);
-    return km_parser_empty(&s_parser) && !s_answer_started;
+    return km_parser_empty(&s_parser) && !s_app.answer_started;
 }
 
 /* Sleeps unless work came: checked under the lock, WFI still wakes on a pending IRQ. */
@@ -602,8 +603,8 @@ static void prv_sleep_unless_work(void)
 {
     const uint32_t irq = km_hal_irq_lock();
     const bool queued = !km_rx_queue_empty(&prv_rx()->q);
-    const bool rx_work = !prv_rx_blocked() && queued && (s_wake || !prv_rx_mid_frame());
-    const bool tx_work = (s_rx_hold & PRV_HOLD_FRAME) != 0u && !km_hal_uart_tx_busy();
+    const bool rx_work = !prv_rx_blocked() && queued && (s_app.wake || !prv_rx_mid_frame());
+    const bool tx_work = (s_app.rx_hold & PRV_HOLD_FRAME) != 0u && !km_hal_uart_tx_busy();
     if (!rx_work && !tx_work && !prv_restart_ready()) {
         prv_sleep(irq, queued);
     }
@@ -625,7 +626,7 @@ __attribute__((noinline)) void km_app_poll(void)
         if (!prv_tick(now)) {
             return;
         }
-        flash_slot = (s_ticks & KM_APP_FLASH_EVERY_MASK) == KM_APP_FLASH_SLOT;
+        flash_slot = (s_app.ticks & KM_APP_FLASH_EVERY_MASK) == KM_APP_FLASH_SLOT;
     }
     if (!flash_slot || !prv_idle_flash_work(now)) {
         prv_sleep_unless_work();
@@ -641,7 +642,7 @@ km_fault_log_t *km_app_fault_log(void)
 
 uint32_t km_app_tx_refused(void)
 {
-    return s_tx_refused;
+    return s_app.tx_refused;
 }
 
 const km_servo_t *km_app_servo(void)
