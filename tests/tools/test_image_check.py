@@ -142,6 +142,17 @@ class ImageCheckTest(unittest.TestCase):
             self.assertIn(f"application {size:,} + {header} B header = {size + header:,} B", out)
             elf.with_suffix(".bin").unlink()
 
+    def test_vector_count_defaults_to_the_table_symbol_size(self):
+        """Without "count" the table is as long as its symbol (the 32 KiB
+        STM32G031 build's 8-word flash table, startup.c): its handlers are
+        still found, each at its interrupt's priority."""
+        cfg = self.config()
+        del cfg["vectors"]["count"]
+        rc, out = self.check(self.build(), cfg)
+        self.assertEqual(rc, 0, out)
+        self.assertIn("PASS stack", out)
+        self.assertRegex(out, r"priority +0: Irq_Handler")
+
     def test_heap_fails(self):
         rc, out = self.check(self.build("WITH_MALLOC"), self.config())
         self.assertEqual(rc, 1, out)
