@@ -141,8 +141,8 @@ option(KM_G031_SHORT_HEADER "stm32g031: 32-byte application header, vector table
 if(KM_G031_SHORT_HEADER)
   set(KM_G031_APP_HEADER 32)
   # No exception but reset, NMI and HardFault is taken from the flash table
-  # then: it holds those, the default handler and the three the drivers use
-  # (32 B instead of 192), and the reset handler builds the RAM table.
+  # then: it holds those and the three the drivers use
+  # (28 B instead of 192), and the reset handler builds the RAM table.
   list(APPEND KM_BOARD_COMPILE_OPTIONS -DKM_G031_SHORT_VECTORS=1)
 else()
   set(KM_G031_APP_HEADER 256)

@@ -36,28 +36,27 @@ typedef void (*prv_vector_t)(void);
 /* The flash table of a short-header image (docs/update.md §2): only the
  * reset, NMI and HardFault vectors are ever taken from it (the bootloader's
  * table or this one is active until Reset_Handler points VTOR at the RAM
- * table, and no other exception is enabled before that); then the handler
- * of every vector not listed and the three the drivers use: SVCall and
- * PendSV take the default handler (only software raises them, and this
- * firmware never does). Reset_Handler builds the 48-entry RAM table from it
- * (docs/footprint.md "STM32G031F6"). */
+ * table, and no other exception is enabled before that); then the three
+ * handlers the drivers use. Reset_Handler builds the 48-entry RAM table
+ * from it: every other vector is HardFault_Handler's, where the default
+ * handler would branch to with IPSR and LR unchanged (SVCall and PendSV
+ * too: only software raises them, and this firmware never does;
+ * docs/footprint.md "STM32G031F6"). */
 typedef struct {
     uint32_t *initial_sp;
     prv_vector_t core[3]; /* vectors 1..3 */
-    prv_vector_t other;   /* vector 4 (reserved on the M0+) and every one not below */
     prv_vector_t systick, tim2, usart1;
 } prv_vector_table_t;
 
-/* A field's word in the table; the RAM table's vectors 0..4 are its first words. */
+/* A field's word in the table; the RAM table's vectors 0..3 are its first words. */
 #define PRV_WORD(field) (offsetof(prv_vector_table_t, field) / sizeof(uint32_t))
-#define PRV_VECTORS_COPIED (PRV_WORD(other) + 1u)
+#define PRV_VECTOR_HARDFAULT 3u
 #define PRV_VECTOR_SYSTICK 15u
 #define PRV_VECTOR_IRQ0 16u
 
 __attribute__((section(".isr_vector"), used)) static const prv_vector_table_t s_vectors = {
     .initial_sp = &_estack,
     .core = {Reset_Handler, NMI_Handler, HardFault_Handler},
-    .other = prv_default_handler,
     .systick = SysTick_Handler,
     .tim2 = TIM2_IRQHandler,
     .usart1 = USART1_IRQHandler,
@@ -68,7 +67,7 @@ static inline void prv_ram_vectors(void)
 {
     const uint32_t *vec = (const uint32_t *)&s_vectors;
     for (uint32_t i = 0u; i < G0_VECTOR_COUNT; i++) {
-        __ram_vectors[i] = vec[i < PRV_VECTORS_COPIED ? i : PRV_VECTORS_COPIED - 1u];
+        __ram_vectors[i] = vec[i < PRV_VECTOR_HARDFAULT ? i : PRV_VECTOR_HARDFAULT];
     }
     __ram_vectors[PRV_VECTOR_SYSTICK] = vec[PRV_WORD(systick)];
     __ram_vectors[PRV_VECTOR_IRQ0 + G0_IRQ_TIM2] = vec[PRV_WORD(tim2)];
