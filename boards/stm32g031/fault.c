@@ -137,7 +137,9 @@ __attribute__((used, noreturn)) static void prv_fault_stop_c(uint32_t kind, uint
     }
 }
 
-/* Moves SP to the top of the stack, then prv_fault_stop_c (r0..r2 unchanged). */
+/* Moves SP to the top of the stack, then prv_fault_stop_c (r0..r2 unchanged); in
+ * RAM: the SysTick handler's call needs no veneer (docs/footprint.md "STM32G031F6"). */
+G0_RAMFUNC(g0_fault_stop)
 __attribute__((naked, noreturn)) void g0_fault_stop(uint32_t kind __attribute__((unused)),
                                                     uint32_t pc __attribute__((unused)),
                                                     uint32_t lr __attribute__((unused)))
