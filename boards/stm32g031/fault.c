@@ -77,15 +77,12 @@ void g0_reset_capture(void)
     uint32_t csr = RCC_CSR;
     RCC_CSR = csr | RCC_CSR_RMVF; /* keeps LSION; clears every reset flag */
 
-    bool fault = s_fault_record.magic == PRV_FAULT_MAGIC &&
-                 s_fault_record.check ==
-                     ~(s_fault_record.magic ^ s_fault_record.kind ^ s_fault_record.pc ^ s_fault_record.lr);
+    /* each word read once */
+    const uint32_t magic = s_fault_record.magic, kind = s_fault_record.kind, pc = s_fault_record.pc;
+    const uint32_t lr = s_fault_record.lr, check = s_fault_record.check;
+    bool fault = magic == PRV_FAULT_MAGIC && check == ~(magic ^ kind ^ pc ^ lr);
     if (fault) {
-        g0_last_fault.magic = s_fault_record.magic;
-        g0_last_fault.kind = s_fault_record.kind;
-        g0_last_fault.pc = s_fault_record.pc;
-        g0_last_fault.lr = s_fault_record.lr;
-        g0_last_fault.check = s_fault_record.check;
+        g0_last_fault = (g0_fault_record_t){magic, kind, pc, lr, check};
     }
     s_fault_record.magic = 0u;
 
