@@ -183,10 +183,10 @@ static bool prv_on_frame(void)
     bool held = false;
     if (km_servo_may_answer(&s_servo, frame)) {
         km_hal_timer_cancel(); /* then s_reply is armed-and-unsent or already sending */
-        if (!s_app.tx_armed && km_hal_uart_tx_busy()) {
+        held = s_app.tx_armed; /* no interrupt changes it any more */
+        if (!held && km_hal_uart_tx_busy()) {
             return false;
         }
-        held = s_app.tx_armed;
     }
     km_servo_handle_view(&s_servo, frame, &s_reply);
     if (s_reply.len > 0) {
