@@ -19,7 +19,7 @@ static km_store_t s_store;
 km_store_mount_t km_app_userdata_mount(const km_flash_t *flash, const km_product_t *product, uint32_t *values)
 {
     uint8_t n = 0;
-    for (unsigned i = 0; i < KM_REG_COUNT; i++) { /* n stays below KM_USERDATA_MAX: the persisted rows */
+    for (unsigned i = 0; i < KM_REG_COUNT; i++) { /* n ends at KM_USERDATA_MAX: the persisted rows */
         if (km_reg_table[i].persisted) {
             s_keys[n].key = km_reg_table[i].addr;
             s_keys[n].def = km_reg_default((km_reg_index_t)i, product);
