@@ -67,7 +67,8 @@ endif()
 
 # The 32 KiB STM32G031F6 build keeps fitting (docs/footprint.md
 # "STM32G031F6"): its own configure and build of the images held to the
-# budget (image-check --enforce-budget), the bootloader alone on the
+# budget (image-check --enforce-budget: the bootloader, the application in
+# its layout, the image without bootloader), the bootloader alone on the
 # virtual G031 answering at ID 1 (docs/update.md §3), and the servo image
 # without bootloader answering at ID 0: about 30 s. Debian's
 # python3, which has the virtual G031's python3-unicorn (tests/g031.cmake).
