@@ -69,8 +69,9 @@ endif()
 # "STM32G031F6"): its own configure and build of the images held to the
 # budget (image-check --enforce-budget: the bootloader, the application in
 # its layout, the image without bootloader), the bootloader alone on the
-# virtual G031 answering at ID 1 (docs/update.md §3), and the servo image
-# without bootloader answering at ID 0: about 30 s. Debian's
+# virtual G031 answering at ID 1 (docs/update.md §3), the bootloader
+# starting the application's update image, which answers at ID 0, and the
+# servo image without bootloader answering at ID 0: about 40 s. Debian's
 # python3, which has the virtual G031's python3-unicorn (tests/g031.cmake).
 find_program(KM_DEBIAN_PYTHON NAMES python3 PATHS /usr/bin NO_DEFAULT_PATH)
 add_test(NAME board_stm32g031_f6_fit

@@ -8,7 +8,10 @@ the application + its header <= 22,528 B, what the bootloader and the
 store leave, an image without bootloader <= 26,624 B beside the store,
 RAM <= 6 KiB), and runs them on the virtual G031 (sim/g031): the
 bootloader alone, with no application and no store reader, answers at ID
-1, 115200 (docs/update.md §3), and at no other ID; the servo image without
+1, 115200 (docs/update.md §3), and at no other ID; the bootloader with
+the application's update image in its region starts the application,
+which answers at its default ID 0 (update mode's ID 1 stays silent); the
+servo image without
 bootloader (the 32 KiB build's compact parser, control and run-time
 routines) answers a ping at its default ID 0 after the longest frame to
 another servo, and reports a checksum-failed frame to it once (§2, §4), on
@@ -23,7 +26,8 @@ import sys
 # The images of the 32 KiB build held to its budget: the bootloader, the
 # image without bootloader and, since it fits (docs/footprint.md
 # "STM32G031F6"), the application in the bootloader's layout.
-CHECKED = ["km-boot-stm32g031-check", "km-servo-stm32g031-check", "km-servo-app-stm32g031-check"]
+CHECKED = ["km-boot-stm32g031-check", "km-servo-stm32g031-check", "km-servo-app-stm32g031-check",
+           "km-servo-app-stm32g031-kmfw"]  # the update image: what the bootloader starts
 MS = 1_000_000
 
 
@@ -74,6 +78,33 @@ def bootloader_alone(source, images):
         fails.append("0x0C at ID 1 not answered: %r" % got.hex(" "))
     if m.faults or m.resets:
         fails.append("faults %s resets %s" % (m.faults, m.resets))
+    return fails
+
+
+def boot_and_application(images):
+    """The bootloader with the 32 KiB application in its region: the application answers at ID 0."""
+    import g031_deps  # sim/g031, on PYTHONPATH
+    g031_deps.require()
+    import argparse
+    import vg031
+    a = argparse.Namespace(boot=os.path.join(images, "km-boot-stm32g031.elf"),
+                           app=os.path.join(images, "km-servo-app-stm32g031.kmfw"), elf=None,
+                           app_elf=os.path.join(images, "km-servo-app-stm32g031.elf"))
+    start = vg031.symbol(a.app_elf, "Reset_Handler")
+    m = vg031.make(a, watch=[start])
+    m.run_until(m.now + 300 * MS)  # the bootloader's bit-serial CRC of the image takes ~110 ms
+    started = m.watches[start]
+    print("bootloader + application: application started at %s" %
+          ("%.1f ms" % (started[0][0] / MS) if started else "no time (never)"))
+    fails = [] if started else ["bootloader + application: the application never started"]
+    for sid, want in ((0, bytes.fromhex("F9F5000200FD")), (1, b"")):
+        got = ask(m, frame(sid, 0x01))
+        print("bootloader + application, ping ID %d: %s" % (sid, got.hex(" ") or "no answer"))
+        if got != want:
+            fails.append("bootloader + application, ping ID %d answered %r, expected %r"
+                         % (sid, got.hex(" "), want.hex(" ")))
+    if m.faults or m.resets:
+        fails.append("bootloader + application: faults %s resets %s" % (m.faults, m.resets))
     return fails
 
 
@@ -148,6 +179,7 @@ def main():
     print("km-boot-stm32g031.bin: %d B of 4,096" % boot)
     fails = [] if boot <= 4096 else ["bootloader %d B > 4,096" % boot]
     fails += bootloader_alone(source, images)
+    fails += boot_and_application(images)
     fails += servo_alone(images)
     for f in fails:
         print("FAIL:", f)
