@@ -8,6 +8,16 @@ static inline uint32_t prv_mulhi_shr(uint32_t n, uint32_t m, uint32_t s)
 {
     return km_umulhi(n, m) >> s;
 }
+
+/* (n x m) >> (32 + s) for a tick's divisor: two of the four products below
+ * 2^16 (most of the tick's dividends), else the one km_umulhi. */
+static inline uint32_t prv_div_mulhi_shr(uint32_t n, uint32_t m, uint32_t s)
+{
+    if (n <= 0xFFFFu) {
+        return ((n * (m >> 16) + ((n * (m & 0xFFFFu)) >> 16)) >> 16) >> s;
+    }
+    return km_umulhi(n, m) >> s;
+}
 #else
 /* (n x m) >> (32 + s): one copy of the multiply for every divisor (flash). */
 static __attribute__((noinline)) uint32_t prv_mulhi_shr(uint32_t n, uint32_t m, uint32_t s)
@@ -42,7 +52,7 @@ static __attribute__((noinline)) uint32_t prv_udiv(uint32_t n, unsigned k)
 {
     const prv_divisor_t *v = &s_divisors[k];
     n >>= v->pre;
-    return n < v->d ? 0u : prv_mulhi_shr(n, v->m, v->s);
+    return n < v->d ? 0u : prv_div_mulhi_shr(n, v->m, v->s);
 }
 
 /* n / d toward zero, as C's `/`, for divisor `k`. */
