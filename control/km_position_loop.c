@@ -70,11 +70,9 @@ static int32_t prv_hold_ki(km_position_loop_t *l, const km_control_gains_t *g,
  * the quotient split at 100 gives C's result exactly (docs/tuning.md). */
 static int32_t prv_integral_step(int32_t ki_e, uint32_t dt_us)
 {
-#if !KM_CONTROL_COMPACT
     if (dt_us == 1000u) {
         return ki_e * 10; /* hundreds x 1000 + the rest x 10: no divide at the 1 ms tick */
     }
-#endif
     const int32_t dt = (int32_t)(dt_us > 2000u ? 2000u : dt_us);
     const int32_t hundreds = km_sdiv100(ki_e);
     return hundreds * dt + km_sdiv100((ki_e - hundreds * 100) * dt);
