@@ -186,8 +186,7 @@ static void prv_cut(km_parser_t *p, bool by_gap)
     p->need = 0u;
 }
 
-/* Fast header check of the byte just stored; false: prv_settle() judges again (the compact form always does).
- */
+/* Fast header check of the byte just stored (false: prv_settle() judges again). */
 static bool prv_header_grows(km_parser_t *p, uint8_t byte)
 {
     switch (p->fill) {
@@ -247,7 +246,7 @@ static inline unsigned prv_feed_one(km_parser_t *p, uint8_t byte, uint32_t now, 
     if (p->fill < p->need) {
         return 0u; /* inside a candidate of known length */
     }
-    if (!KM_PROTOCOL_COMPACT && !p->pending && p->stale == 0u && prv_header_grows(p, byte)) {
+    if (!p->pending && p->stale == 0u && prv_header_grows(p, byte)) {
         return 0u; /* a header byte that keeps the candidate viable */
     }
     return prv_settle(p, out);
