@@ -21,11 +21,14 @@ PRV_ENCODE_NOINLINE uint16_t km_encode_response(uint8_t *out, uint8_t id, uint8_
     out[2] = id;
     out[3] = length;
     out[4] = cmd;
+    /* Checksum (§2) covers ID through the last body byte: summed as the body is copied. */
+    uint32_t sum = (uint32_t)id + length + cmd;
     for (uint8_t i = 0; i < body_len; i++) {
-        out[5u + i] = body[i];
+        const uint8_t byte = body[i];
+        out[5u + i] = byte;
+        sum += byte;
     }
-    /* Checksum covers ID through the last body byte: 3 + body_len bytes. */
-    out[5u + body_len] = km_checksum(&out[2], 3u + (uint32_t)body_len);
+    out[5u + body_len] = (uint8_t)~sum;
     return (uint16_t)(6u + body_len);
 }
 
