@@ -23,17 +23,16 @@ static KM_COMPACT_NOINLINE int32_t prv_sdiv_near(int32_t n, uint32_t d, const km
     return n < 0 ? -(int32_t)q : (int32_t)q;
 }
 
-#if !KM_CONTROL_COMPACT
 /* d x 1e6 / PRV_FAST_SPAN_US (7,000 us) toward zero for |d| <= 2000:
  * 1e6 / 7000 = 142 + 6/7, and 6|d| / 7 by a 16-bit reciprocal (exact for
  * every such d: tests/unit/control/test_control_fixdiv.c checks each). */
 static int32_t prv_per_fast_span(int32_t d)
 {
-    const uint32_t m = d < 0 ? 0u - (uint32_t)d : (uint32_t)d;
+    const uint32_t neg = 0u - ((uint32_t)d >> 31); /* all ones below 0: |d| and the sign back by xor */
+    const uint32_t m = ((uint32_t)d ^ neg) - neg;
     const uint32_t q = m * 142u + ((m * 6u * 9363u) >> 16);
-    return d < 0 ? -(int32_t)q : (int32_t)q;
+    return (int32_t)((q ^ neg) - neg);
 }
-#endif
 
 void km_speed_window_init(km_speed_window_t *w)
 {
@@ -89,15 +88,15 @@ KM_COMPACT_NOINLINE int32_t km_speed_fast_step(km_speed_fast_t *f, int32_t posit
     int32_t d = km_pos_diff(position, f->pos[i]);
     d = km_sat(d, 2000); /* keeps d x 1e6 in 32 bits */
 #if !KM_CONTROL_COMPACT
-    if (d == 0) { /* a shaft holding still */
+    if (d == 0) { /* a shaft holding still (the compact build's prv_per_fast_span gives 0 too) */
         f->ddps = 0;
         return 0;
     }
+#endif
     if (span == PRV_FAST_SPAN_US) { /* the steady 1 kHz tick */
         f->ddps = prv_per_fast_span(d);
         return f->ddps;
     }
-#endif
     f->ddps = prv_sdiv_near(d * 1000000, span, &s_span_recip); /* near 7,000 us: no Newton step */
     return f->ddps;
 }
