@@ -105,40 +105,6 @@ uint32_t km_udiv_near(uint32_t n, uint32_t d, const km_recip_near_t *c);
         }                                                   \
     } while (0)
 
-#if KM_CONTROL_COMPACT
-/* floor(sqrt(hi:lo)) for hi:lo < 2^56, leading zero nibbles skipped: one
- * nibble step per pass, hi:lo shifted as one word (one copy of the step,
- * a few instructions more per step: flash). */
-static inline uint32_t km_isqrt56(uint32_t hi, uint32_t lo)
-{
-    uint32_t root = 0, rem = 0;
-    unsigned n = 16u; /* nibbles left in hi:lo */
-    if (hi == 0u) {
-        hi = lo;
-        lo = 0u;
-        n = 8u;
-        if (hi == 0u) {
-            return 0u;
-        }
-    }
-    while ((hi >> 24) == 0u) {
-        hi = (hi << 8) | (lo >> 24);
-        lo <<= 8;
-        n -= 2u;
-    }
-    while ((hi >> 28) == 0u) {
-        hi = (hi << 4) | (lo >> 28);
-        lo <<= 4;
-        n--;
-    }
-    for (; n > 0u; n--) {
-        KM_SQRT_NIBBLE(hi);
-        hi |= lo >> 28;
-        lo <<= 4;
-    }
-    return root;
-}
-#else
 /* n steps of KM_SQRT_NIBBLE on the word w. */
 #define KM_SQRT_NIBBLES(w, n) \
     for (; (n) > 0u; (n)--) { \
@@ -170,7 +136,6 @@ static inline uint32_t km_isqrt56(uint32_t hi, uint32_t lo)
     KM_SQRT_NIBBLES(lo, m)
     return root;
 }
-#endif
 
 #if !KM_CONTROL_COMPACT
 /* 1/sqrt from a value's top 8 bits: [i] = round(2^31 / sqrt((64 + i + 1/2)
