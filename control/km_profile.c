@@ -276,15 +276,11 @@ void km_profile_stream(km_profile_t *p, int32_t target_ddeg, uint32_t interval_u
 /* vel / 1000 toward zero, divided only when vel changed since the last. */
 static int32_t prv_vel_q(km_profile_t *p)
 {
-#if KM_CONTROL_COMPACT
-    return km_sdiv1000(p->vel); /* no copy: flash */
-#else
     if (p->vel != p->vel_q_of) {
         p->vel_q_of = p->vel;
         p->vel_q = km_sdiv1000(p->vel);
     }
     return p->vel_q;
-#endif
 }
 
 /* pos += vel * dt / 1e6 exactly, remainder carried (dt <= 2000; |pos_rem|
@@ -481,9 +477,5 @@ int32_t km_profile_pos_ddeg(const km_profile_t *p)
 
 int32_t km_profile_vel_ddps(const km_profile_t *p)
 {
-#if KM_CONTROL_COMPACT
-    return km_sdiv1000(p->vel);
-#else
     return p->vel == p->vel_q_of ? p->vel_q : km_sdiv1000(p->vel);
-#endif
 }
