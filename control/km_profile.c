@@ -378,10 +378,6 @@ static void prv_stream_end(km_profile_t *p)
  * set-point). */
 static int32_t prv_ahead_ms(km_profile_t *p, int32_t ahead)
 {
-#if KM_CONTROL_COMPACT
-    (void)p;
-    return km_sdiv1000(ahead); /* no copy: flash */
-#else
     int32_t q = p->s_ahead_q;
     const int32_t r = ahead - q * 1000;
     if (r < 0 && r >= -1000) {
@@ -391,7 +387,6 @@ static int32_t prv_ahead_ms(km_profile_t *p, int32_t ahead)
     }
     p->s_ahead_q = q;
     return q;
-#endif
 }
 
 /* The speed a stream heads for: the targets' speed plus 1/128 ms of the

@@ -29,20 +29,18 @@ typedef struct {
     int32_t vel_q;    /* vel_q_of / 1000 toward zero */
     uint32_t vsq_hi;  /* vmax^2, high and low word, for the braking test */
     uint32_t vsq_lo;
-    int32_t s_vel;    /* stream: the targets' speed, u/s */
-    int32_t s_vel_q;  /* stream: s_vel / 1000 toward zero, set with it */
-    int32_t s_period; /* stream: the filtered frame period, us (0 = none yet) */
-    int32_t s_since;  /* stream: us since the filtered arrival of the newest target */
-    int32_t s_lag;    /* stream: how far behind the newest target the set-point runs, us */
-    int32_t s_frames; /* stream: frames fitted into the clock (2..KM_PROFILE_STREAM_FRAMES) */
-    int32_t s_step;   /* stream: the targets' step per period, u */
-    int32_t s_vr;     /* stream: the speed the set-point heads for, rate-limited, u/s */
-    int32_t s_vf;     /* stream: s_vr through the first of two low passes (vel the second), u/s */
-    bool stream;      /* following a stream of targets (0x68) */
-    bool done;        /* at the target, at rest */
-#if !defined(KM_CONTROL_COMPACT) || !KM_CONTROL_COMPACT
-    int32_t s_ahead_q; /* stream: the last ahead (us) / 1000, the next one's first guess (the fast build's) */
-#endif
+    int32_t s_vel;     /* stream: the targets' speed, u/s */
+    int32_t s_vel_q;   /* stream: s_vel / 1000 toward zero, set with it */
+    int32_t s_period;  /* stream: the filtered frame period, us (0 = none yet) */
+    int32_t s_since;   /* stream: us since the filtered arrival of the newest target */
+    int32_t s_lag;     /* stream: how far behind the newest target the set-point runs, us */
+    int32_t s_frames;  /* stream: frames fitted into the clock (2..KM_PROFILE_STREAM_FRAMES) */
+    int32_t s_step;    /* stream: the targets' step per period, u */
+    int32_t s_vr;      /* stream: the speed the set-point heads for, rate-limited, u/s */
+    int32_t s_vf;      /* stream: s_vr through the first of two low passes (vel the second), u/s */
+    bool stream;       /* following a stream of targets (0x68) */
+    bool done;         /* at the target, at rest */
+    int32_t s_ahead_q; /* stream: the last ahead (us) / 1000, the next one's first guess */
 } km_profile_t;
 
 /* At rest at `pos_ddeg`. */
