@@ -7,10 +7,8 @@
 void km_position_loop_init(km_position_loop_t *l)
 {
     l->i_acc = 0;
-#if !KM_CONTROL_COMPACT
     l->i_pwm_of = 0;
     l->i_pwm = 0;
-#endif
     l->still_ms = 0;
     l->rest_pos = 0;
     l->last_sp_ddps = 0;
@@ -20,15 +18,11 @@ void km_position_loop_init(km_position_loop_t *l)
 /* The integrator's PWM, i_acc / 256000, divided only when i_acc changed. */
 static int32_t prv_i_pwm(km_position_loop_t *l)
 {
-#if KM_CONTROL_COMPACT
-    return km_sdiv256000(l->i_acc); /* no copy: flash */
-#else
     if (l->i_acc != l->i_pwm_of) {
         l->i_pwm_of = l->i_acc;
         l->i_pwm = km_sdiv256000(l->i_acc);
     }
     return l->i_pwm;
-#endif
 }
 
 /* Whether a settled hold was pushed away from where it rested (ki_hold's case). */
