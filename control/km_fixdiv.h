@@ -112,7 +112,8 @@ uint32_t km_udiv_near(uint32_t n, uint32_t d, const km_recip_near_t *c);
     }
 
 /* floor(sqrt(hi:lo)) for hi:lo < 2^56, leading zero nibbles skipped: the
- * nibbles of hi, then those of lo (two copies of the step: instructions). */
+ * nibbles of hi, then those of lo (two copies of the step: instructions;
+ * the compact build runs its one copy twice). */
 static inline uint32_t km_isqrt56(uint32_t hi, uint32_t lo)
 {
     uint32_t root = 0, rem = 0;
@@ -132,9 +133,21 @@ static inline uint32_t km_isqrt56(uint32_t hi, uint32_t lo)
         hi <<= 4;
         n--;
     }
+#if KM_CONTROL_COMPACT
+    for (;;) {
+        KM_SQRT_NIBBLES(hi, n)
+        if (m == 0u) {
+            return root;
+        }
+        hi = lo;
+        n = m;
+        m = 0u;
+    }
+#else
     KM_SQRT_NIBBLES(hi, n)
     KM_SQRT_NIBBLES(lo, m)
     return root;
+#endif
 }
 
 #if !KM_CONTROL_COMPACT
