@@ -354,6 +354,8 @@ static void prv_arrive(km_profile_t *p)
     p->pos = p->target;
     p->pos_rem = 0;
     p->vel = 0;
+    p->vel_q_of = 0; /* 0 / 1000: the reported speed needs no divide */
+    p->vel_q = 0;
     p->vel_rem = 0;
     p->done = true;
 }
