@@ -194,17 +194,7 @@ static void prv_settle_clock(km_servo_mode_t *m, const km_control_params_t *p, i
 static void prv_count_rotation(km_servo_mode_t *m, uint32_t dt_us)
 {
     uint32_t rem = m->rotation_rem_us + dt_us;
-#if !KM_CONTROL_COMPACT
-    if (rem < 2000u) {
-        if (rem >= 1000u) {
-            m->rotation_ms++;
-            rem -= 1000u;
-        }
-        m->rotation_rem_us = rem;
-        return;
-    }
-#endif
-    const uint32_t ms = km_udiv1000(rem); /* no second copy: flash */
+    const uint32_t ms = rem < 2000u ? (rem >= 1000u ? 1u : 0u) : km_udiv1000(rem);
     m->rotation_ms += ms;
     m->rotation_rem_us = rem - ms * 1000u;
 }
