@@ -177,7 +177,7 @@ km_report_t km_cmd_multi_write(km_servo_t *s, const km_frame_view_t *f, km_reply
         return KM_REPORT_NONE; /* not in the list: this servo does nothing at all */
     }
     s->sync.full = false;
-    km_reg_write[r](s, (km_reg_index_t)r, at + 1, (uint8_t)k); /* as a write of the register */
+    km_reg_write(r)(s, (km_reg_index_t)r, at + 1, (uint8_t)k); /* as a write of the register */
     return KM_REPORT_NONE;
 }
 

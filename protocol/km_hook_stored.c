@@ -6,14 +6,36 @@
 
 #include "km_servo.h"
 
-const km_read_hook_t km_reg_read[KM_REG_COUNT] = {
-#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) km_rd_##rd,
-#include "km_registers.def"
-#undef KM_REG
+/* Each hook's index in the lists below. */
+enum {
+#define KM_HOOK_INDEX(name) KM_RDH_##name,
+    KM_RD_HOOKS(KM_HOOK_INDEX)
+#undef KM_HOOK_INDEX
+        KM_RDH_COUNT
+};
+enum {
+#define KM_HOOK_INDEX(name) KM_WRH_##name,
+    KM_WR_HOOKS(KM_HOOK_INDEX)
+#undef KM_HOOK_INDEX
+        KM_WRH_COUNT
+};
+_Static_assert(KM_RDH_COUNT <= (1u << KM_RD_HOOK_BITS) && KM_WRH_COUNT <= (1u << KM_WR_HOOK_BITS),
+               "a hook index does not fit its bit-field");
+
+const km_read_hook_t km_rd_hooks[KM_RDH_COUNT] = {
+#define KM_HOOK_ENTRY(name) km_rd_##name,
+    KM_RD_HOOKS(KM_HOOK_ENTRY)
+#undef KM_HOOK_ENTRY
 };
 
-const km_write_hook_t km_reg_write[KM_REG_COUNT] = {
-#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) km_wr_##wr,
+const km_write_hook_t km_wr_hooks[KM_WRH_COUNT] = {
+#define KM_HOOK_ENTRY(name) km_wr_##name,
+    KM_WR_HOOKS(KM_HOOK_ENTRY)
+#undef KM_HOOK_ENTRY
+};
+
+const km_reg_hooks_t km_reg_hooks[KM_REG_COUNT] = {
+#define KM_REG(addr, ident, access, persisted, layout, def, lo, hi, multi, rd, wr) {KM_WRH_##wr, KM_RDH_##rd},
 #include "km_registers.def"
 #undef KM_REG
 };

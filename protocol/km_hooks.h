@@ -10,6 +10,9 @@
 #include "km_registers.h"
 #include "km_request.h"
 
+/* Generated from the .def (tools/gen/reg-hooks); after km_registers.h, as the .def. */
+#include "km_reg_hooks.h"
+
 struct km_servo;
 
 typedef uint8_t (*km_read_hook_t)(struct km_servo *s, km_reg_index_t r, uint8_t *out);
@@ -23,9 +26,31 @@ typedef void (*km_write_hook_t)(struct km_servo *s, km_reg_index_t r, const uint
 #include "km_registers.def"
 #undef KM_REG
 
-/* The hooks by register index (km_hook_stored.c, from the .def). */
-extern const km_read_hook_t km_reg_read[KM_REG_COUNT];
-extern const km_write_hook_t km_reg_write[KM_REG_COUNT];
+/* Each distinct hook once (KM_RD_HOOKS, KM_WR_HOOKS: generated from the
+ * .def by tools/gen/reg-hooks), and per register the index of its two
+ * (km_hook_stored.c; docs/architecture.md "Register hooks"). */
+extern const km_read_hook_t km_rd_hooks[];
+extern const km_write_hook_t km_wr_hooks[];
+
+/* The read index in the upper bits: one shift to extract on the answer paths. */
+typedef struct {
+    uint8_t wr : KM_WR_HOOK_BITS; /* index into km_wr_hooks */
+    uint8_t rd : KM_RD_HOOK_BITS; /* index into km_rd_hooks */
+} km_reg_hooks_t;
+
+extern const km_reg_hooks_t km_reg_hooks[KM_REG_COUNT];
+
+/* The read hook of the register at table index r (km_reg_find()'s int). */
+static inline km_read_hook_t km_reg_read(int r)
+{
+    return km_rd_hooks[km_reg_hooks[r].rd];
+}
+
+/* The write hook of the register at table index r (km_reg_find()'s int). */
+static inline km_write_hook_t km_reg_write(int r)
+{
+    return km_wr_hooks[km_reg_hooks[r].wr];
+}
 
 /* A typed request to control; true when accepted (no control attached:
  * accepted). */

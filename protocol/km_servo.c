@@ -217,7 +217,7 @@ void km_dispatch_read_answer(km_servo_t *s, int r, uint8_t addr, uint32_t slot, 
     }
     uint8_t body[1 + TEXT_MAX];
     body[0] = addr;
-    const uint8_t n = km_reg_read[r](s, (km_reg_index_t)r, &body[1]);
+    const uint8_t n = km_reg_read(r)(s, (km_reg_index_t)r, &body[1]);
     if (reply != NULL) {
         reply->len = km_encode_response(reply->bytes, km_servo_id(s), CMD_READ, body, (uint8_t)(1u + n));
         reply->delay_us = prv_slot_delay_us(s, slot, prv_read_answer_max(r));
@@ -263,7 +263,7 @@ void km_dispatch_write(km_servo_t *s, uint8_t addr, const uint8_t *d, uint8_t le
         km_regfile_exception(&s->reg); /* reserved address */
         return;
     }
-    km_reg_write[r](s, (km_reg_index_t)r, d, len); /* km_wr_none: read-only, bit 5 */
+    km_reg_write(r)(s, (km_reg_index_t)r, d, len); /* km_wr_none: read-only, bit 5 */
 }
 
 km_report_t km_cmd_write(km_servo_t *s, const km_frame_view_t *f, km_reply_t *reply)

@@ -28,7 +28,12 @@ add_custom_command(OUTPUT ${KM_EXT_COPIES}
   COMMENT "protocol_extend: protocol/ with one register added")
 add_library(km_protocol_extended STATIC ${KM_EXT_SOURCES} ${CMAKE_CURRENT_SOURCE_DIR}/extend/km_hook_demo.c)
 target_include_directories(km_protocol_extended PUBLIC ${KM_EXT_DIR})
-target_link_libraries(km_protocol_extended PUBLIC km_shared)
+# Its own hook lists, generated from the copy's .def as protocol/'s are
+# (outside the copy: add_register.cmake empties it), once the copy is made.
+add_custom_target(km_protocol_extended_copy DEPENDS ${KM_EXT_COPIES})
+km_reg_hooks(km_protocol_extended_hooks ${KM_EXT_DIR}/km_registers.def ${CMAKE_CURRENT_BINARY_DIR}/protocol_extend_gen)
+add_dependencies(km_protocol_extended_hooks_gen km_protocol_extended_copy)
+target_link_libraries(km_protocol_extended PUBLIC km_shared km_protocol_extended_hooks)
 
 add_executable(test_protocol_extend ${CMAKE_CURRENT_SOURCE_DIR}/extend/test_protocol_extend.c)
 target_link_libraries(test_protocol_extend PRIVATE km_protocol_extended km_test_support ${CMOCKA_LIBRARY})

@@ -47,6 +47,13 @@ if(KM_PYTHON3)
   # test_run_on_bus.py also imports the conformance wrapper (tests/conformance/)
   set_property(TEST py_tools APPEND PROPERTY ENVIRONMENT_MODIFICATION
     "PYTHONPATH=path_list_append:${CMAKE_SOURCE_DIR}/tests/conformance")
+  # tools/gen/reg-hooks (protocol/'s hook lists, generated in every build)
+  # on its own, about 2 s: its headers compiled and their lists printed.
+  add_test(NAME reg_hooks_gen
+    COMMAND ${KM_PYTHON3} ${CMAKE_SOURCE_DIR}/tests/tools/test_reg_hooks.py -v)
+  set_tests_properties(reg_hooks_gen PROPERTIES
+    LABELS "tools;unit" TIMEOUT 120
+    FAIL_REGULAR_EXPRESSION "Ran 0 tests;FAILED")
 endif()
 
 # host/ installs with pip from the checkout without network, into a venv of

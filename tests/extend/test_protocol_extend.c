@@ -47,8 +47,8 @@ static void test_row_in_the_generated_tables(void **state)
     assert_int_equal(km_reg_table[r].access, KM_RW);
     assert_int_equal(km_reg_table[r].multi, KM_K(2));
     assert_string_equal(km_reg_names[r], "DEMO_ACCUMULATE");
-    assert_ptr_equal(km_reg_read[r], km_rd_stored);
-    assert_ptr_equal(km_reg_write[r], km_wr_demo_accumulate);
+    assert_ptr_equal(km_reg_read(r), km_rd_stored);
+    assert_ptr_equal(km_reg_write(r), km_wr_demo_accumulate);
     assert_int_equal(km_reg_find(0x72), -1);
 }
 
