@@ -207,19 +207,18 @@ static uint16_t prv_read_answer_max(int r)
 
 void km_dispatch_read_answer(km_servo_t *s, int r, uint8_t addr, uint32_t slot, km_reply_t *reply)
 {
+    uint8_t body[1 + TEXT_MAX];
+    uint8_t n = 0u;
     if (r < 0) {
         km_regfile_exception(&s->reg);
-        if (reply != NULL) {
-            reply->len = km_encode_status(reply->bytes, km_servo_id(s), km_regfile_own_status(&s->reg));
-            reply->delay_us = prv_slot_delay_us(s, slot, prv_read_answer_max(r));
-        }
-        return;
+    } else {
+        body[0] = addr;
+        n = km_reg_read(r)(s, (km_reg_index_t)r, &body[1]);
     }
-    uint8_t body[1 + TEXT_MAX];
-    body[0] = addr;
-    const uint8_t n = km_reg_read(r)(s, (km_reg_index_t)r, &body[1]);
     if (reply != NULL) {
-        reply->len = km_encode_response(reply->bytes, km_servo_id(s), CMD_READ, body, (uint8_t)(1u + n));
+        reply->len =
+            r < 0 ? km_encode_status(reply->bytes, km_servo_id(s), km_regfile_own_status(&s->reg))
+                  : km_encode_response(reply->bytes, km_servo_id(s), CMD_READ, body, (uint8_t)(1u + n));
         reply->delay_us = prv_slot_delay_us(s, slot, prv_read_answer_max(r));
     }
 }
