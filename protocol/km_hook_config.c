@@ -30,16 +30,21 @@ void km_wr_restart(km_servo_t *s, km_reg_index_t r, const uint8_t *d, uint8_t le
     }
 }
 
+/* What a level-1 reset keeps: ID, baud and the zero offset, one bit per register index. */
+#define PRV_KEPT_AT_LEVEL_1 ((1u << KM_REG_ID) | (1u << KM_REG_BAUD) | (1u << KM_REG_ZERO_OFFSET2))
+_Static_assert(KM_REG_ID < 32 && KM_REG_BAUD < 32 && KM_REG_ZERO_OFFSET2 < 32,
+               "kept registers beyond the mask");
+
 /* The registers a user-data reset writes back and their defaults, in
  * table order; returns how many ("User-data reset"). */
 static uint8_t prv_reset_list(const km_product_t *p, uint8_t level, uint8_t *regs, uint8_t *addrs,
                               uint32_t *values)
 {
+    const uint32_t kept = level == 1u ? PRV_KEPT_AT_LEVEL_1 : 0u;
     uint8_t n = 0;
     for (uint8_t i = 0; i < (uint8_t)KM_REG_COUNT; i++) {
         const km_reg_t *t = &km_reg_table[i];
-        const bool kept = level == 1u && (i == KM_REG_ID || i == KM_REG_BAUD || i == KM_REG_ZERO_OFFSET2);
-        if (t->persisted && (t->access & KM_W) && !kept) {
+        if (t->persisted && (t->access & KM_W) && !(i < 32u && ((kept >> i) & 1u))) {
             regs[n] = i;
             addrs[n] = t->addr;
             values[n] = km_reg_default((km_reg_index_t)i, p);
