@@ -51,15 +51,19 @@ void km_regfile_init(km_regfile_t *rf, const km_product_t *product, const uint32
     rf->prng = seed ? seed : 0x2545F491u;
 }
 
+/* The maxima 0x13..0x15 and the limits in force 0x5B..0x5D pair up row by row: a limit is its
+ * maximum's index + PRV_LIMIT_OF_MAX. */
+#define PRV_LIMIT_OF_MAX (KM_REG_TORQUE_LIMIT - KM_REG_MAX_TORQUE)
+_Static_assert(KM_REG_MAX_CURRENT == KM_REG_MAX_TORQUE + 1 && KM_REG_MAX_SPEED == KM_REG_MAX_TORQUE + 2 &&
+                   KM_REG_CURRENT_LIMIT_NOW == KM_REG_MAX_CURRENT + PRV_LIMIT_OF_MAX &&
+                   KM_REG_SPEED_LIMIT == KM_REG_MAX_SPEED + PRV_LIMIT_OF_MAX,
+               "km_registers.def: 0x13..0x15 and 0x5B..0x5D must stay in the same order");
+
 void km_regfile_apply(km_regfile_t *rf, km_reg_index_t r, uint32_t v)
 {
     km_regfile_set(rf, r, v);
-    if (r == KM_REG_MAX_TORQUE) {
-        rf->value[KM_REG_TORQUE_LIMIT] = v;
-    } else if (r == KM_REG_MAX_CURRENT) {
-        rf->value[KM_REG_CURRENT_LIMIT_NOW] = v;
-    } else if (r == KM_REG_MAX_SPEED) {
-        rf->value[KM_REG_SPEED_LIMIT] = v;
+    if (r >= KM_REG_MAX_TORQUE && r <= KM_REG_MAX_SPEED) {
+        rf->value[r + PRV_LIMIT_OF_MAX] = v;
     }
 }
 
@@ -67,11 +71,9 @@ bool km_regfile_consistent(const km_regfile_t *rf, km_reg_index_t r, uint32_t v)
 {
     switch (r) {
     case KM_REG_TORQUE_LIMIT:
-        return v <= rf->value[KM_REG_MAX_TORQUE];
     case KM_REG_CURRENT_LIMIT_NOW:
-        return v <= rf->value[KM_REG_MAX_CURRENT];
     case KM_REG_SPEED_LIMIT:
-        return v <= rf->value[KM_REG_MAX_SPEED];
+        return v <= rf->value[r - PRV_LIMIT_OF_MAX];
     case KM_REG_ANGLE_MIN:
         return prv_angle_limits_ok((int16_t)v, (int16_t)rf->value[KM_REG_ANGLE_MAX]);
     case KM_REG_ANGLE_MAX:
