@@ -5,6 +5,9 @@
  * (0x46..0x4D, §5.3). */
 #include "km_hooks.h"
 
+#include <stddef.h>
+#include <string.h>
+
 #include "km_servo.h"
 
 #define TEXT_MAX 16u
@@ -61,28 +64,23 @@ uint8_t km_rd_live_pos(km_servo_t *s, km_reg_index_t r, uint8_t *out)
     return km_put_le(out, (uint32_t)v, v >= -32768 && v <= 32767 ? 2u : 4u);
 }
 
+/* 0x47..0x4B are speed, current, PWM, temperature, voltage: consecutive rows and consecutive
+ * int32 fields of km_live_t, so a register's field is one offset from the first. */
+_Static_assert(KM_REG_CURRENT == KM_REG_SPEED + 1 && KM_REG_PWM == KM_REG_SPEED + 2 &&
+                   KM_REG_TEMPERATURE == KM_REG_SPEED + 3 && KM_REG_VOLTAGE == KM_REG_SPEED + 4,
+               "km_registers.def: 0x47..0x4B out of order");
+_Static_assert(offsetof(km_live_t, current) == offsetof(km_live_t, speed) + 4u &&
+                   offsetof(km_live_t, pwm) == offsetof(km_live_t, speed) + 8u &&
+                   offsetof(km_live_t, temperature) == offsetof(km_live_t, speed) + 12u &&
+                   offsetof(km_live_t, voltage) == offsetof(km_live_t, speed) + 16u,
+               "km_live_t: speed..voltage not consecutive int32 fields");
+
 /* 0x47..0x4B: speed, current, PWM, temperature, voltage as i16, clamped. */
 uint8_t km_rd_live16(km_servo_t *s, km_reg_index_t r, uint8_t *out)
 {
-    const km_live_t *l = &s->reg.live;
     int32_t v;
-    switch (r) {
-    case KM_REG_SPEED:
-        v = l->speed;
-        break;
-    case KM_REG_CURRENT:
-        v = l->current;
-        break;
-    case KM_REG_PWM:
-        v = l->pwm;
-        break;
-    case KM_REG_TEMPERATURE:
-        v = l->temperature;
-        break;
-    default: /* KM_REG_VOLTAGE */
-        v = l->voltage;
-        break;
-    }
+    const uint8_t *const first = (const uint8_t *)&s->reg.live + offsetof(km_live_t, speed);
+    memcpy(&v, first + sizeof v * (size_t)(r - KM_REG_SPEED), sizeof v);
     return km_put_le(out, (uint32_t)prv_clamp16(v), 2);
 }
 
