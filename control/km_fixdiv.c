@@ -184,7 +184,7 @@ __attribute__((noinline)) int32_t km_clamp(int32_t v, int32_t lo, int32_t hi)
 
 __attribute__((noinline)) int32_t km_sat(int32_t v, int32_t m)
 {
-    return v > m ? m : (v < -m ? -m : v);
+    return km_sat_inline(v, m);
 }
 #endif
 

@@ -225,6 +225,13 @@ static inline uint32_t km_isqrt56_fast(uint32_t hi, uint32_t lo)
  * (docs/control-design.md "Arithmetic"). */
 uint32_t km_isqrt(uint32_t hi, uint32_t lo);
 
+/* v bounded to +-m: m above m, else -m below -m; inlined in every build
+ * (the position loop's saturations, the tick's hottest calls). */
+static inline int32_t km_sat_inline(int32_t v, int32_t m)
+{
+    return v > m ? m : (v < -m ? -m : v);
+}
+
 #if KM_CONTROL_COMPACT
 /* v bounded to [lo, hi]: lo below lo, else hi above hi (one copy, not inlined: flash). */
 int32_t km_clamp(int32_t v, int32_t lo, int32_t hi);
@@ -240,7 +247,7 @@ static inline int32_t km_clamp(int32_t v, int32_t lo, int32_t hi)
 /* v bounded to +-m: m above m, else -m below -m. */
 static inline int32_t km_sat(int32_t v, int32_t m)
 {
-    return v > m ? m : (v < -m ? -m : v);
+    return km_sat_inline(v, m);
 }
 #endif
 

@@ -80,7 +80,7 @@ static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
 {
     int32_t i_pwm = prv_i_pwm(l);
     /* 10 deg: the integrator is for small errors */
-    const int32_t e_d = km_sat(km_sdiv1000(e_u), 100);
+    const int32_t e_d = km_sat_inline(km_sdiv1000(e_u), 100);
     int32_t ki = (int32_t)g->ki_q8;
     if (KM_FEATURE_HOLD_KI && in->still) {
         ki = prv_hold_ki(l, g, in, e_u, e_d, in_band);
@@ -92,7 +92,7 @@ static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
     const int32_t di = prv_integral_step(km_sdiv10(ki * e_d), dt_us);
     before += i_pwm;
     if (!((before >= in->pwm_max && di > 0) || (before <= -in->pwm_max && di < 0))) {
-        l->i_acc = km_sat(l->i_acc + di, i_max);
+        l->i_acc = km_sat_inline(l->i_acc + di, i_max);
         i_pwm = prv_i_pwm(l);
     }
     return i_pwm;
@@ -135,12 +135,12 @@ static int32_t prv_accel_ff(km_position_loop_t *l, const km_position_loop_in_t *
 {
     int32_t va;
     if (in->stream) {
-        const int32_t sub = km_sat(in->setpoint_sub, 999);
-        const int32_t dvs_u = km_sat((vs - l->last_sp_ddps) * 1000 + sub - l->last_sp_sub, 2000000);
+        const int32_t sub = km_sat_inline(in->setpoint_sub, 999);
+        const int32_t dvs_u = km_sat_inline((vs - l->last_sp_ddps) * 1000 + sub - l->last_sp_sub, 2000000);
         va = km_sdiv1000(dvs_u * tau);
         l->last_sp_sub = sub;
     } else {
-        va = km_sat(vs - l->last_sp_ddps, 20000) * tau;
+        va = km_sat_inline(vs - l->last_sp_ddps, 20000) * tau;
         l->last_sp_sub = 0;
     }
     l->last_sp_ddps = vs;
@@ -151,11 +151,11 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
                               const km_position_loop_in_t *in, uint32_t dt_us)
 {
     /* error in u, bounded to +-200 deg */
-    const int32_t pos_u = km_sat(in->position, 1000000) * 1000;
-    const int32_t sp_u = km_sat(in->setpoint_u, 1000000000);
-    int32_t e_u = km_sat(sp_u - pos_u, 2000000);
-    const int32_t vs = km_sat(in->setpoint_ddps, 20000);
-    int32_t ev = km_sat(vs - km_sat(in->speed_ddps, 20000), 20000);
+    const int32_t pos_u = km_sat_inline(in->position, 1000000) * 1000;
+    const int32_t sp_u = km_sat_inline(in->setpoint_u, 1000000000);
+    int32_t e_u = km_sat_inline(sp_u - pos_u, 2000000);
+    const int32_t vs = km_sat_inline(in->setpoint_ddps, 20000);
+    int32_t ev = km_sat_inline(vs - km_sat_inline(in->speed_ddps, 20000), 20000);
     int32_t kp = (int32_t)g->kp_q8, kd = (int32_t)g->kd_q8;
     bool in_band = false;
     if (in->still) {
@@ -175,8 +175,8 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     if (dt_us >= 2000u) { /* over dt in ms, at least 1 */
         va /= (int32_t)km_udiv1000(dt_us);
     }
-    va = km_sat(va, 20000);
-    out += km_sdiv2560((int32_t)g->kv_q8 * km_sat(vs + va, 20000)); /* kv: PWM per deg/s Q8 */
+    va = km_sat_inline(va, 20000);
+    out += km_sdiv2560((int32_t)g->kv_q8 * km_sat_inline(vs + va, 20000)); /* kv: PWM per deg/s Q8 */
     if (vs != 0) {
         out += vs > 0 ? (int32_t)g->friction_pwm : -(int32_t)g->friction_pwm;
     }
@@ -188,5 +188,5 @@ int32_t km_position_loop_step(km_position_loop_t *l, const km_control_gains_t *g
     } else {
         out += prv_i_pwm(l);
     }
-    return km_sat(out, in->pwm_max);
+    return km_sat_inline(out, in->pwm_max);
 }
