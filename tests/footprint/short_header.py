@@ -3,8 +3,10 @@
 """The 32-byte application header (board.cmake KM_G031_SHORT_HEADER, on in
 the 32 KiB build; docs/update.md §2, docs/footprint.md "STM32G031F6"),
 end to end on the virtual G031. Configures the 64 KiB layout with
--DKM_G031_SHORT_HEADER=ON in its own build directory (the virtual G031 is
-the 64 KiB part, and the 32 KiB application does not fit its region yet),
+-DKM_G031_SHORT_HEADER=ON in its own build directory (the short header
+alone, on the 64 KiB layout the stm32g031 preset's 256-byte format is
+built for, so check 3 can swap the two; board_stm32g031_f6_fit starts
+the 32 KiB build's short-header application through its bootloader),
 builds the bootloader and the application's update image, and checks:
   1. the image: header field `vectors` 0x20, length 32 + the .bin, the
      application's vector table linked at the region's start + 0x20;
