@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* CRC-32 by nibbles (a 64-byte table), or bit by bit where flash is
- * shortest (KM_CRC32_BITWISE: the 32 KiB STM32G031F6's bootloader, 68 B
- * less, docs/footprint.md): the same CRC either way. */
+ * shortest (KM_CRC32_BITWISE: the 32 KiB STM32G031F6's application store,
+ * 68 B less, docs/footprint.md): the same CRC either way. */
 #include "km_crc32.h"
 
 #ifndef KM_CRC32_BITWISE

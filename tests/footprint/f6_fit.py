@@ -92,7 +92,7 @@ def boot_and_application(images):
                            app_elf=os.path.join(images, "km-servo-app-stm32g031.elf"))
     start = vg031.symbol(a.app_elf, "Reset_Handler")
     m = vg031.make(a, watch=[start])
-    m.run_until(m.now + 300 * MS)  # the bootloader's bit-serial CRC of the image takes ~110 ms
+    m.run_until(m.now + 300 * MS)  # the boot check: the CRC of the whole application
     started = m.watches[start]
     print("bootloader + application: application started at %s" %
           ("%.1f ms" % (started[0][0] / MS) if started else "no time (never)"))

@@ -2,7 +2,7 @@
 /* km_crc32 (firmware/store/km_crc32.c) against zlib's CRC-32: the check
  * value, an empty run, a long buffer, and a CRC continued across calls.
  * Built twice: the nibble-table km_crc32 (test_crc32) and the bitwise one
- * of the 32 KiB STM32G031F6's bootloader (test_crc32_bitwise,
+ * of the 32 KiB STM32G031F6's application store (test_crc32_bitwise,
  * KM_CRC32_BITWISE=1), so both give the same CRC. */
 #include <setjmp.h>
 #include <stdarg.h>
