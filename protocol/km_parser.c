@@ -454,6 +454,50 @@ static inline __attribute__((always_inline)) uint32_t prv_run(km_parser_t *p, co
 
 #endif
 
+#if KM_PROTOCOL_COMPACT
+_Static_assert(KM_PARSE_FRAME == 1u, "prv_rest_here returns the event in bit 0");
+
+/* The head candidate's length known and the rest of it in the caller's n >= 1 bytes b[]: stored after it in
+ * the ring and, with no gap and a good checksum, judged at once (a command handed out as prv_settle() would).
+ * Returns the bytes taken * 2 + KM_PARSE_FRAME if a command, or 0 for the byte way. */
+__attribute__((noinline)) static uint32_t
+prv_rest_here(km_parser_t *p, const uint8_t *b, const uint32_t *ticks, uint32_t n, km_parser_out_t *out)
+{
+    const uint32_t k = (uint32_t)p->need - p->fill;
+    if (k > n) {
+        return 0u;
+    }
+    /* the ID onward already fed (acc less the prefix sum before the ID), then the rest with the checksum */
+    const uint32_t before_id = prv_psum_at(p, 2u);
+    uint32_t sum = p->acc - before_id;
+    uint32_t prev = p->last_tick;
+    const uint32_t slot = (uint32_t)p->head + p->fill;
+    for (uint32_t j = 0u; j < k; j++) {
+        if ((uint32_t)(ticks[j] - prev) > p->gap_ticks) {
+            return 0u;
+        }
+        prev = ticks[j];
+        sum += b[j];
+        p->window[(uint8_t)(slot + j)] = b[j]; /* past fill: the byte way stores it again if need be */
+    }
+    if ((uint8_t)sum != 0xFFu) {
+        return 0u;
+    }
+    p->acc = (uint8_t)(before_id + sum);
+    p->last_tick = prev;
+    const uint16_t total = p->need;
+    p->fill = 0u;
+    p->need = 0u;
+    if (prv_at(p, 1u) != KM_HDR1_COMMAND) {
+        prv_count(&p->stats.responses_skipped);
+        return k * 2u;
+    }
+    prv_deliver(p, total, out);
+    prv_count(&p->stats.frames_ok);
+    return k * 2u + KM_PARSE_FRAME;
+}
+#endif
+
 unsigned km_parser_feed_bytes(km_parser_t *p, const uint8_t *bytes, const uint32_t *ticks, uint32_t n,
                               uint32_t *used, km_parser_out_t *out)
 {
@@ -461,6 +505,12 @@ unsigned km_parser_feed_bytes(km_parser_t *p, const uint8_t *bytes, const uint32
     unsigned events = 0u;
 #if KM_PROTOCOL_COMPACT
     while (i < n && (events & KM_PARSE_FRAME) == 0u) {
+        const uint32_t whole = p->need > p->fill ? prv_rest_here(p, &bytes[i], &ticks[i], n - i, out) : 0u;
+        if (whole != 0u) {
+            events |= whole & KM_PARSE_FRAME;
+            i += whole >> 1;
+            continue;
+        }
         events |= prv_feed_one(p, bytes[i], ticks[i], out);
         i++;
     }

@@ -10,8 +10,8 @@
 #include "km_frame.h"
 
 /* KM_PROTOCOL_COMPACT=1 (the 32 KiB STM32G031F6 build, docs/footprint.md): the batch entry feeds its bytes to
- * the byte rule one by one, every frame a view into the ring; 0: whole frames are judged in place and runs
- * appended in bulk (fewer instructions, more code). */
+ * the byte rule one by one (the rest of a candidate of known length in one loop), every frame a view into the
+ * ring; 0: whole frames are judged in place and runs appended in bulk (fewer instructions, more code). */
 #ifndef KM_PROTOCOL_COMPACT
 #define KM_PROTOCOL_COMPACT 0
 #endif
