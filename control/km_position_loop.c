@@ -80,7 +80,7 @@ static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
 {
     int32_t i_pwm = prv_i_pwm(l);
     /* 10 deg: the integrator is for small errors */
-    const int32_t e_d = km_sat_inline(km_sdiv1000(e_u), 100);
+    const int32_t e_d = km_sat(km_sdiv1000(e_u), 100);
     int32_t ki = (int32_t)g->ki_q8;
     if (KM_FEATURE_HOLD_KI && in->still) {
         ki = prv_hold_ki(l, g, in, e_u, e_d, in_band);
@@ -92,7 +92,7 @@ static int32_t prv_integrate(km_position_loop_t *l, const km_control_gains_t *g,
     const int32_t di = prv_integral_step(km_sdiv10(ki * e_d), dt_us);
     before += i_pwm;
     if (!((before >= in->pwm_max && di > 0) || (before <= -in->pwm_max && di < 0))) {
-        l->i_acc = km_sat_inline(l->i_acc + di, i_max);
+        l->i_acc = km_sat(l->i_acc + di, i_max);
         i_pwm = prv_i_pwm(l);
     }
     return i_pwm;
