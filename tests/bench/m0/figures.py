@@ -159,7 +159,12 @@ def f6_budget_section(f6_build):
         if not lines:
             raise RuntimeError("image-check printed no budget line for %s:\n%s%s" % (elf, p.stdout, p.stderr))
         out += ["%s: %s" % (name, ln) for ln in lines]
-    return out + ["```", ""]
+    used, reserve = g031_figures.stack_high_water(os.path.join(f6_build, "boards", "stm32g031"))
+    pct = 100.0 * used / reserve
+    return out + ["```", "", "Measured stack high-water of the 32 KiB application (the same traffic as"
+                  " above, through its bootloader): **%s B of the %s B reserve, %.0f %%** (target ≤ %d %%: %s)."
+                  % (f"{used:,}", f"{reserve:,}", pct, HIGH_WATER_TARGET,
+                     "met" if pct <= HIGH_WATER_TARGET else "NOT met"), ""]
 
 
 def hot_path_rows(elf):
