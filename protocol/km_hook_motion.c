@@ -13,11 +13,14 @@ static km_request_t prv_torque_request(uint8_t torque)
 {
     _Static_assert(sizeof(km_request_t) == 12u && offsetof(km_request_t, u.torque) == 2u,
                    "kind in byte 0, torque in 2");
-    _Static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "byte 0 is a word's low byte");
-    const union {
+    _Static_assert(KM_REQ_TORQUE == 0 && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "word 0 is torque << 16");
+    union {
         uint32_t words[3];
         km_request_t req;
-    } r = {.words = {(uint32_t)KM_REQ_TORQUE | ((uint32_t)torque << 16), 0u, 0u}};
+    } r;
+    r.words[0] = (uint32_t)torque << 16;
+    r.words[1] = 0u;
+    r.words[2] = 0u;
     return r.req;
 }
 
