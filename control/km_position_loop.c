@@ -62,7 +62,7 @@ static int32_t prv_hold_ki(km_position_loop_t *l, const km_control_gains_t *g,
 
 /* ki x e / 10 (ki_e) x dt / 100, dt capped at 2 ms, without overflowing:
  * the quotient split at 100 gives C's result exactly (docs/tuning.md). */
-static int32_t prv_integral_step(int32_t ki_e, uint32_t dt_us)
+KM_COMPACT_NOINLINE static int32_t prv_integral_step(int32_t ki_e, uint32_t dt_us)
 {
     if (dt_us == 1000u) {
         return ki_e * 10; /* hundreds x 1000 + the rest x 10: no divide at the 1 ms tick */
