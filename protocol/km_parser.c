@@ -504,8 +504,11 @@ unsigned km_parser_feed_bytes(km_parser_t *p, const uint8_t *bytes, const uint32
     uint32_t i = 0u;
     unsigned events = 0u;
 #if KM_PROTOCOL_COMPACT
+    bool refused = false; /* prv_rest_here said no: byte way to the candidate's end */
     while (i < n && (events & KM_PARSE_FRAME) == 0u) {
-        const uint32_t whole = p->need > p->fill ? prv_rest_here(p, &bytes[i], &ticks[i], n - i, out) : 0u;
+        const uint32_t whole =
+            !refused && p->need > p->fill ? prv_rest_here(p, &bytes[i], &ticks[i], n - i, out) : 0u;
+        refused = whole == 0u && p->need > p->fill;
         if (whole != 0u) {
             events |= whole & KM_PARSE_FRAME;
             i += whole >> 1;
