@@ -5,7 +5,14 @@
 
 #include <stdint.h>
 
-/* Ticks per second: a whole number of MHz. */
+/* Ticks per microsecond, fixed when compiling so that converting ticks and
+ * microseconds costs no division: 1 unless a board defines it for the whole
+ * build (its km_hal_time_tick_hz() then returns KM_HAL_TICK_MHZ MHz). */
+#ifndef KM_HAL_TICK_MHZ
+#define KM_HAL_TICK_MHZ 1u
+#endif
+
+/* Ticks per second: KM_HAL_TICK_MHZ MHz. */
 uint32_t km_hal_time_tick_hz(void);
 
 void km_hal_time_init(void);

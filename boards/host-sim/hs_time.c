@@ -19,7 +19,7 @@ static uint64_t s_firing_due_ns; /* inside the handler: the timer's due time */
 
 uint32_t km_hal_time_tick_hz(void)
 {
-    return 1000000u;
+    return KM_HAL_TICK_MHZ * 1000000u;
 }
 
 void km_hal_time_init(void)

@@ -8,8 +8,9 @@
 #include "km_hal_time.h"
 #include "nrf51_regs.h"
 
-#define PRV_TICK_HZ 1000000u
+#define PRV_TICK_HZ (KM_HAL_TICK_MHZ * 1000000u)
 #define PRV_PRESCALER 4u /* 16 MHz >> 4 = 1 MHz */
+_Static_assert(KM_HAL_TICK_MHZ == 1u, "TIMER0's prescaler gives 1 MHz");
 #define PRV_CC_NOW 0u
 #define PRV_CC_SHOT 1u
 

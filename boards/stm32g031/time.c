@@ -10,12 +10,12 @@
 #include "g0_vectors.h"
 #include "km_hal_system.h"
 
-#define TICK_HZ 1000000u
+#define TICK_HZ (KM_HAL_TICK_MHZ * 1000000u)
 
 static km_timer_handler_t s_handler;
 static void *s_ctx;
 
-/* 1 MHz. */
+/* KM_HAL_TICK_MHZ (1) MHz. */
 uint32_t km_hal_time_tick_hz(void)
 {
     return TICK_HZ;

@@ -2,10 +2,11 @@
 /* Template: the monotonic tick and the one-shot timer (km_hal_time.h). */
 #include "km_hal_time.h"
 
-/* Ticks per second of km_hal_time_now(): at least 1 MHz. */
+/* Ticks per second of km_hal_time_now(): KM_HAL_TICK_MHZ (a whole number,
+ * 1 unless the board's build defines it) MHz. */
 uint32_t km_hal_time_tick_hz(void)
 {
-    return 1000000u;
+    return KM_HAL_TICK_MHZ * 1000000u;
 }
 
 /* Starts a free-running timer at tick_hz (32 bits, or extended in software). */

@@ -123,11 +123,11 @@ static inline prv_rx_t *prv_rx(void)
     return rx;
 }
 
-/* Ticks per microsecond: every hal's tick is whole MHz (a constant where the
- * link inlines km_hal_time_tick_hz). */
+/* Ticks per microsecond: the hal's compile-time rate, so that no build (with
+ * LTO or without) pays a call or a division for it. */
 static inline uint32_t prv_ticks_per_us(void)
 {
-    return km_hal_time_tick_hz() / 1000000u;
+    return KM_HAL_TICK_MHZ;
 }
 
 static uint32_t prv_us_to_ticks(uint32_t us)
@@ -138,8 +138,7 @@ static uint32_t prv_us_to_ticks(uint32_t us)
 /* Ticks to whole microseconds (no division for a 1 MHz tick, as every hal's). */
 static uint32_t prv_ticks_to_us(uint32_t ticks)
 {
-    const uint32_t per_us = prv_ticks_per_us();
-    return per_us == 1u ? ticks : ticks / per_us;
+    return prv_ticks_per_us() == 1u ? ticks : ticks / prv_ticks_per_us();
 }
 
 /* Arms the timer to send s_app.tx_len bytes of s_reply `delay_us` after `frame_end`. */

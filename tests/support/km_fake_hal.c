@@ -482,7 +482,7 @@ void km_hal_wake(void)
 
 uint32_t km_hal_time_tick_hz(void)
 {
-    return 1000000u;
+    return KM_HAL_TICK_MHZ * 1000000u;
 }
 
 void km_hal_time_init(void)
