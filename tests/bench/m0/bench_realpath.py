@@ -324,10 +324,10 @@ def per_byte(b, rows, figs):
 
 
 def per_entry(pts):
-    """Instructions an entry: the least-squares slope over the list lengths
-    of the instructions from the dispatcher's entry on (the parser's copy
-    of the bytes since the previous wake-up before it varies with timing,
-    not with the list)."""
+    """Instructions (or cycles) an entry: the least-squares slope over the
+    list lengths of the count from the dispatcher's entry on (the parser's
+    copy of the bytes since the previous wake-up before it varies with
+    timing, not with the list)."""
     if len(pts) < 2:
         return 0.0
     return statistics.linear_regression([n for n, _ in pts], [v for _, v in pts]).slope
@@ -369,7 +369,7 @@ def lists(b, rows, figs, step):
                             break
                         armed = b.armed(lo, hi)
                         stop = armed if armed is not None else hi
-                        got = b.cost(lo, stop) + (stop - at,)
+                        got = b.cost(lo, stop) + (stop - at, b.cost(at, stop)[1])
                 if got is not None:
                     out[(kind, ours, n)] = got
     for kind, _k, _maxn in lengths:
@@ -377,13 +377,15 @@ def lists(b, rows, figs, step):
             pts = sorted((n, v) for (kd, o, n), v in out.items() if kd == kind and o == ours)
             if not pts:
                 continue
-            n, (ins, cyc, _) = max(pts, key=lambda p: p[1][0])
+            n, (ins, cyc, _, _) = max(pts, key=lambda p: p[1][0])
             slope = per_entry([(m, v[2]) for m, v in pts])
+            cyc_slope = per_entry([(m, v[3]) for m, v in pts])
             key = "%s_%s" % (kind.replace(" ", "_"), "ours" if ours else "absent")
-            figs[key] = {"worst_n": n, "instructions": ins, "cycles": cyc, "per_entry": round(slope, 2)}
+            figs[key] = {"worst_n": n, "instructions": ins, "cycles": cyc, "per_entry": round(slope, 2),
+                         "cycles_per_entry": round(cyc_slope, 2)}
             rows.append(("%s, %s, %d list lengths: worst (at %d) / per entry" %
                          (kind, "this servo last" if ours else "this servo not listed", len(pts), n),
-                         "%d / %.2f" % (ins, slope), "%d" % cyc,
+                         "%d / %.2f" % (ins, slope), "%d / %.2f" % (cyc, cyc_slope),
                          "<= %d%s" % (TARGET_LAST, "" if ours else " / <= 2")))
     if no_0x82:
         # KM_G031_MULTI_READ=OFF (the 32 KiB build, docs/footprint.md "What
