@@ -138,7 +138,11 @@ static uint32_t prv_us_to_ticks(uint32_t us)
 /* Ticks to whole microseconds (no division for a 1 MHz tick, as every hal's). */
 static uint32_t prv_ticks_to_us(uint32_t ticks)
 {
-    return prv_ticks_per_us() == 1u ? ticks : ticks / prv_ticks_per_us();
+#if KM_HAL_TICK_MHZ == 1
+    return ticks;
+#else
+    return ticks / prv_ticks_per_us();
+#endif
 }
 
 /* Arms the timer to send s_app.tx_len bytes of s_reply `delay_us` after `frame_end`. */
