@@ -130,7 +130,6 @@ void km_conv_prepare(const km_board_config_t *cfg, km_conv_t *conv)
                                               KM_ADC_FULL_SCALE * cfg->vdiv_den, KM_ADC_FULL_SCALE)
                                   : (km_conv_ratio_t){0u, 0u};
     conv->ntc_mul[0] = 0u;
-    conv->ntc_at = 1u;
     for (uint32_t i = 1u; i < KM_NTC_POINTS; i++) {
         /* into <= seg, so into * mul <= step << 16 whatever the segment */
         const uint32_t seg = (uint32_t)cfg->ntc_raw[i - 1u] - cfg->ntc_raw[i];
@@ -156,15 +155,17 @@ int32_t km_conv_fast_voltage_mv(const km_conv_t *conv, uint16_t raw)
     return (int32_t)((uint32_t)raw * conv->voltage.mul >> conv->voltage.shift);
 }
 
-int32_t km_conv_fast_temperature_c10(const km_board_config_t *cfg, km_conv_t *conv, uint16_t raw)
+int32_t km_conv_fast_temperature_c10(const km_board_config_t *cfg, const km_conv_t *conv, uint8_t *ntc_at,
+                                     uint16_t raw)
 {
     const uint16_t *t = cfg->ntc_raw;
     if (raw >= t[0]) {
         return cfg->ntc_first_c10;
     }
     /* The first i >= 1 with raw >= t[i] (the table falls), walked to from
-     * the last reading's segment rather than from 1. */
-    uint32_t i = conv->ntc_at;
+     * the last reading's segment rather than from 1 (from 0 the first time:
+     * raw < t[0] here, so the walk passes to 1). */
+    uint32_t i = *ntc_at;
     while (i > 1u && raw >= t[i - 1u]) {
         i--;
     }
@@ -174,7 +175,7 @@ int32_t km_conv_fast_temperature_c10(const km_board_config_t *cfg, km_conv_t *co
     if (i == KM_NTC_POINTS) {
         return cfg->ntc_first_c10 + (int32_t)(KM_NTC_POINTS - 1u) * cfg->ntc_step_c10;
     }
-    conv->ntc_at = (uint8_t)i;
+    *ntc_at = (uint8_t)i;
     const int32_t lo_c = cfg->ntc_first_c10 + (int32_t)(i - 1u) * cfg->ntc_step_c10;
     const uint32_t into = (uint32_t)t[i - 1u] - raw;
     const int32_t q =

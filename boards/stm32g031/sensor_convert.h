@@ -59,16 +59,20 @@ typedef struct {
     km_conv_ratio_t voltage;
     /* [i]: ntc_step_c10 / (ntc_raw[i-1] - ntc_raw[i]) << KM_CONV_NTC_SHIFT, rounded */
     uint32_t ntc_mul[KM_NTC_POINTS];
-    /* The NTC segment the last reading fell in (1..KM_NTC_POINTS-1): the
-     * next search starts there, the temperature moving slowly. */
-    uint8_t ntc_at;
 } km_conv_t;
 
 void km_conv_prepare(const km_board_config_t *cfg, km_conv_t *conv);
+
+/* km_conv_prepare(&km_board_config) done by the compiler (board_config.c):
+ * the firmware converts with it and links no preparation code. */
+extern const km_conv_t km_board_conv;
 int32_t km_conv_fast_position(const km_conv_t *conv, uint16_t raw);
 int32_t km_conv_fast_current_ma(const km_conv_t *conv, uint16_t raw);
 int32_t km_conv_fast_voltage_mv(const km_conv_t *conv, uint16_t raw);
-/* Keeps the segment found in conv->ntc_at; the result does not depend on it. */
-int32_t km_conv_fast_temperature_c10(const km_board_config_t *cfg, km_conv_t *conv, uint16_t raw);
+/* *ntc_at: the NTC segment the last reading fell in (1..KM_NTC_POINTS-1; 0
+ * before the first), where the search starts, the temperature moving
+ * slowly; kept up to date here. The result does not depend on it. */
+int32_t km_conv_fast_temperature_c10(const km_board_config_t *cfg, const km_conv_t *conv, uint8_t *ntc_at,
+                                     uint16_t raw);
 
 #endif

@@ -12,8 +12,8 @@
 #include "km_board.h"
 #include "sensor_convert.h"
 
-/* The calibration's divisions, done once (sensor_convert.h). */
-static km_conv_t s_conv;
+/* The NTC segment of the last reading (km_conv_fast_temperature_c10). */
+static uint8_t s_ntc_at;
 
 /* The NTC converted on one reading in 4, from the first (heat is slow: the
  * temperature's protection and checks time 500 ms and 3 s; the reading is
@@ -27,7 +27,6 @@ static bool s_ntc_at_rail;
 void km_hal_sensors_init(void)
 {
     s_reads = 0u;
-    km_conv_prepare(&km_board_config, &s_conv);
     km_adc_start();
 }
 
@@ -50,15 +49,15 @@ void km_hal_sensors_read(km_sensors_t *out)
     }
     if ((s_reads++ & PRV_NTC_EVERY_MASK) == 0u) {
         s_ntc_at_rail = km_conv_at_rail(cfg, raw[ADC_CH_NTC]);
-        s_temperature_c10 = km_conv_fast_temperature_c10(cfg, &s_conv, raw[ADC_CH_NTC]);
+        s_temperature_c10 = km_conv_fast_temperature_c10(cfg, &km_board_conv, &s_ntc_at, raw[ADC_CH_NTC]);
     }
     if (s_ntc_at_rail) {
         faults |= KM_FAULT_TEMPERATURE;
     }
 
-    out->position = km_conv_fast_position(&s_conv, raw[ADC_CH_POT]);
-    out->current_ma = km_conv_fast_current_ma(&s_conv, raw[ADC_CH_SHUNT]) * km_board_motor_direction();
-    out->voltage_mv = km_conv_fast_voltage_mv(&s_conv, raw[ADC_CH_VSUPPLY]);
+    out->position = km_conv_fast_position(&km_board_conv, raw[ADC_CH_POT]);
+    out->current_ma = km_conv_fast_current_ma(&km_board_conv, raw[ADC_CH_SHUNT]) * km_board_motor_direction();
+    out->voltage_mv = km_conv_fast_voltage_mv(&km_board_conv, raw[ADC_CH_VSUPPLY]);
     out->temperature_c10 = s_temperature_c10;
     out->faults = faults;
 }

@@ -78,7 +78,8 @@ static void check_fast_against_exact(const km_board_config_t *c)
         const uint16_t r = (uint16_t)raw;
         const int32_t dp = km_conv_fast_position(&conv, r) - km_conv_position(c, r);
         assert_true(dp >= -1 && dp <= 1);
-        const int32_t dt = km_conv_fast_temperature_c10(c, &conv, r) - km_conv_temperature_c10(c, r);
+        uint8_t ntc_at = 0u;
+        const int32_t dt = km_conv_fast_temperature_c10(c, &conv, &ntc_at, r) - km_conv_temperature_c10(c, r);
         assert_true(dt >= -1 && dt <= 1);
         const int64_t net = (int64_t)raw - c->shunt_offset_raw;
         const int64_t div = (int64_t)c->shunt_mohm * c->shunt_gain;
@@ -142,28 +143,48 @@ static void test_position_no_span_and_extreme_lines(void **state)
     }
 }
 
-/* The NTC search starts at the previous reading's segment (conv.ntc_at):
- * readings in any order, near and far jumps, convert exactly as a fresh
- * search from the first segment does, and within 1 of the exact function. */
+/* The NTC search starts at the previous reading's segment (ntc_at, 0
+ * before the first reading): readings in any order, near and far jumps,
+ * convert exactly as a fresh search does, and within 1 of the exact function. */
 static void test_ntc_search_any_order(void **state)
 {
     (void)state;
     km_conv_t conv;
     km_conv_prepare(cfg, &conv);
-    assert_int_equal(conv.ntc_at, 1u);
+    uint8_t ntc_at = 0u;
     uint32_t raw = 0u;
     for (uint32_t k = 0; k < 3u * (KM_ADC_FULL_SCALE + 1u); k++) {
         /* a stride prime to 4096 visits every count, in jumps; every
          * fourth reading a step of one count, as a slow drift does */
         raw =
             (k % 4u == 3u) ? (raw + 1u) % (KM_ADC_FULL_SCALE + 1u) : (raw + 2731u) % (KM_ADC_FULL_SCALE + 1u);
-        km_conv_t fresh;
-        km_conv_prepare(cfg, &fresh);
-        const int32_t got = km_conv_fast_temperature_c10(cfg, &conv, (uint16_t)raw);
-        assert_int_equal(got, km_conv_fast_temperature_c10(cfg, &fresh, (uint16_t)raw));
+        uint8_t fresh_at = 0u;
+        const int32_t got = km_conv_fast_temperature_c10(cfg, &conv, &ntc_at, (uint16_t)raw);
+        assert_int_equal(got, km_conv_fast_temperature_c10(cfg, &conv, &fresh_at, (uint16_t)raw));
         const int32_t d = got - km_conv_temperature_c10(cfg, (uint16_t)raw);
         assert_true(d >= -1 && d <= 1);
-        assert_true(conv.ntc_at >= 1u && conv.ntc_at < KM_NTC_POINTS);
+        assert_true(raw >= cfg->ntc_raw[0] || (ntc_at >= 1u && ntc_at <= KM_NTC_POINTS - 1u));
+    }
+}
+
+/* The firmware's conversions (km_board_conv, computed by the compiler in
+ * board_config.c) are exactly what km_conv_prepare makes of the product's
+ * calibration, field by field. */
+static void test_board_conv_is_prepared(void **state)
+{
+    (void)state;
+    km_conv_t conv;
+    km_conv_prepare(&km_board_config, &conv);
+    assert_int_equal(km_board_conv.pot_mul, conv.pot_mul);
+    assert_int_equal(km_board_conv.pot_base, conv.pot_base);
+    assert_int_equal(km_board_conv.pot_shift, conv.pot_shift);
+    assert_int_equal(km_board_conv.shunt_offset, conv.shunt_offset);
+    assert_int_equal(km_board_conv.current.mul, conv.current.mul);
+    assert_int_equal(km_board_conv.current.shift, conv.current.shift);
+    assert_int_equal(km_board_conv.voltage.mul, conv.voltage.mul);
+    assert_int_equal(km_board_conv.voltage.shift, conv.voltage.shift);
+    for (uint32_t i = 0u; i < KM_NTC_POINTS; i++) {
+        assert_int_equal(km_board_conv.ntc_mul[i], conv.ntc_mul[i]);
     }
 }
 
@@ -178,6 +199,7 @@ int main(void)
         cmocka_unit_test(test_prepared_conversions_match),
         cmocka_unit_test(test_position_no_span_and_extreme_lines),
         cmocka_unit_test(test_ntc_search_any_order),
+        cmocka_unit_test(test_board_conv_is_prepared),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
