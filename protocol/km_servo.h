@@ -34,11 +34,12 @@ typedef struct {
 } km_servo_ops_t;
 
 /* The answer to send: `len` 0 = none. Starts `delay_us` after the frame's
- * last byte. */
+ * last byte. Both before the bytes: a short load's offset from the reply's
+ * address (docs/footprint.md "Register values from one base"). */
 typedef struct {
-    uint8_t bytes[KM_FRAME_MAX];
-    uint16_t len;
     uint32_t delay_us;
+    uint16_t len;
+    uint8_t bytes[KM_FRAME_MAX];
 } km_reply_t;
 
 typedef struct km_servo {
