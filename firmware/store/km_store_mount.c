@@ -70,7 +70,9 @@ static void prv_scan(const km_store_t *s, uint32_t page, prv_page_t *pi, uint32_
     const uint32_t base = page * f->page_size;
     uint8_t buf[KM_REC_MAX_BYTES];
     km_rec_t rec;
-    memset(pi, 0, sizeof *pi);
+    pi->valid = false;
+    pi->confirmed = false;
+    pi->erased = false;
     if (!km_rec_read(f, page, 0u, buf, &rec) || rec.type != KM_REC_SNAPSHOT) {
         pi->erased = km_rec_range_erased(f, base, f->page_size);
         return;
