@@ -12,6 +12,14 @@ static bool prv_angle_limits_ok(int16_t lo, int16_t hi)
     return lo == 0 || hi == 0 || lo < hi;
 }
 
+/* The maxima 0x13..0x15 and the limits in force 0x5B..0x5D pair up row by row: a limit is its
+ * maximum's index + PRV_LIMIT_OF_MAX. */
+#define PRV_LIMIT_OF_MAX (KM_REG_TORQUE_LIMIT - KM_REG_MAX_TORQUE)
+_Static_assert(KM_REG_MAX_CURRENT == KM_REG_MAX_TORQUE + 1 && KM_REG_MAX_SPEED == KM_REG_MAX_TORQUE + 2 &&
+                   KM_REG_CURRENT_LIMIT_NOW == KM_REG_MAX_CURRENT + PRV_LIMIT_OF_MAX &&
+                   KM_REG_SPEED_LIMIT == KM_REG_MAX_SPEED + PRV_LIMIT_OF_MAX,
+               "km_registers.def: 0x13..0x15 and 0x5B..0x5D must stay in the same order");
+
 /* A stored value passes the checks a write of it would, else the default. */
 static bool prv_persisted_ok(km_reg_index_t r, const km_product_t *p, uint32_t v)
 {
@@ -39,25 +47,21 @@ void km_regfile_init(km_regfile_t *rf, const km_product_t *product, const uint32
         k += km_reg_table[i].persisted;
         km_regfile_apply(rf, (km_reg_index_t)i, v);
     }
+    /* The values from one base register (docs/footprint.md "Register values from one base"). */
+    uint32_t *value = rf->value;
+    __asm__("" : "+r"(value));
     /* §5.4: 0x5B..0x5D start equal to the stored 0x13..0x15: mirror again after the defaults. */
-    km_regfile_apply(rf, KM_REG_MAX_TORQUE, rf->value[KM_REG_MAX_TORQUE]);
-    km_regfile_apply(rf, KM_REG_MAX_CURRENT, rf->value[KM_REG_MAX_CURRENT]);
-    km_regfile_apply(rf, KM_REG_MAX_SPEED, rf->value[KM_REG_MAX_SPEED]);
+    for (unsigned r = KM_REG_MAX_TORQUE; r <= KM_REG_MAX_SPEED; r++) {
+        value[r + PRV_LIMIT_OF_MAX] = value[r];
+        rf->gen++;
+    }
     /* "Limits that contradict each other" apply to stored values too. */
-    if (!prv_angle_limits_ok((int16_t)rf->value[KM_REG_ANGLE_MIN], (int16_t)rf->value[KM_REG_ANGLE_MAX])) {
-        rf->value[KM_REG_ANGLE_MIN] = km_reg_default(KM_REG_ANGLE_MIN, product);
-        rf->value[KM_REG_ANGLE_MAX] = km_reg_default(KM_REG_ANGLE_MAX, product);
+    if (!prv_angle_limits_ok((int16_t)value[KM_REG_ANGLE_MIN], (int16_t)value[KM_REG_ANGLE_MAX])) {
+        value[KM_REG_ANGLE_MIN] = km_reg_default(KM_REG_ANGLE_MIN, product);
+        value[KM_REG_ANGLE_MAX] = km_reg_default(KM_REG_ANGLE_MAX, product);
     }
     rf->prng = seed ? seed : 0x2545F491u;
 }
-
-/* The maxima 0x13..0x15 and the limits in force 0x5B..0x5D pair up row by row: a limit is its
- * maximum's index + PRV_LIMIT_OF_MAX. */
-#define PRV_LIMIT_OF_MAX (KM_REG_TORQUE_LIMIT - KM_REG_MAX_TORQUE)
-_Static_assert(KM_REG_MAX_CURRENT == KM_REG_MAX_TORQUE + 1 && KM_REG_MAX_SPEED == KM_REG_MAX_TORQUE + 2 &&
-                   KM_REG_CURRENT_LIMIT_NOW == KM_REG_MAX_CURRENT + PRV_LIMIT_OF_MAX &&
-                   KM_REG_SPEED_LIMIT == KM_REG_MAX_SPEED + PRV_LIMIT_OF_MAX,
-               "km_registers.def: 0x13..0x15 and 0x5B..0x5D must stay in the same order");
 
 void km_regfile_apply(km_regfile_t *rf, km_reg_index_t r, uint32_t v)
 {
