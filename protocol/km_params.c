@@ -2,8 +2,6 @@
 /* The control registers decoded into engineering units for control
  * (include/km/km_params.h): the one place their wire forms (0x11 bits,
  * the two-field limits 0x3C..0x3F) are taken apart. */
-#include <string.h>
-
 #include "km_servo.h"
 
 #define CONFIG_DIRECTION 0x04u      /* 0x11 bit 2: counter-clockwise positive */
@@ -29,7 +27,6 @@ void km_servo_control_params(const km_servo_t *s, km_control_params_t *out)
     const uint32_t temp = value[PRV_AT(KM_REG_TEMP_LIMITS)];
     const uint32_t cur = value[PRV_AT(KM_REG_CURRENT_LIMIT)];
     const uint32_t stall = value[PRV_AT(KM_REG_STALL_LIMIT)];
-    memset(out, 0, sizeof *out);
     out->variant = km_product_variant(rf->product);
     out->reverse = (config & CONFIG_DIRECTION) != 0u;
     out->idle_brake = (config & CONFIG_IDLE_BRAKE) != 0u;
