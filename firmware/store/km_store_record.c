@@ -199,7 +199,6 @@ bool km_rec_read(const km_flash_t *f, uint32_t page, uint32_t offset, uint8_t *b
         return false;
     }
     r.room = f->page_size - offset;
-    memset(rec, 0, sizeof *rec);
     if (!prv_need(&r, 1u)) {
         return false;
     }

@@ -58,7 +58,8 @@ uint32_t km_rec_delta_max_size(uint32_t count, uint32_t cell);
 uint32_t km_rec_encode(uint8_t *buf, const km_rec_t *rec, const km_store_schema_t *schema,
                        const uint32_t *values, uint32_t keys_mask, uint32_t cell);
 
-/* Reads the record at byte offset of page, one cell at a time; true and rec filled if it is whole. */
+/* Reads the record at byte offset of page, one cell at a time; true and rec filled if it is whole (version,
+ * gen and hash only for a snapshot, as km_rec_t says; on false rec is not written). */
 bool km_rec_read(const km_flash_t *f, uint32_t page, uint32_t offset, uint8_t *buf, km_rec_t *rec);
 
 /* Entry i of a valid record, walked in order: *at starts at 0 and is
