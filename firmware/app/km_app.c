@@ -123,16 +123,11 @@ static inline prv_rx_t *prv_rx(void)
     return rx;
 }
 
-/* Ticks per microsecond: the hal's compile-time rate, so that no build (with
- * LTO or without) pays a call or a division for it. */
-static inline uint32_t prv_ticks_per_us(void)
-{
-    return KM_HAL_TICK_MHZ;
-}
-
+/* Microseconds to ticks at the hal's compile-time rate (KM_HAL_TICK_MHZ):
+ * no build, with LTO or without, pays a call or a division for it. */
 static uint32_t prv_us_to_ticks(uint32_t us)
 {
-    return us * prv_ticks_per_us();
+    return us * KM_HAL_TICK_MHZ;
 }
 
 /* Ticks to whole microseconds (no division for a 1 MHz tick, as every hal's). */
@@ -141,7 +136,7 @@ static uint32_t prv_ticks_to_us(uint32_t ticks)
 #if KM_HAL_TICK_MHZ == 1
     return ticks;
 #else
-    return ticks / prv_ticks_per_us();
+    return ticks / KM_HAL_TICK_MHZ;
 #endif
 }
 
